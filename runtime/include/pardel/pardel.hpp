@@ -1,0 +1,178 @@
+/**
+ * @file pardel.hpp
+ * The public C++ API of the pardel runtime: problems, options, solvers, summaries and the
+ * convergence certificate for the discrete Euler-Lagrange boundary-value problem
+ *   D2 Ld(q_{k-1}, q_k) + D1 Ld(q_k, q_{k+1}) = 0,  k = 1..N-1,  q_0 and q_N fixed,
+ * where each q_k is a point of T^(order-1)Q and Ld is a generated kernel (kernel_abi.h).
+ */
+#ifndef PARDEL_PARDEL_HPP
+#define PARDEL_PARDEL_HPP
+
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pardel/kernel_abi.h"
+
+namespace pardel {
+
+// ---------------------------------------------------------------------------------------------
+// Models
+
+/** Every model linked into this binary through the bundled registry (empty if none linked). */
+const std::vector<const pardel_model*>& bundled_models();
+/** The bundled model of that name, or nullptr. */
+const pardel_model* find_model(std::string_view name);
+/** The discretization of that name ("trapezoid", "trapezoid(alpha=1)", ...), or nullptr. */
+const pardel_discretization* find_discretization(const pardel_model& model, std::string_view name);
+
+// ---------------------------------------------------------------------------------------------
+// Problems
+
+/** How node times are obtained. */
+enum class ClockMode {
+  none,              ///< t_k = t0 + k*T/N (h = T/N)
+  free_final_time,   ///< h = T/N is the step of the path parameter s; t_{k+1} = t_k + clock_k; the
+                     ///< travel time t_N is an output (Zermelo with time-varying wind)
+  fixed_total_time,  ///< Sundman adaptive step: t_{k+1} - t_k proportional to clock_k, summing to T
+};
+
+/** An interpolation constraint (knot): q(t) = q at a grid node; only derivatives move there. */
+struct Knot {
+  double t = 0;
+  std::vector<double> q;  ///< ncoords values
+};
+
+/** One boundary-value problem. */
+struct Problem {
+  const pardel_model* model = nullptr;
+  const pardel_discretization* discretization = nullptr;
+  std::vector<double> params;  ///< nparams values (model defaults when empty)
+  double t0 = 0;
+  double T = 1;                ///< final time minus t0 (or the span of s under free_final_time)
+  int N = 100;                 ///< number of intervals; nodes 0..N
+  std::vector<double> q0;      ///< dim values: coords, then derivatives up to order-1
+  std::vector<double> qN;      ///< dim values
+  std::vector<Knot> knots;
+  ClockMode clock = ClockMode::none;
+};
+
+/** A discrete trajectory: node times and points of T^(order-1)Q, row-major (N+1) x dim. */
+struct Trajectory {
+  int N = 0;
+  int dim = 0;
+  std::vector<double> t;  ///< N+1 node times
+  std::vector<double> q;  ///< (N+1)*dim values
+  double* node(int k) { return q.data() + static_cast<std::size_t>(k) * dim; }
+  const double* node(int k) const { return q.data() + static_cast<std::size_t>(k) * dim; }
+};
+
+/** The straight line from q0 to qN (derivative components interpolated too). */
+Trajectory linear_guess(const Problem& problem);
+/** A polyline through the given coordinate points (ncoords each), first and last replaced by
+ *  the boundary; derivatives consistent with the polyline's parametrization by node index. */
+Trajectory polyline_guess(const Problem& problem, const std::vector<std::vector<double>>& points);
+/** A trajectory resampled onto N intervals by interpolation (coarse-to-fine refinement). */
+Trajectory resample(const Problem& problem, const Trajectory& from, int N);
+
+// ---------------------------------------------------------------------------------------------
+// Solving
+
+enum class Method {
+  jacobi,         ///< nonlinear block Jacobi (seed eq. pDEL), each block by Newton to a tolerance
+  jacobi_newton,  ///< the seed's m-step block Jacobi-Newton (eq. NewtonRaphson)
+  newton,         ///< globalized Newton on the whole DEL system, block-tridiagonal solves
+  multigrid,      ///< nonlinear multigrid in time (FAS) with Jacobi-Newton smoothing
+  hybrid,         ///< Jacobi-Newton until the certificate holds, then Newton
+};
+const char* to_string(Method method);
+/** Parses "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"; false if unknown. */
+bool parse_method(std::string_view text, Method* method);
+
+enum class Termination { converged, max_iterations, diverged, non_finite, invalid_input, interrupted };
+const char* to_string(Termination termination);
+
+/** One record of the convergence history. */
+struct IterationRecord {
+  long iteration = 0;
+  int N = 0;
+  double residual = 0;  ///< infinity-norm of the DEL residual
+  double action = 0;    ///< discrete action
+  double seconds = 0;   ///< wall time since the start of the solve
+};
+
+struct Options {
+  Method method = Method::jacobi_newton;
+  double tol = 1e-10;            ///< on the infinity-norm of the DEL residual
+  long max_iterations = 1000000;
+  double damping = 0;            ///< epsilon: q <- q + (1 - epsilon)(qbar - q)
+  int newton_substeps = 1;       ///< m of the m-step Jacobi-Newton
+  int threads = 0;               ///< 0: all cores
+  int refine_start_N = 0;        ///< coarse-to-fine: start at this N (0: off)
+  double refine_factor = 1.2;    ///< growth of N per refinement
+  int clock_update_every = 100;  ///< iterations between node-time updates under a clock
+  long history_every = 1;        ///< record the history every this many iterations
+  /** Called after each recorded iteration; returning false interrupts the solve. */
+  std::function<bool(const IterationRecord&)> on_iteration;
+  /** Checks the options; on failure writes a message naming the option and value. */
+  bool is_valid(std::string* error) const;
+};
+
+/** Verdicts of the seed's convergence theory at one trajectory. */
+struct IntervalViolation {
+  int k = 0;                   ///< interval [k, k+1]
+  bool hessian_psd = true;     ///< H^{Ld}_k positive semi-definite
+  bool A_pd = true;            ///< A_k = D11 positive definite
+  bool B_pd = true;            ///< B_k = D22 positive definite
+  double min_eig_hessian = 0, min_eig_A = 0, min_eig_B = 0;
+};
+
+struct Certificate {
+  // Theorem prp:discrete_positive_def, interval by interval
+  bool all_intervals_psd = false;
+  bool all_A_pd = false;
+  bool all_B_pd = false;
+  bool theorem_holds = false;  ///< all psd and (all A pd or all B pd)
+  std::vector<IntervalViolation> violations;
+  // Inertia of the full block-tridiagonal Hessian (block LDL^T, Sylvester's law)
+  long inertia_positive = 0, inertia_negative = 0, inertia_zero = 0;
+  bool hessian_positive_definite = false;
+  // Jacobi iteration matrix J = -D^{-1} C
+  double jacobi_spectral_radius = 0;
+  double expected_iterations = 0;  ///< sweeps to reduce the residual by tol/initial residual
+  std::string report() const;      ///< human-readable
+};
+
+struct Summary {
+  Termination termination = Termination::invalid_input;
+  std::string message;
+  Method method = Method::jacobi_newton;
+  long iterations = 0;
+  int N = 0;
+  int threads = 1;
+  double residual = 0;
+  double action = 0;
+  double final_time = 0;  ///< t_N (the travel time under free_final_time)
+  double wall_seconds = 0;
+  std::vector<IterationRecord> history;
+  bool converged() const { return termination == Termination::converged; }
+  std::string brief_report() const;
+};
+
+/**
+ * Solves the problem starting from `trajectory`, which holds the initial guess on entry and the
+ * last finite iterate on return (resampled to problem.N when refinement was used).
+ */
+Summary solve(const Problem& problem, const Options& options, Trajectory& trajectory);
+
+/** The infinity-norm of the DEL residual and the discrete action at a trajectory. */
+double residual_norm(const Problem& problem, const Trajectory& trajectory);
+double discrete_action(const Problem& problem, const Trajectory& trajectory);
+
+/** The convergence certificate at a trajectory. */
+Certificate certify(const Problem& problem, const Trajectory& trajectory, int threads = 0);
+
+}  // namespace pardel
+
+#endif  // PARDEL_PARDEL_HPP
