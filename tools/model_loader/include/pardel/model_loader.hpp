@@ -1,0 +1,37 @@
+/**
+ * @file model_loader.hpp
+ * Resolves a model named in a scene or on the command line: either a bundled model compiled
+ * into this binary, or a path to a .lag file, which is generated (pardel-gen + render), compiled
+ * into a shared object in a cache folder and loaded on first use.
+ */
+#ifndef PARDEL_MODEL_LOADER_HPP
+#define PARDEL_MODEL_LOADER_HPP
+
+#include <stdexcept>
+#include <string>
+
+#include "pardel/kernel_abi.h"
+
+namespace pardel {
+
+/** Raised when a model cannot be resolved; what() carries the generator's diagnostics
+ *  (FILE:LINE:COL: error: ...) or the reason (unknown name, compiler failure). */
+class ModelLoadError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/**
+ * A bundled model's name, or a path to a .lag file (anything ending in ".lag" or containing '/').
+ * The returned model stays valid for the life of the process. Compiled .lag files are cached
+ * under $PARDEL_CACHE_DIR, else $XDG_CACHE_HOME/pardel, else ~/.cache/pardel, keyed by a hash of
+ * the file's content and the generator's version; concurrent callers are safe.
+ */
+const pardel_model* resolve_model(const std::string& name_or_path);
+
+/** True when this build can compile .lag files at run time (pardel-gen and a compiler found). */
+bool can_compile_lag_files();
+
+}  // namespace pardel
+
+#endif  // PARDEL_MODEL_LOADER_HPP
