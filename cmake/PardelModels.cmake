@@ -1,0 +1,70 @@
+# pardel_add_model(<target> <file.lag> [DISCRETIZATIONS ...ignored...])
+#
+# Generates the kernels of a .lag model at build time (pardel-gen, then the Jinja2 render step)
+# and compiles them into <target>. The generated header <model>.hpp is put on <target>'s include
+# path; the model's descriptor is the C symbol `<model>_model` (see pardel/kernel_abi.h).
+# Editing the .lag, the generator or its templates regenerates exactly that model.
+#
+# Without GiNaC (PARDEL_REGENERATE=OFF) the committed copy under generated/ is compiled instead;
+# that works only for the bundled models.
+include_guard(GLOBAL)
+
+set(PARDEL_GENERATED_DIR "${PROJECT_SOURCE_DIR}/generated" CACHE INTERNAL
+    "Committed generated kernels of the bundled models")
+
+# Reads the model name from the .lag's `model NAME` line (the file's stem if there is none: the
+# generator then reports the missing line at build time).
+function(pardel_lag_model_name lag out_var)
+  file(STRINGS "${lag}" _model_lines REGEX "^[ \t]*model[ \t]+[A-Za-z_][A-Za-z0-9_]*")
+  if(_model_lines)
+    list(GET _model_lines 0 _line)
+    string(REGEX REPLACE "^[ \t]*model[ \t]+([A-Za-z_][A-Za-z0-9_]*).*$" "\\1" _name "${_line}")
+  else()
+    get_filename_component(_name "${lag}" NAME_WE)
+  endif()
+  set(${out_var} "${_name}" PARENT_SCOPE)
+endfunction()
+
+# The path of a file relative to the project root when inside it (recorded in the banner).
+function(pardel_source_name file out_var)
+  file(RELATIVE_PATH _rel "${PROJECT_SOURCE_DIR}" "${file}")
+  if(_rel MATCHES "^\\.\\./")
+    get_filename_component(_rel "${file}" NAME)
+  endif()
+  set(${out_var} "${_rel}" PARENT_SCOPE)
+endfunction()
+
+function(pardel_add_model target lag)
+  get_filename_component(lag "${lag}" ABSOLUTE)
+  if(NOT EXISTS "${lag}")
+    message(FATAL_ERROR "pardel_add_model: no such file: ${lag}")
+  endif()
+  set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${lag}")
+  pardel_lag_model_name("${lag}" model)
+  pardel_source_name("${lag}" source_name)
+
+  if(PARDEL_REGENERATE AND TARGET pardel-gen)
+    set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/pardel_generated")
+    set(ir "${out_dir}/${model}.ir.json")
+    add_custom_command(
+      OUTPUT "${out_dir}/${model}.hpp" "${out_dir}/${model}.cpp"
+      COMMAND ${CMAKE_COMMAND} -E make_directory "${out_dir}"
+      COMMAND $<TARGET_FILE:pardel-gen> "${lag}" -o "${ir}" --source-name "${source_name}"
+      COMMAND "${PARDEL_PYTHON}" "${PARDEL_RENDER_SCRIPT}" "${ir}" --out-dir "${out_dir}"
+      DEPENDS "${lag}" pardel-gen "${PARDEL_RENDER_SCRIPT}" ${PARDEL_TEMPLATES}
+      COMMENT "pardel-gen: ${source_name} -> ${model}.hpp, ${model}.cpp"
+      VERBATIM)
+  else()
+    set(out_dir "${PARDEL_GENERATED_DIR}")
+    if(NOT EXISTS "${out_dir}/${model}.cpp")
+      message(FATAL_ERROR "pardel_add_model: ${source_name} needs pardel-gen (GiNaC was not found, "
+                          "or PARDEL_REGENERATE is OFF) and has no committed copy under generated/.")
+    endif()
+  endif()
+  target_sources(${target} PRIVATE "${out_dir}/${model}.cpp")
+  target_include_directories(${target} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
+  target_link_libraries(${target} PUBLIC pardel::kernel_abi)
+  set_property(TARGET ${target} APPEND PROPERTY PARDEL_MODELS "${model}")
+  set_property(TARGET ${target} APPEND PROPERTY PARDEL_GENERATED_FILES
+               "${out_dir}/${model}.hpp" "${out_dir}/${model}.cpp")
+endfunction()

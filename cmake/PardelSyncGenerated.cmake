@@ -1,0 +1,16 @@
+# Copies freshly generated kernels (FILES) into the committed folder DEST, and removes files there
+# that no bundled model produces any more. Run by the update-generated target.
+file(MAKE_DIRECTORY "${DEST}")
+set(_keep "")
+foreach(_f IN LISTS FILES)
+  get_filename_component(_n "${_f}" NAME)
+  list(APPEND _keep "${_n}")
+  file(COPY_FILE "${_f}" "${DEST}/${_n}" ONLY_IF_DIFFERENT)
+endforeach()
+file(GLOB _existing RELATIVE "${DEST}" "${DEST}/*.hpp" "${DEST}/*.cpp")
+foreach(_n IN LISTS _existing)
+  if(NOT _n IN_LIST _keep)
+    file(REMOVE "${DEST}/${_n}")
+    message(STATUS "removed stale generated/${_n}")
+  endif()
+endforeach()

@@ -1,0 +1,176 @@
+// Resolves models by name or compiles a .lag file into a cached shared object and loads it.
+#include "pardel/model_loader.hpp"
+
+#include <dlfcn.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "pardel/pardel.hpp"
+
+extern char** environ;
+
+namespace pardel {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool looks_like_path(const std::string& s) {
+  return s.find('/') != std::string::npos ||
+         (s.size() > 4 && s.compare(s.size() - 4, 4, ".lag") == 0);
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ModelLoadError("cannot read model file '" + path.string() + "'");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  return buf.str();
+}
+
+// FNV-1a, 64 bit: a stable key for the cache (std::hash is not stable across builds).
+std::uint64_t fnv1a(const std::string& text, std::uint64_t h = 1469598103934665603ull) {
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+fs::path cache_root() {
+  if (const char* dir = std::getenv("PARDEL_CACHE_DIR"); dir && *dir) return dir;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return fs::path(xdg) / "pardel";
+  if (const char* home = std::getenv("HOME"); home && *home) return fs::path(home) / ".cache" / "pardel";
+  return fs::temp_directory_path() / ("pardel-cache-" + std::to_string(getuid()));
+}
+
+// Runs a program (no shell), its stdout and stderr appended to `log`; returns the exit status.
+int run_program(const std::vector<std::string>& argv, const fs::path& log) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND,
+                                   0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = 0;
+  int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) return 127;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return 127;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+std::string trim(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  return s;
+}
+
+#ifdef PARDEL_LOADER_GEN
+// Generates, renders and compiles `lag` into the cache folder `dir`; atomic: built in a
+// temporary sibling folder and renamed into place.
+void build_into(const fs::path& lag, const fs::path& dir) {
+  fs::create_directories(dir.parent_path());
+  fs::path tmp = dir.parent_path() /
+                 (dir.filename().string() + ".tmp." + std::to_string(getpid()) + "." +
+                  std::to_string(reinterpret_cast<std::uintptr_t>(&dir) & 0xffff));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  const fs::path log = tmp / "log.txt";
+  const fs::path ir = tmp / "model.ir.json";
+  auto fail = [&](const std::string& what) {
+    std::string details = fs::exists(log) ? trim(read_file(log)) : std::string();
+    fs::remove_all(tmp);
+    throw ModelLoadError(details.empty() ? what : details);
+  };
+  if (run_program({PARDEL_LOADER_GEN, lag.string(), "-o", ir.string(), "--source-name",
+                   lag.filename().string()},
+                  log) != 0)
+    fail("pardel-gen failed on " + lag.string());
+  if (run_program({PARDEL_LOADER_PYTHON, PARDEL_LOADER_RENDER, ir.string(), "--out-dir", tmp.string()},
+                  log) != 0)
+    fail("rendering the kernels of " + lag.string() + " failed");
+  std::string model;
+  for (const auto& entry : fs::directory_iterator(tmp)) {
+    if (entry.path().extension() == ".cpp") model = entry.path().stem().string();
+  }
+  if (model.empty()) fail("the generator wrote no kernels for " + lag.string());
+  if (run_program({PARDEL_LOADER_CXX, "-std=c++17", "-O2", "-fPIC", "-shared", "-Wl,-Bsymbolic",
+                   "-I" PARDEL_LOADER_ABI_INCLUDE, (tmp / (model + ".cpp")).string(), "-o",
+                   (tmp / "model.so").string()},
+                  log) != 0)
+    fail("compiling the kernels of " + lag.string() + " failed");
+  std::ofstream(tmp / "model_name.txt") << model;
+  std::error_code ec;
+  fs::rename(tmp, dir, ec);
+  if (ec) fs::remove_all(tmp);  // another process finished first; its result is identical
+}
+#endif
+
+}  // namespace
+
+bool can_compile_lag_files() {
+#ifdef PARDEL_LOADER_GEN
+  return fs::exists(PARDEL_LOADER_GEN) && fs::exists(PARDEL_LOADER_RENDER);
+#else
+  return false;
+#endif
+}
+
+const pardel_model* resolve_model(const std::string& name_or_path) {
+  if (!looks_like_path(name_or_path)) {
+    if (const pardel_model* model = find_model(name_or_path)) return model;
+    std::string known;
+    for (const pardel_model* m : bundled_models()) known += std::string(known.empty() ? "" : ", ") + m->name;
+    throw ModelLoadError("unknown model '" + name_or_path + "' (compiled models: " + known +
+                         "; a path to a .lag file is compiled on the fly)");
+  }
+#ifndef PARDEL_LOADER_GEN
+  throw ModelLoadError("cannot compile '" + name_or_path +
+                       "': this build of pardel has no generator (GiNaC was not found)");
+#else
+  static std::mutex mutex;
+  static std::map<std::uint64_t, const pardel_model*> loaded;
+  std::lock_guard<std::mutex> lock(mutex);
+
+  const fs::path lag = name_or_path;
+  const std::string content = read_file(lag);
+  std::uint64_t key = fnv1a(content);
+  key = fnv1a(PARDEL_LOADER_GEN, key);
+  key = fnv1a(PARDEL_LOADER_CXX, key);
+  key = fnv1a(std::to_string(fs::last_write_time(PARDEL_LOADER_GEN).time_since_epoch().count()), key);
+  if (auto it = loaded.find(key); it != loaded.end()) return it->second;
+
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(key));
+  const fs::path dir = cache_root() / hex;
+  if (!fs::exists(dir / "model.so")) build_into(lag, dir);
+
+  const std::string model = trim(read_file(dir / "model_name.txt"));
+  void* handle = dlopen((dir / "model.so").c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (!handle) throw ModelLoadError(std::string("cannot load the compiled model: ") + dlerror());
+  auto* descriptor = static_cast<const pardel_model*>(dlsym(handle, (model + "_model").c_str()));
+  if (!descriptor) throw ModelLoadError("the compiled model has no symbol " + model + "_model");
+  if (descriptor->abi_version != PARDEL_KERNEL_ABI_VERSION)
+    throw ModelLoadError("the compiled model was built for another kernel ABI version");
+  loaded.emplace(key, descriptor);
+  return descriptor;
+#endif
+}
+
+}  // namespace pardel
