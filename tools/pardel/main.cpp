@@ -1,0 +1,456 @@
+// The pardel command line: list models, evaluate kernels, solve scenes and check certificates.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "outputs.hpp"
+#include "pardel/pardel.hpp"
+#include "pardel_cli/config.hpp"
+#include "progress.hpp"
+#include "scene.hpp"
+#include "trajectory_io.hpp"
+#ifdef PARDEL_HAVE_MODEL_LOADER
+#include "pardel/model_loader.hpp"
+#endif
+
+extern char** environ;
+
+namespace {
+
+using namespace pardel;
+using namespace pardel::cli;
+namespace fs = std::filesystem;
+
+constexpr int kExitUsage = 2;
+constexpr int kExitInternal = 1;
+
+const char* const kExitCodesHelp =
+    "Exit codes: 0 converged (or success), 1 internal error (e.g. an output file cannot be written),\n"
+    "2 invalid input (bad scene, option or model), 3 max_iterations, 4 diverged, 5 non_finite,\n"
+    "6 interrupted (Ctrl-C).";
+
+/** A bad command-line value: the message names the option; exit code 2. */
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+std::vector<std::string> bundled_names() {
+  std::vector<std::string> names;
+  for (const pardel_model* m : bundled_models()) names.push_back(m->name);
+  return names;
+}
+
+bool looks_like_path(const std::string& spec) {
+  return spec.find('/') != std::string::npos || (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
+}
+
+/** A bundled name (nullptr if unknown) or a .lag path (compiled on first use when the loader is linked). */
+const pardel_model* resolve_model_spec(const std::string& spec) {
+  if (!looks_like_path(spec)) return find_model(spec);
+#ifdef PARDEL_HAVE_MODEL_LOADER
+  return pardel::resolve_model(spec);
+#else
+  throw std::runtime_error("this build cannot load .lag files (no model loader); use a bundled model");
+#endif
+}
+
+/** The absolute path of a model's .lag source, or "" when it cannot be found. */
+std::string model_source_path(const pardel_model& model) {
+  if (!model.source || !*model.source) return "";
+  const fs::path source(model.source);
+  std::error_code ec;
+  if (source.is_absolute()) return fs::exists(source, ec) ? source.string() : "";
+  const fs::path in_project = fs::path(config::source_dir) / source;
+  if (fs::exists(in_project, ec)) return in_project.lexically_normal().string();
+  if (fs::exists(source, ec)) return fs::absolute(source, ec).lexically_normal().string();
+  return "";
+}
+
+double parse_number_option(const std::string& text, const std::string& option) {
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE) {
+    throw UsageError(fmt::format("{}: '{}' is not a number", option, text));
+  }
+  return value;
+}
+
+std::vector<double> parse_vector_option(const std::string& text, const std::string& option, std::size_t size,
+                                        const std::string& what) {
+  std::vector<double> values;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    values.push_back(parse_number_option(item, option));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (values.size() != size) {
+    throw UsageError(fmt::format("{}: {} value{} given; expected {} ({})", option, values.size(),
+                                 values.size() == 1 ? "" : "s", size, what));
+  }
+  return values;
+}
+
+// ---------------------------------------------------------------------------------------------
+// pardel models
+
+int run_models(bool json) {
+  const auto& models = bundled_models();
+  if (json) {
+    nlohmann::ordered_json list = nlohmann::ordered_json::array();
+    for (const pardel_model* m : models) {
+      nlohmann::ordered_json j;
+      j["name"] = m->name;
+      j["source"] = m->source ? m->source : "";
+      j["order"] = m->order;
+      j["dim"] = m->dim;
+      j["coords"] = std::vector<std::string>(m->coords, m->coords + m->ncoords);
+      nlohmann::ordered_json params = nlohmann::ordered_json::object();
+      for (int i = 0; i < m->nparams; ++i) params[m->param_names[i]] = m->param_defaults[i];
+      j["params"] = params;
+      j["time_dependent"] = m->time_dependent != 0;
+      j["clock"] = m->clock != nullptr;
+      nlohmann::ordered_json discs = nlohmann::ordered_json::array();
+      for (int i = 0; i < m->ndiscretizations; ++i) {
+        discs.push_back({{"name", m->discretizations[i].name},
+                         {"consistency_order", m->discretizations[i].consistency_order}});
+      }
+      j["discretizations"] = discs;
+      list.push_back(j);
+    }
+    std::cout << list.dump(2) << "\n";
+    return 0;
+  }
+  if (models.empty()) {
+    std::cout << "no bundled models in this build\n";
+    return 0;
+  }
+  for (const pardel_model* m : models) {
+    std::string coords;
+    for (int i = 0; i < m->ncoords; ++i) coords += (i ? " " : "") + std::string(m->coords[i]);
+    std::string params;
+    for (int i = 0; i < m->nparams; ++i) {
+      params += fmt::format("{}{}={}", i ? " " : "", m->param_names[i], format_double(m->param_defaults[i]));
+    }
+    std::string discs;
+    for (int i = 0; i < m->ndiscretizations; ++i) discs += (i ? " " : "") + std::string(m->discretizations[i].name);
+    std::cout << fmt::format("{}\n  coords: {}\n  order: {}{}{}\n  params: {}\n  discretizations: {}\n", m->name,
+                             coords, m->order, m->time_dependent ? ", time-dependent" : "",
+                             m->clock ? ", has a clock" : "", params.empty() ? "(none)" : params, discs);
+  }
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// pardel kernels
+
+struct KernelArgs {
+  std::string model, disc, h, t0, t1, q0, q1;
+  std::vector<std::string> params;
+};
+
+std::string json_number(double v) {
+  return std::isfinite(v) ? format_double(v) : "null";
+}
+
+std::string json_vector(const double* v, int n) {
+  std::string out = "[";
+  for (int i = 0; i < n; ++i) out += (i ? ", " : "") + json_number(v[i]);
+  return out + "]";
+}
+
+std::string json_matrix(const double* m, int n) {
+  std::string out = "[";
+  for (int i = 0; i < n; ++i) out += (i ? ", " : "") + json_vector(m + static_cast<std::size_t>(i) * n, n);
+  return out + "]";
+}
+
+int run_kernels(const KernelArgs& args) {
+  const pardel_model* model = nullptr;
+  try {
+    model = resolve_model_spec(args.model);
+  } catch (const std::exception& error) {
+    throw UsageError(fmt::format("--model: cannot load '{}': {}", args.model, error.what()));
+  }
+  if (!model) {
+    const std::string suggestion = nearest_name(args.model, bundled_names());
+    throw UsageError(fmt::format("--model: unknown model '{}'{}", args.model,
+                                 suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion)));
+  }
+  const pardel_discretization* disc = find_discretization(*model, args.disc);
+  if (!disc && model->order >= 2 && args.disc == "trapezoid") disc = find_discretization(*model, "trapezoid(alpha=1)");
+  if (!disc) {
+    std::vector<std::string> names;
+    for (int i = 0; i < model->ndiscretizations; ++i) names.push_back(model->discretizations[i].name);
+    const std::string suggestion = nearest_name(args.disc, names);
+    std::string all;
+    for (const auto& n : names) all += (all.empty() ? "" : ", ") + n;
+    throw UsageError(fmt::format("--disc: unknown discretization '{}' for model {}{} (it has: {})", args.disc,
+                                 model->name, suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion),
+                                 all));
+  }
+  const double h = parse_number_option(args.h, "--h");
+  const double t0 = parse_number_option(args.t0, "--t0");
+  const double t1 = parse_number_option(args.t1, "--t1");
+  std::string layout;
+  for (const auto& name : state_column_names(*model)) layout += (layout.empty() ? "" : ",") + name;
+  const auto q0 = parse_vector_option(args.q0, "--q0", model->dim, "order*ncoords values: " + layout);
+  const auto q1 = parse_vector_option(args.q1, "--q1", model->dim, "order*ncoords values: " + layout);
+  std::vector<double> p(model->param_defaults, model->param_defaults + model->nparams);
+  std::vector<std::string> names(model->param_names, model->param_names + model->nparams);
+  for (const auto& assignment : args.params) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos) throw UsageError(fmt::format("--param: '{}' is not NAME=VALUE", assignment));
+    const std::string name = assignment.substr(0, eq);
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) {
+      const std::string suggestion = nearest_name(name, names);
+      throw UsageError(fmt::format("--param: model {} has no param '{}'{}", model->name, name,
+                                   suggestion.empty() ? (names.empty() ? " (it has none)" : "")
+                                                      : fmt::format("; did you mean '{}'?", suggestion)));
+    }
+    p[it - names.begin()] = parse_number_option(assignment.substr(eq + 1), "--param " + name);
+  }
+  const int m = model->dim;
+  double Ld = 0;
+  std::vector<double> D1(m), D2(m), D11(m * m), D12(m * m), D22(m * m);
+  disc->full(h, t0, t1, q0.data(), q1.data(), p.data(), &Ld, D1.data(), D2.data(), D11.data(), D12.data(), D22.data());
+  std::cout << "{\"Ld\": " << json_number(Ld) << ", \"D1\": " << json_vector(D1.data(), m)
+            << ", \"D2\": " << json_vector(D2.data(), m) << ", \"D11\": " << json_matrix(D11.data(), m)
+            << ", \"D12\": " << json_matrix(D12.data(), m) << ", \"D22\": " << json_matrix(D22.data(), m) << "}\n";
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// pardel solve / check
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_sigint(int) { g_interrupted.store(true); }
+
+Scene load_scene_or_throw(const std::string& path, const std::vector<std::string>& sets) {
+  return load_scene(path, sets, resolve_model_spec, bundled_names());
+}
+
+/** Runs the plotting script on an output folder; returns false (after a warning) on failure. */
+bool run_plot_script(const std::string& out_dir) {
+  std::vector<std::string> argv_strings = {config::python, config::plot_script, out_dir};
+  std::vector<char*> argv;
+  for (auto& s : argv_strings) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawn_error = ::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
+  if (spawn_error != 0) {
+    std::fprintf(stderr, "warning: plots not written: cannot run %s: %s\n", config::python, std::strerror(spawn_error));
+    return false;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      std::fprintf(stderr, "warning: plots not written: waitpid failed: %s\n", std::strerror(errno));
+      return false;
+    }
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::fprintf(stderr, "warning: plots not written: %s %s exited with status %d\n", config::python,
+                 config::plot_script, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    return false;
+  }
+  return true;
+}
+
+struct SolveArgs {
+  std::string scene;
+  std::string out;
+  std::vector<std::string> sets;
+  int threads = -1;
+  bool quiet = false;
+  bool no_plot = false;
+};
+
+int run_solve(const SolveArgs& args) {
+  Scene scene = load_scene_or_throw(args.scene, args.sets);
+  if (args.threads >= 0) scene.options.threads = args.threads;
+  Trajectory trajectory = make_initial_guess(scene);
+
+  std::string out_dir = args.out;
+  if (out_dir.empty()) out_dir = scene.output_dir;
+  if (out_dir.empty()) out_dir = (fs::path("out") / fs::path(args.scene).stem()).string();
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
+
+  ProgressLine progress(!args.quiet, scene.options.tol);
+  scene.options.on_iteration = [&progress](const IterationRecord& record) {
+    progress.update(record);
+    return !g_interrupted.load();
+  };
+  g_interrupted.store(false);
+  auto previous_handler = std::signal(SIGINT, on_sigint);
+  const Summary summary = solve(scene.problem, scene.options, trajectory);
+  std::signal(SIGINT, previous_handler);
+  progress.finish();
+  scene.options.on_iteration = nullptr;
+
+  // The certificate needs a trajectory on the problem's grid; skip it when the solve stopped
+  // before producing one (invalid input).
+  Certificate certificate;
+  Problem final_problem = scene.problem;
+  final_problem.N = trajectory.N;
+  const bool have_trajectory = trajectory.N >= 2 && static_cast<int>(trajectory.t.size()) == trajectory.N + 1;
+  if (have_trajectory) certificate = certify(final_problem, trajectory, scene.options.threads);
+
+  const pardel_model& model = *scene.model;
+  const std::string source = model_source_path(model);
+  write_file_atomic((fs::path(out_dir) / "summary.json").string(),
+                    summary_json(scene, summary, trajectory, certificate, source).dump(2) + "\n");
+  if (have_trajectory) {
+    write_file_atomic((fs::path(out_dir) / "trajectory.csv").string(), trajectory_csv(model, trajectory));
+  }
+  write_file_atomic((fs::path(out_dir) / "convergence.csv").string(), convergence_csv(summary));
+  if (!args.no_plot && have_trajectory) run_plot_script(out_dir);
+
+  if (!args.quiet) {
+    const PhysicalCost cost = physical_cost(scene, summary, trajectory);
+    std::cout << summary.brief_report() << "\n";
+    std::cout << fmt::format("{} = {} ({})\n", cost.name, format_double(cost.value), cost.definition);
+    std::cout << fmt::format("certificate: theorem {}, Hessian {} (inertia +{} -{} 0:{}), Jacobi spectral radius {}\n",
+                             certificate.theorem_holds ? "holds" : "does not hold",
+                             certificate.hessian_positive_definite ? "positive definite" : "not positive definite",
+                             certificate.inertia_positive, certificate.inertia_negative, certificate.inertia_zero,
+                             format_double(certificate.jacobi_spectral_radius));
+    std::cout << "output: " << out_dir << "\n";
+  }
+  if (!summary.converged()) {
+    std::fprintf(stderr, "pardel solve: %s: %s\n", to_string(summary.termination), summary.message.c_str());
+  }
+  return exit_code(summary.termination);
+}
+
+struct CheckArgs {
+  std::string scene;
+  std::string trajectory;
+  std::vector<std::string> sets;
+  bool json = false;
+};
+
+int run_check(const CheckArgs& args) {
+  Scene scene = load_scene_or_throw(args.scene, args.sets);
+  Trajectory trajectory;
+  if (args.trajectory.empty()) {
+    trajectory = make_initial_guess(scene);
+  } else {
+    try {
+      trajectory = read_trajectory_csv(args.trajectory, *scene.model);
+    } catch (const std::runtime_error& error) {
+      throw UsageError(fmt::format("--trajectory: {}", error.what()));
+    }
+    scene.problem.N = trajectory.N;
+  }
+  const Certificate certificate = certify(scene.problem, trajectory, scene.options.threads);
+  const double residual = residual_norm(scene.problem, trajectory);
+  const double action = discrete_action(scene.problem, trajectory);
+  if (args.json) {
+    nlohmann::ordered_json j;
+    j["trajectory"] = args.trajectory.empty() ? "initial guess" : args.trajectory;
+    j["N"] = trajectory.N;
+    j["residual"] = residual;
+    j["action"] = action;
+    j["certificate"] = certificate_json(certificate, static_cast<std::size_t>(-1));
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::cout << fmt::format("trajectory: {} (N = {})\nresidual: {}\naction: {}\n",
+                             args.trajectory.empty() ? "initial guess" : args.trajectory, trajectory.N,
+                             format_double(residual), format_double(action));
+    std::cout << certificate.report();
+    if (!certificate.report().empty() && certificate.report().back() != '\n') std::cout << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pardel: solve the boundary-value problems of variational integrators"};
+  app.footer(kExitCodesHelp);
+  app.require_subcommand(1);
+
+  bool models_json = false;
+  auto* models = app.add_subcommand("models", "List the bundled models: coords, order, params, discretizations");
+  models->add_flag("--json", models_json, "Print JSON");
+
+  KernelArgs k;
+  auto* kernels = app.add_subcommand("kernels", "Evaluate a discrete Lagrangian and its derivatives (JSON)");
+  kernels->add_option("--model", k.model, "A bundled model's name or a path to a .lag file")->required();
+  kernels->add_option("--disc", k.disc, "Discretization, e.g. trapezoid or trapezoid(alpha=1)")->required();
+  kernels->add_option("--h", k.h, "Step h")->required();
+  kernels->add_option("--t0", k.t0, "Time of the first node")->required();
+  kernels->add_option("--t1", k.t1, "Time of the second node")->required();
+  kernels->add_option("--q0", k.q0, "First node: order*ncoords values a,b,... [coords, coords', ...]")->required();
+  kernels->add_option("--q1", k.q1, "Second node, same layout")->required();
+  kernels->add_option("--param", k.params, "NAME=VALUE, overrides a param's default (repeatable)")
+      ->allow_extra_args(false);
+
+  SolveArgs s;
+  auto* solve_cmd = app.add_subcommand("solve", "Solve a scene and write trajectory, convergence, summary and plots");
+  solve_cmd->footer(kExitCodesHelp);
+  solve_cmd->add_option("scene", s.scene, "Scene file (TOML)")->required();
+  solve_cmd->add_option("--out", s.out, "Output folder (default: [output].dir, else out/<scene-stem>)");
+  solve_cmd->add_option("--set", s.sets, "KEY=VALUE: override a scene key, e.g. solver.method=newton (repeatable)")
+      ->allow_extra_args(false);
+  solve_cmd->add_option("--threads", s.threads, "Threads (0: all cores); overrides solver.threads")
+      ->check(CLI::Range(0, 4096));
+  solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
+  solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
+
+  CheckArgs c;
+  auto* check = app.add_subcommand("check", "Print the convergence certificate at the initial guess or a trajectory");
+  check->add_option("scene", c.scene, "Scene file (TOML)")->required();
+  check->add_option("--trajectory", c.trajectory, "A trajectory.csv (default: the scene's initial guess)");
+  check->add_option("--set", c.sets, "KEY=VALUE: override a scene key (repeatable)")->allow_extra_args(false);
+  check->add_flag("--json", c.json, "Print JSON");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    const int code = app.exit(error);
+    return code == 0 ? 0 : kExitUsage;
+  }
+
+  try {
+    if (*models) return run_models(models_json);
+    if (*kernels) return run_kernels(k);
+    if (*solve_cmd) return run_solve(s);
+    if (*check) return run_check(c);
+  } catch (const UsageError& error) {
+    std::fprintf(stderr, "pardel: error: %s\n", error.what());
+    return kExitUsage;
+  } catch (const SceneError& error) {
+    std::fprintf(stderr, "%s\n", error.what());
+    return kExitUsage;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "pardel: error: %s\n", error.what());
+    return kExitInternal;
+  }
+  return kExitUsage;
+}

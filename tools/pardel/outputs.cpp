@@ -1,0 +1,124 @@
+// convergence.csv, summary.json and the physical cost of a solve (see outputs.hpp).
+#include "outputs.hpp"
+
+#include <cmath>
+
+#include "trajectory_io.hpp"
+
+namespace pardel::cli {
+
+double summed_clock(const Problem& problem, const Trajectory& trajectory) {
+  const pardel_model& model = *problem.model;
+  const double h = problem.T / trajectory.N;
+  double total = 0;
+  for (int k = 0; k < trajectory.N; ++k) {
+    total += model.clock(h, trajectory.t[k], trajectory.node(k), trajectory.node(k + 1), problem.params.data());
+  }
+  return total;
+}
+
+PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Trajectory& trajectory) {
+  const Problem& problem = scene.problem;
+  const std::string name = scene.model->name;
+  if (scene.model->clock && problem.clock == ClockMode::free_final_time) {
+    return {"travel_time", summary.final_time - problem.t0,
+            "t_N - t_0, the node times being the prefix sums of the model's clock (free final time)"};
+  }
+  if (scene.model->clock && problem.clock == ClockMode::none) {
+    return {"travel_time", summed_clock(problem, trajectory),
+            "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the clock F)"};
+  }
+  if (name == "fuel_nav") {
+    return {"fuel", summary.action, "the discrete action: the integral of |u|^2/2 dt by the discretization"};
+  }
+  if (name == "spacecraft") {
+    return {"fuel", summary.action, "the discrete action: the integral of |u|^2 dt by the discretization"};
+  }
+  if (name == "interp_fuel") {
+    return {"cost", summary.action,
+            "the discrete action: the integral of (|u|^2 + c |u'|^2)/2 dt by the discretization"};
+  }
+  return {"action", summary.action, "the discrete action"};
+}
+
+std::string convergence_csv(const Summary& summary) {
+  std::string out = "iteration,N,residual,action,seconds\n";
+  for (const auto& record : summary.history) {
+    out += std::to_string(record.iteration) + "," + std::to_string(record.N) + "," + format_double(record.residual) +
+           "," + format_double(record.action) + "," + format_double(record.seconds) + "\n";
+  }
+  return out;
+}
+
+nlohmann::ordered_json certificate_json(const Certificate& c, std::size_t max_violations) {
+  nlohmann::ordered_json j;
+  j["theorem_holds"] = c.theorem_holds;
+  j["all_intervals_psd"] = c.all_intervals_psd;
+  j["all_A_pd"] = c.all_A_pd;
+  j["all_B_pd"] = c.all_B_pd;
+  j["hessian_positive_definite"] = c.hessian_positive_definite;
+  j["inertia_positive"] = c.inertia_positive;
+  j["inertia_negative"] = c.inertia_negative;
+  j["inertia_zero"] = c.inertia_zero;
+  j["jacobi_spectral_radius"] = c.jacobi_spectral_radius;
+  j["expected_iterations"] = c.expected_iterations;
+  j["violations_total"] = c.violations.size();
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (std::size_t i = 0; i < c.violations.size() && i < max_violations; ++i) {
+    const auto& v = c.violations[i];
+    list.push_back({{"k", v.k},
+                    {"hessian_psd", v.hessian_psd},
+                    {"A_pd", v.A_pd},
+                    {"B_pd", v.B_pd},
+                    {"min_eig_hessian", v.min_eig_hessian},
+                    {"min_eig_A", v.min_eig_A},
+                    {"min_eig_B", v.min_eig_B}});
+  }
+  j["violations"] = list;
+  return j;
+}
+
+nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
+                                    const Certificate& certificate, const std::string& model_source) {
+  const Problem& problem = scene.problem;
+  const PhysicalCost cost = physical_cost(scene, summary, trajectory);
+  nlohmann::ordered_json j;
+  j["status"] = to_string(summary.termination);
+  j["message"] = summary.message;
+  j["iterations"] = summary.iterations;
+  j["residual"] = summary.residual;
+  j["action"] = summary.action;
+  j["cost"] = {{"name", cost.name}, {"value", cost.value}, {"definition", cost.definition}};
+  j["final_time"] = summary.final_time;
+  j["wall_seconds"] = summary.wall_seconds;
+  j["method"] = to_string(summary.method);
+  j["N"] = summary.N;
+  j["threads"] = summary.threads;
+  j["model"] = scene.model->name;
+  j["model_source"] = model_source;
+  j["discretization"] = scene.discretization;
+  j["clock"] = to_string(problem.clock);
+  nlohmann::ordered_json params = nlohmann::ordered_json::object();
+  for (int i = 0; i < scene.model->nparams; ++i) params[scene.model->param_names[i]] = problem.params[i];
+  j["params"] = params;
+  j["t0"] = problem.t0;
+  j["T"] = problem.T;
+  j["tol"] = scene.options.tol;
+  j["scene"] = scene.path;
+  j["certificate"] = certificate_json(certificate);
+  return j;
+}
+
+int exit_code(Termination termination) {
+  switch (termination) {
+    case Termination::converged: return 0;
+    case Termination::invalid_input: return 2;
+    case Termination::max_iterations: return 3;
+    case Termination::diverged: return 4;
+    case Termination::non_finite: return 5;
+    case Termination::interrupted: return 6;
+  }
+  return 1;
+}
+
+}  // namespace pardel::cli

@@ -1,0 +1,51 @@
+/**
+ * @file outputs.hpp
+ * What `pardel solve` writes besides the trajectory: convergence.csv, summary.json (status,
+ * numbers, the example's physical cost and the convergence certificate) and the cost itself.
+ */
+#ifndef PARDEL_CLI_OUTPUTS_HPP
+#define PARDEL_CLI_OUTPUTS_HPP
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "pardel/pardel.hpp"
+#include "scene.hpp"
+
+namespace pardel::cli {
+
+/** The physical cost a scene's example minimizes, as reported in summary.json. */
+struct PhysicalCost {
+  std::string name;        ///< "travel_time", "fuel", "cost" or "action"
+  double value = 0;
+  std::string definition;  ///< how the value was computed
+};
+
+/**
+ * Travel time for models with a clock solved without the Sundman mode (Summary::final_time - t0
+ * under free_final_time, else the summed clock kernel); otherwise the discrete action, named
+ * "fuel" (fuel_nav, spacecraft), "cost" (interp_fuel) or "action" (any other model).
+ */
+PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Trajectory& trajectory);
+
+/** The sum over intervals of the model's clock kernel (requires model.clock). */
+double summed_clock(const Problem& problem, const Trajectory& trajectory);
+
+/** convergence.csv: iteration,N,residual,action,seconds — one row per history record. */
+std::string convergence_csv(const Summary& summary);
+
+/** Every field of the certificate; at most `max_violations` violations are listed
+ *  (violations_total gives their number). */
+nlohmann::ordered_json certificate_json(const Certificate& certificate, std::size_t max_violations = 100);
+
+/** summary.json for one solve. */
+nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
+                                    const Certificate& certificate, const std::string& model_source);
+
+/** The exit status of `pardel solve` for a termination: 0 converged, 2 invalid_input,
+ *  3 max_iterations, 4 diverged, 5 non_finite, 6 interrupted. */
+int exit_code(Termination termination);
+
+}  // namespace pardel::cli
+
+#endif  // PARDEL_CLI_OUTPUTS_HPP

@@ -1,0 +1,682 @@
+// Scene parsing and checking for the pardel command line (see scene.hpp for the contract).
+#include "scene.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#define TOML_EXCEPTIONS 1
+#include <toml++/toml.h>
+
+#include "trajectory_io.hpp"
+
+namespace pardel::cli {
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + cost});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string nearest_name(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_distance = std::string::npos;
+  for (const auto& candidate : candidates) {
+    const std::size_t d = edit_distance(word, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  // A plausible typo: at most a third of the longer word changed (and at least one edit allowed).
+  const std::size_t longest = std::max(word.size(), best.size());
+  const std::size_t allowed = std::max<std::size_t>(1, (longest + 2) / 3);
+  return best_distance <= allowed ? best : std::string();
+}
+
+std::string boundary_prefix(int d) {
+  switch (d) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    case 3: return "j";
+    default: return "d" + std::to_string(d) + "_";
+  }
+}
+
+bool parse_clock_mode(std::string_view text, ClockMode* mode) {
+  if (text == "none") *mode = ClockMode::none;
+  else if (text == "free_final_time") *mode = ClockMode::free_final_time;
+  else if (text == "fixed_total_time") *mode = ClockMode::fixed_total_time;
+  else return false;
+  return true;
+}
+
+const char* to_string(ClockMode mode) {
+  switch (mode) {
+    case ClockMode::none: return "none";
+    case ClockMode::free_final_time: return "free_final_time";
+    case ClockMode::fixed_total_time: return "fixed_total_time";
+  }
+  return "none";
+}
+
+namespace {
+
+const std::vector<std::string> kMethodNames = {"jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"};
+const std::vector<std::string> kClockNames = {"none", "free_final_time", "fixed_total_time"};
+const std::vector<std::string> kGuessKinds = {"linear", "polyline", "csv"};
+
+std::string type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a floating-point number";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::table: return "a table";
+    case toml::node_type::date: return "a date";
+    case toml::node_type::time: return "a time";
+    case toml::node_type::date_time: return "a date-time";
+    default: return "nothing";
+  }
+}
+
+std::string show_value(const toml::node& node) {
+  if (const auto* s = node.as_string()) return fmt::format("\"{}\"", s->get());
+  if (node.is_table()) return "{...}";
+  std::ostringstream out;
+  node.visit([&](const auto& v) { out << v; });
+  std::string text = out.str();
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
+
+std::string join(const std::vector<std::string>& names, const char* separator = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) out += (i ? separator : "") + names[i];
+  return out;
+}
+
+/** Walks a parsed scene, checking each key; every error names the key and where it came from. */
+class SceneReader {
+ public:
+  SceneReader(const std::string& file, std::map<std::string, std::string> origins)
+      : file_(file), origins_(std::move(origins)) {}
+
+  /** "FILE:LINE:COL", or the --set that supplied the key, or the file alone. */
+  std::string where(const toml::source_region& source, const std::string& dotted) const {
+    if (source.begin.line > 0 && source.path && source.path->rfind("--set", 0) != 0) {
+      return fmt::format("{}:{}:{}", file_, source.begin.line, source.begin.column);
+    }
+    std::string prefix = dotted;
+    for (;;) {
+      auto it = origins_.find(prefix);
+      if (it != origins_.end()) return it->second;
+      const auto dot = prefix.rfind('.');
+      if (dot == std::string::npos) break;
+      prefix.resize(dot);
+    }
+    return file_;
+  }
+
+  [[noreturn]] void fail(const toml::source_region& source, const std::string& dotted,
+                         const std::string& message) const {
+    throw SceneError(fmt::format("{}: error: {}", where(source, dotted), message));
+  }
+  [[noreturn]] void fail(const toml::node& node, const std::string& dotted, const std::string& message) const {
+    fail(node.source(), dotted, message);
+  }
+
+  /** Every key of `table` must be in `allowed`; the first that is not is an error. */
+  void check_keys(const toml::table& table, const std::string& prefix, const std::vector<std::string>& allowed,
+                  const std::string& note = "") const {
+    for (auto&& [key, node] : table) {
+      const std::string name(key.str());
+      if (std::find(allowed.begin(), allowed.end(), name) != allowed.end()) continue;
+      const std::string dotted = prefix.empty() ? name : prefix + "." + name;
+      const std::string suggestion = nearest_name(name, allowed);
+      std::string message = fmt::format("unknown key '{}'", dotted);
+      if (!suggestion.empty()) {
+        message += fmt::format("; did you mean '{}'?", prefix.empty() ? suggestion : prefix + "." + suggestion);
+      } else if (!allowed.empty()) {
+        message += fmt::format(" (valid keys{}: {})", prefix.empty() ? "" : " in [" + prefix + "]", join(allowed));
+      }
+      if (!note.empty()) message += " " + note;
+      const toml::source_region& source = key.source().begin.line > 0 ? key.source() : node.source();
+      fail(source, dotted, message);
+    }
+  }
+
+  const toml::table* table(const toml::table& parent, const std::string& key, const std::string& dotted) const {
+    const toml::node* node = parent.get(key);
+    if (!node) return nullptr;
+    if (!node->is_table()) fail(*node, dotted, fmt::format("{} must be a table, got {}", dotted, type_name(*node)));
+    return node->as_table();
+  }
+
+  double number(const toml::node& node, const std::string& dotted) const {
+    if (node.is_integer()) return static_cast<double>(node.as_integer()->get());
+    if (node.is_floating_point()) {
+      const double v = node.as_floating_point()->get();
+      if (!std::isfinite(v)) fail(node, dotted, fmt::format("{} must be a finite number, got {}", dotted, show_value(node)));
+      return v;
+    }
+    fail(node, dotted, fmt::format("{} must be a number, got {} {}", dotted, type_name(node), show_value(node)));
+  }
+
+  std::optional<double> number(const toml::table* parent, const std::string& key, const std::string& dotted) const {
+    if (!parent) return std::nullopt;
+    const toml::node* node = parent->get(key);
+    if (!node) return std::nullopt;
+    return number(*node, dotted);
+  }
+
+  std::optional<long long> integer(const toml::table* parent, const std::string& key, const std::string& dotted) const {
+    if (!parent) return std::nullopt;
+    const toml::node* node = parent->get(key);
+    if (!node) return std::nullopt;
+    if (!node->is_integer()) {
+      fail(*node, dotted, fmt::format("{} must be an integer, got {} {}", dotted, type_name(*node), show_value(*node)));
+    }
+    return node->as_integer()->get();
+  }
+
+  std::optional<std::string> string(const toml::table* parent, const std::string& key, const std::string& dotted) const {
+    if (!parent) return std::nullopt;
+    const toml::node* node = parent->get(key);
+    if (!node) return std::nullopt;
+    if (!node->is_string()) {
+      fail(*node, dotted, fmt::format("{} must be a string, got {} {}", dotted, type_name(*node), show_value(*node)));
+    }
+    return node->as_string()->get();
+  }
+
+  /** An array of exactly `size` numbers; `what` explains the expected size. */
+  std::vector<double> vector(const toml::node& node, const std::string& dotted, std::size_t size,
+                             const std::string& what) const {
+    const toml::array* array = node.as_array();
+    if (!array) {
+      fail(node, dotted, fmt::format("{} must be an array of {} numbers ({}), got {} {}", dotted, size, what,
+                                     type_name(node), show_value(node)));
+    }
+    if (array->size() != size) {
+      fail(node, dotted, fmt::format("{} has {} value{}; expected {} ({})", dotted, array->size(),
+                                     array->size() == 1 ? "" : "s", size, what));
+    }
+    std::vector<double> values;
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      values.push_back(number(*array->get(i), fmt::format("{}[{}]", dotted, i)));
+    }
+    return values;
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+  std::map<std::string, std::string> origins_;
+};
+
+std::vector<std::string> split(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t pos = text.find(separator, start);
+    parts.push_back(text.substr(start, pos == std::string::npos ? std::string::npos : pos - start));
+    if (pos == std::string::npos) return parts;
+    start = pos + 1;
+  }
+}
+
+bool is_bare_key(const std::string& key) {
+  if (key.empty()) return false;
+  return std::all_of(key.begin(), key.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+  });
+}
+
+/** Applies one --set KEY=VALUE to the document; returns the dotted key. */
+std::string apply_override(toml::table& root, const std::string& assignment) {
+  const std::string origin = "--set " + assignment;
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos) {
+    throw SceneError(fmt::format("{}: error: expected KEY=VALUE (e.g. solver.method=newton)", origin));
+  }
+  const std::string dotted = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  const auto path = split(dotted, '.');
+  for (const auto& segment : path) {
+    if (!is_bare_key(segment)) {
+      throw SceneError(fmt::format("{}: error: '{}' is not a key path (keys joined by '.', e.g. grid.N)", origin, dotted));
+    }
+  }
+  toml::table snippet;
+  const std::string document = "value = " + text;
+  try {
+    snippet = toml::parse(std::string_view(document), std::string_view("--set"));
+  } catch (const toml::parse_error&) {
+    snippet = toml::table{};
+    snippet.insert_or_assign("value", text);  // not a TOML value: take it as a string
+  }
+  toml::table* table = &root;
+  std::string walked;
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    walked += (i ? "." : "") + path[i];
+    toml::node* next = table->get(path[i]);
+    if (!next) {
+      table->insert_or_assign(path[i], toml::table{});
+      next = table->get(path[i]);
+    }
+    if (!next->is_table()) {
+      throw SceneError(fmt::format("{}: error: {} is {}, not a table; cannot set {}", origin, walked,
+                                   type_name(*next), dotted));
+    }
+    table = next->as_table();
+  }
+  const toml::node& value = *snippet.get("value");
+  value.visit([&](const auto& v) { table->insert_or_assign(path.back(), v); });
+  return dotted;
+}
+
+std::string resolve_relative(const std::string& scene_path, const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  if (p.is_absolute()) return path;
+  return (fs::path(scene_path).parent_path() / p).lexically_normal().string();
+}
+
+bool looks_like_path(const std::string& spec) {
+  return spec.find('/') != std::string::npos ||
+         (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
+}
+
+}  // namespace
+
+Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
+                  const ModelResolver& resolve, const std::vector<std::string>& model_names) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& error) {
+    throw SceneError(fmt::format("{}:{}:{}: error: {}", source_name, error.source().begin.line,
+                                 error.source().begin.column, error.description()));
+  }
+  std::map<std::string, std::string> origins;
+  for (const auto& assignment : overrides) {
+    const std::string dotted = apply_override(root, assignment);
+    origins[dotted] = "--set " + assignment;
+  }
+  const SceneReader r(source_name, origins);
+
+  Scene scene;
+  scene.path = source_name;
+  r.check_keys(root, "", {"model", "discretization", "params", "grid", "boundary", "knots", "guess", "solver", "output"});
+
+  // model
+  const auto model_spec = r.string(&root, "model", "model");
+  if (!model_spec) {
+    throw SceneError(fmt::format("{}: error: missing key 'model' (a bundled model's name or a path to a .lag file)",
+                                 source_name));
+  }
+  scene.model_spec = *model_spec;
+  std::string to_resolve = *model_spec;
+  if (looks_like_path(to_resolve)) {
+    const std::string beside_scene = resolve_relative(source_name, to_resolve);
+    if (std::filesystem::exists(beside_scene)) to_resolve = beside_scene;
+  }
+  const toml::node& model_node = *root.get("model");
+  try {
+    scene.model = resolve(to_resolve);
+  } catch (const std::exception& error) {
+    r.fail(model_node, "model", fmt::format("cannot load model '{}': {}", *model_spec, error.what()));
+  }
+  if (!scene.model) {
+    const std::string suggestion = nearest_name(*model_spec, model_names);
+    std::string message = fmt::format("unknown model '{}'", *model_spec);
+    if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+    else if (!model_names.empty()) message += fmt::format(" (bundled models: {})", join(model_names));
+    r.fail(model_node, "model", message);
+  }
+  const pardel_model& model = *scene.model;
+  Problem& problem = scene.problem;
+  problem.model = scene.model;
+  std::vector<std::string> coord_names;
+  for (int i = 0; i < model.ncoords; ++i) coord_names.push_back(model.coords[i]);
+  const std::string coords_text = join(coord_names);
+
+  // discretization
+  std::vector<std::string> disc_names;
+  for (int i = 0; i < model.ndiscretizations; ++i) disc_names.push_back(model.discretizations[i].name);
+  if (const auto disc = r.string(&root, "discretization", "discretization")) {
+    problem.discretization = find_discretization(model, *disc);
+    if (!problem.discretization && model.order >= 2 && *disc == "trapezoid") {
+      problem.discretization = find_discretization(model, "trapezoid(alpha=1)");
+    }
+    if (!problem.discretization) {
+      const std::string suggestion = nearest_name(*disc, disc_names);
+      std::string message = fmt::format("unknown discretization '{}' for model {}", *disc, model.name);
+      if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+      message += fmt::format(" (it has: {})", join(disc_names));
+      r.fail(*root.get("discretization"), "discretization", message);
+    }
+  } else {
+    if (model.ndiscretizations < 1) {
+      throw SceneError(fmt::format("{}: error: model {} has no discretization", source_name, model.name));
+    }
+    problem.discretization = &model.discretizations[0];
+  }
+  scene.discretization = problem.discretization->name;
+
+  // params
+  std::vector<std::string> param_names;
+  for (int i = 0; i < model.nparams; ++i) param_names.push_back(model.param_names[i]);
+  problem.params.assign(model.param_defaults, model.param_defaults + model.nparams);
+  if (const toml::table* params = r.table(root, "params", "params")) {
+    r.check_keys(*params, "params", param_names,
+                 model.nparams == 0 ? fmt::format("(model {} has no params)", model.name) : "");
+    for (int i = 0; i < model.nparams; ++i) {
+      if (auto v = r.number(params, param_names[i], "params." + param_names[i])) problem.params[i] = *v;
+    }
+  }
+
+  // grid
+  const toml::table* grid = r.table(root, "grid", "grid");
+  if (!grid) throw SceneError(fmt::format("{}: error: missing table [grid] (keys t0, T, N)", source_name));
+  r.check_keys(*grid, "grid", {"t0", "T", "N"});
+  problem.t0 = r.number(grid, "t0", "grid.t0").value_or(0.0);
+  const auto T = r.number(grid, "T", "grid.T");
+  if (!T) r.fail(grid->source(), "grid", "missing key 'grid.T' (the final time minus t0)");
+  if (!(*T > 0)) r.fail(*grid->get("T"), "grid.T", fmt::format("grid.T must be > 0, got {}", *T));
+  problem.T = *T;
+  const auto N = r.integer(grid, "N", "grid.N");
+  if (!N) r.fail(grid->source(), "grid", "missing key 'grid.N' (the number of intervals)");
+  constexpr long long kMaxN = 100000000;
+  if (*N < 2 || *N > kMaxN) {
+    r.fail(*grid->get("N"), "grid.N", fmt::format("grid.N must be between 2 and {}, got {}", kMaxN, *N));
+  }
+  problem.N = static_cast<int>(*N);
+
+  // boundary
+  const toml::table* boundary = r.table(root, "boundary", "boundary");
+  std::vector<std::string> boundary_keys;
+  for (int d = 0; d < model.order; ++d) {
+    boundary_keys.push_back(boundary_prefix(d) + "0");
+    boundary_keys.push_back(boundary_prefix(d) + "N");
+  }
+  if (!boundary) {
+    throw SceneError(fmt::format("{}: error: missing table [boundary] (keys {})", source_name, join(boundary_keys)));
+  }
+  r.check_keys(*boundary, "boundary", boundary_keys, fmt::format("(model {} has order {})", model.name, model.order));
+  problem.q0.clear();
+  problem.qN.clear();
+  for (int d = 0; d < model.order; ++d) {
+    for (const char end : {'0', 'N'}) {
+      const std::string key = boundary_prefix(d) + end;
+      const toml::node* node = boundary->get(key);
+      if (!node) {
+        r.fail(boundary->source(), "boundary",
+               fmt::format("missing key 'boundary.{}' ({} values: {}{})", key, model.ncoords, coords_text,
+                           d == 0 ? "" : fmt::format(", derivative {}", d)));
+      }
+      const auto values = r.vector(*node, "boundary." + key, static_cast<std::size_t>(model.ncoords),
+                                   fmt::format("model {} has coords {}", model.name, coords_text));
+      auto& target = end == '0' ? problem.q0 : problem.qN;
+      target.insert(target.end(), values.begin(), values.end());
+    }
+  }
+  // q0/qN are laid out [coords, coords', ...]: the loop above appended derivative by derivative.
+
+  // solver (read before knots: the clock mode decides whether knots make sense)
+  Options& options = scene.options;
+  const toml::table* solver = r.table(root, "solver", "solver");
+  if (solver) {
+    r.check_keys(*solver, "solver",
+                 {"method", "tol", "max_iterations", "damping", "newton_substeps", "threads", "refine",
+                  "clock_update_every", "clock"});
+    if (const auto method = r.string(solver, "method", "solver.method")) {
+      if (!parse_method(*method, &options.method)) {
+        const std::string suggestion = nearest_name(*method, kMethodNames);
+        std::string message = fmt::format("unknown method '{}'", *method);
+        if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+        message += fmt::format(" (methods: {})", join(kMethodNames));
+        r.fail(*solver->get("method"), "solver.method", message);
+      }
+    }
+    if (const auto tol = r.number(solver, "tol", "solver.tol")) {
+      if (!(*tol > 0)) r.fail(*solver->get("tol"), "solver.tol", fmt::format("solver.tol must be > 0, got {}", *tol));
+      options.tol = *tol;
+    }
+    if (const auto max_it = r.integer(solver, "max_iterations", "solver.max_iterations")) {
+      if (*max_it < 1) {
+        r.fail(*solver->get("max_iterations"), "solver.max_iterations",
+               fmt::format("solver.max_iterations must be >= 1, got {}", *max_it));
+      }
+      options.max_iterations = static_cast<long>(*max_it);
+    }
+    if (const auto damping = r.number(solver, "damping", "solver.damping")) {
+      if (!(*damping >= 0 && *damping < 1)) {
+        r.fail(*solver->get("damping"), "solver.damping",
+               fmt::format("solver.damping must be in [0, 1), got {}", *damping));
+      }
+      options.damping = *damping;
+    }
+    if (const auto m = r.integer(solver, "newton_substeps", "solver.newton_substeps")) {
+      if (*m < 1 || *m > 1000) {
+        r.fail(*solver->get("newton_substeps"), "solver.newton_substeps",
+               fmt::format("solver.newton_substeps must be between 1 and 1000, got {}", *m));
+      }
+      options.newton_substeps = static_cast<int>(*m);
+    }
+    if (const auto threads = r.integer(solver, "threads", "solver.threads")) {
+      if (*threads < 0 || *threads > 4096) {
+        r.fail(*solver->get("threads"), "solver.threads",
+               fmt::format("solver.threads must be between 0 (all cores) and 4096, got {}", *threads));
+      }
+      options.threads = static_cast<int>(*threads);
+    }
+    if (const toml::table* refine = r.table(*solver, "refine", "solver.refine")) {
+      r.check_keys(*refine, "solver.refine", {"start_N", "factor"});
+      const auto start = r.integer(refine, "start_N", "solver.refine.start_N");
+      if (!start) r.fail(refine->source(), "solver.refine", "missing key 'solver.refine.start_N'");
+      if (*start < 2 || *start > problem.N) {
+        r.fail(*refine->get("start_N"), "solver.refine.start_N",
+               fmt::format("solver.refine.start_N must be between 2 and grid.N = {}, got {}", problem.N, *start));
+      }
+      options.refine_start_N = static_cast<int>(*start);
+      if (const auto factor = r.number(refine, "factor", "solver.refine.factor")) {
+        if (!(*factor > 1 && *factor <= 16)) {
+          r.fail(*refine->get("factor"), "solver.refine.factor",
+                 fmt::format("solver.refine.factor must be in (1, 16], got {}", *factor));
+        }
+        options.refine_factor = *factor;
+      }
+    }
+    if (const auto every = r.integer(solver, "clock_update_every", "solver.clock_update_every")) {
+      if (*every < 1) {
+        r.fail(*solver->get("clock_update_every"), "solver.clock_update_every",
+               fmt::format("solver.clock_update_every must be >= 1, got {}", *every));
+      }
+      options.clock_update_every = static_cast<int>(std::min<long long>(*every, 1000000000));
+    }
+    if (const auto clock = r.string(solver, "clock", "solver.clock")) {
+      if (!parse_clock_mode(*clock, &problem.clock)) {
+        const std::string suggestion = nearest_name(*clock, kClockNames);
+        std::string message = fmt::format("unknown clock mode '{}'", *clock);
+        if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+        message += fmt::format(" (modes: {})", join(kClockNames));
+        r.fail(*solver->get("clock"), "solver.clock", message);
+      }
+      if (problem.clock != ClockMode::none && !model.clock) {
+        r.fail(*solver->get("clock"), "solver.clock",
+               fmt::format("solver.clock = \"{}\" needs a model with a clock; model {} declares none", *clock,
+                           model.name));
+      }
+    }
+  }
+
+  // knots
+  if (const toml::node* knots_node = root.get("knots")) {
+    const toml::array* knots = knots_node->as_array();
+    if (!knots) {
+      r.fail(*knots_node, "knots", fmt::format("knots must be an array of tables ([[knots]] with t and q), got {}",
+                                               type_name(*knots_node)));
+    }
+    if (!knots->empty() && problem.clock != ClockMode::none) {
+      r.fail(*knots_node, "knots", "knots need solver.clock = \"none\" (node times move under a clock)");
+    }
+    const double h = problem.T / problem.N;
+    std::vector<long> used_nodes;
+    for (std::size_t i = 0; i < knots->size(); ++i) {
+      const std::string name = fmt::format("knots[{}]", i);
+      const toml::node& node = *knots->get(i);
+      const toml::table* knot = node.as_table();
+      if (!knot) r.fail(node, name, fmt::format("{} must be a table with t and q, got {}", name, type_name(node)));
+      r.check_keys(*knot, name, {"t", "q"});
+      const auto t = r.number(knot, "t", name + ".t");
+      if (!t) r.fail(knot->source(), name, fmt::format("missing key '{}.t'", name));
+      if (!knot->get("q")) r.fail(knot->source(), name, fmt::format("missing key '{}.q'", name));
+      Knot k;
+      k.q = r.vector(*knot->get("q"), name + ".q", static_cast<std::size_t>(model.ncoords),
+                     fmt::format("model {} has coords {}", model.name, coords_text));
+      const double position = (*t - problem.t0) / h;
+      const long node_index = std::lround(position);
+      const toml::node& t_node = *knot->get("t");
+      if (!(position > 0.5 && position < problem.N - 0.5)) {
+        r.fail(t_node, name + ".t",
+               fmt::format("{}.t = {} must lie strictly inside the grid ({}, {}); the ends are set by [boundary]", name,
+                           *t, problem.t0, problem.t0 + problem.T));
+      }
+      const double node_time = problem.t0 + node_index * h;
+      if (std::abs(*t - node_time) > 1e-9 * std::max(1.0, std::abs(problem.T))) {
+        const long below = static_cast<long>(std::floor(position));
+        r.fail(t_node, name + ".t",
+               fmt::format("{}.t = {} is not on a grid node (h = T/N = {}); nearest nodes: t = {} (k = {}) and "
+                           "t = {} (k = {})",
+                           name, *t, h, problem.t0 + below * h, below, problem.t0 + (below + 1) * h, below + 1));
+      }
+      if (std::find(used_nodes.begin(), used_nodes.end(), node_index) != used_nodes.end()) {
+        r.fail(t_node, name + ".t", fmt::format("{}.t = {}: another knot is already at node k = {}", name, *t, node_index));
+      }
+      used_nodes.push_back(node_index);
+      k.t = node_time;
+      problem.knots.push_back(std::move(k));
+    }
+  }
+
+  // guess
+  if (const toml::table* guess = r.table(root, "guess", "guess")) {
+    r.check_keys(*guess, "guess", {"kind", "points", "path"});
+    const std::string kind = r.string(guess, "kind", "guess.kind").value_or("linear");
+    if (kind == "linear") {
+      scene.guess.kind = GuessKind::linear;
+    } else if (kind == "polyline") {
+      scene.guess.kind = GuessKind::polyline;
+    } else if (kind == "csv") {
+      scene.guess.kind = GuessKind::csv;
+    } else {
+      const std::string suggestion = nearest_name(kind, kGuessKinds);
+      std::string message = fmt::format("unknown guess kind '{}'", kind);
+      if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+      message += fmt::format(" (kinds: {})", join(kGuessKinds));
+      r.fail(*guess->get("kind"), "guess.kind", message);
+    }
+    const toml::node* points = guess->get("points");
+    const toml::node* path = guess->get("path");
+    if (points && scene.guess.kind != GuessKind::polyline) {
+      r.fail(*points, "guess.points", fmt::format("guess.points is used only with kind = \"polyline\", not \"{}\"", kind));
+    }
+    if (path && scene.guess.kind != GuessKind::csv) {
+      r.fail(*path, "guess.path", fmt::format("guess.path is used only with kind = \"csv\", not \"{}\"", kind));
+    }
+    if (scene.guess.kind == GuessKind::polyline) {
+      if (!points) r.fail(guess->source(), "guess", "missing key 'guess.points' (the polyline's vertices)");
+      const toml::array* array = points->as_array();
+      if (!array || array->size() < 2) {
+        r.fail(*points, "guess.points",
+               fmt::format("guess.points must be an array of at least 2 points (arrays of {} numbers: {})",
+                           model.ncoords, coords_text));
+      }
+      for (std::size_t i = 0; i < array->size(); ++i) {
+        scene.guess.points.push_back(r.vector(*array->get(i), fmt::format("guess.points[{}]", i),
+                                              static_cast<std::size_t>(model.ncoords),
+                                              fmt::format("model {} has coords {}", model.name, coords_text)));
+      }
+    }
+    if (scene.guess.kind == GuessKind::csv) {
+      const auto csv = r.string(guess, "path", "guess.path");
+      if (!csv) r.fail(guess->source(), "guess", "missing key 'guess.path' (a trajectory.csv file)");
+      scene.guess.csv_path = resolve_relative(source_name, *csv);
+      if (!std::filesystem::exists(scene.guess.csv_path)) {
+        r.fail(*path, "guess.path", fmt::format("guess.path: file '{}' not found", scene.guess.csv_path));
+      }
+    }
+  }
+
+  // output
+  if (const toml::table* output = r.table(root, "output", "output")) {
+    r.check_keys(*output, "output", {"dir"});
+    if (const auto dir = r.string(output, "dir", "output.dir")) {
+      if (dir->empty()) r.fail(*output->get("dir"), "output.dir", "output.dir must not be empty");
+      scene.output_dir = *dir;
+    }
+  }
+
+  std::string why;
+  if (!options.is_valid(&why)) {
+    throw SceneError(fmt::format("{}: error: invalid solver options: {}", r.where(solver ? solver->source()
+                                                                                        : toml::source_region{},
+                                                                                 "solver"),
+                                 why));
+  }
+  return scene;
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides, const ModelResolver& resolve,
+                 const std::vector<std::string>& model_names) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(fmt::format("{}: error: cannot open scene file", path));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), path, overrides, resolve, model_names);
+}
+
+Trajectory make_initial_guess(const Scene& scene) {
+  switch (scene.guess.kind) {
+    case GuessKind::linear: return linear_guess(scene.problem);
+    case GuessKind::polyline: return polyline_guess(scene.problem, scene.guess.points);
+    case GuessKind::csv: {
+      Trajectory from;
+      try {
+        from = read_trajectory_csv(scene.guess.csv_path, *scene.model);
+      } catch (const std::runtime_error& error) {
+        throw SceneError(error.what());
+      }
+      if (from.N == scene.problem.N) {
+        // Boundary values come from the scene, not the file.
+        std::copy(scene.problem.q0.begin(), scene.problem.q0.end(), from.node(0));
+        std::copy(scene.problem.qN.begin(), scene.problem.qN.end(), from.node(from.N));
+        return from;
+      }
+      return resample(scene.problem, from, scene.problem.N);
+    }
+  }
+  return linear_guess(scene.problem);
+}
+
+}  // namespace pardel::cli

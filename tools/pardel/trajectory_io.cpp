@@ -1,0 +1,171 @@
+// Trajectory CSV files and atomic writes for the pardel command line (see trajectory_io.hpp).
+#include "trajectory_io.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace pardel::cli {
+
+std::vector<std::string> state_column_names(const pardel_model& model) {
+  std::vector<std::string> names;
+  for (int d = 0; d < model.order; ++d) {
+    for (int i = 0; i < model.ncoords; ++i) names.push_back(model.coords[i] + std::string(d, '\''));
+  }
+  return names;
+}
+
+std::string format_double(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  return fmt::format("{:.17g}", value);
+}
+
+std::string trajectory_csv(const pardel_model& model, const Trajectory& trajectory) {
+  const int dim = trajectory.dim;
+  const int nc = model.ncoords;
+  const bool add_velocity = model.order == 1;
+  std::string out = "k,t";
+  for (const auto& name : state_column_names(model)) out += "," + name;
+  if (add_velocity) {
+    for (int i = 0; i < nc; ++i) out += "," + std::string(model.coords[i]) + "'";
+  }
+  out += '\n';
+  for (int k = 0; k <= trajectory.N; ++k) {
+    out += std::to_string(k) + "," + format_double(trajectory.t[k]);
+    const double* q = trajectory.node(k);
+    for (int j = 0; j < dim; ++j) out += "," + format_double(q[j]);
+    if (add_velocity) {
+      const int a = k == 0 ? 0 : k - 1;
+      const int b = k == trajectory.N ? k : k + 1;
+      const double dt = trajectory.t[b] - trajectory.t[a];
+      for (int i = 0; i < nc; ++i) {
+        const double dq = trajectory.node(b)[i] - trajectory.node(a)[i];
+        out += "," + format_double(dt != 0 ? dq / dt : std::nan(""));
+      }
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+namespace {
+
+std::vector<std::string> split_csv_line(const std::string& line, std::vector<int>* columns) {
+  std::vector<std::string> cells;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = line.find(',', start);
+    columns->push_back(static_cast<int>(start) + 1);
+    cells.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  for (auto& cell : cells) {
+    while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.pop_back();
+    while (!cell.empty() && cell.front() == ' ') cell.erase(cell.begin());
+  }
+  return cells;
+}
+
+bool parse_number(const std::string& text, double* value) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  *value = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && errno != ERANGE;
+}
+
+}  // namespace
+
+Trajectory read_trajectory_csv(const std::string& path, const pardel_model& model) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(fmt::format("{}: error: cannot open trajectory file", path));
+  auto fail = [&](long line, int col, const std::string& what) {
+    return std::runtime_error(fmt::format("{}:{}:{}: error: {}", path, line, col, what));
+  };
+  std::string line;
+  if (!std::getline(in, line)) throw fail(1, 1, "empty file; expected a header row k,t,...");
+  std::vector<int> header_cols;
+  const auto header = split_csv_line(line, &header_cols);
+  auto find_column = [&](const std::string& name) -> int {
+    for (std::size_t c = 0; c < header.size(); ++c) {
+      if (header[c] == name) return static_cast<int>(c);
+    }
+    return -1;
+  };
+  const int col_k = find_column("k");
+  const int col_t = find_column("t");
+  if (col_k < 0) throw fail(1, 1, "missing column 'k'");
+  if (col_t < 0) throw fail(1, 1, "missing column 't'");
+  std::vector<int> state_cols;
+  for (const auto& name : state_column_names(model)) {
+    const int c = find_column(name);
+    if (c < 0) throw fail(1, 1, fmt::format("missing column '{}' of model {}", name, model.name));
+    state_cols.push_back(c);
+  }
+  Trajectory trajectory;
+  trajectory.dim = model.dim;
+  long line_number = 1;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty() || line == "\r") continue;
+    std::vector<int> cols;
+    const auto cells = split_csv_line(line, &cols);
+    if (cells.size() != header.size()) {
+      throw fail(line_number, 1, fmt::format("{} cells, expected {} as in the header", cells.size(), header.size()));
+    }
+    auto number = [&](int c) {
+      double v = 0;
+      if (!parse_number(cells[c], &v)) {
+        throw fail(line_number, cols[c], fmt::format("column '{}': '{}' is not a number", header[c], cells[c]));
+      }
+      if (!std::isfinite(v)) {
+        throw fail(line_number, cols[c], fmt::format("column '{}': value {} is not finite", header[c], cells[c]));
+      }
+      return v;
+    };
+    const double k = number(col_k);
+    const long expected_k = static_cast<long>(trajectory.t.size());
+    if (k != static_cast<double>(expected_k)) {
+      throw fail(line_number, cols[col_k], fmt::format("k = {} out of sequence; expected {}", cells[col_k], expected_k));
+    }
+    trajectory.t.push_back(number(col_t));
+    for (int c : state_cols) trajectory.q.push_back(number(c));
+  }
+  if (trajectory.t.size() < 3) {
+    throw fail(line_number, 1, fmt::format("{} nodes; a trajectory needs at least 3 (N >= 2)", trajectory.t.size()));
+  }
+  trajectory.N = static_cast<int>(trajectory.t.size()) - 1;
+  return trajectory;
+}
+
+void write_file_atomic(const std::string& path, const std::string& content) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) throw std::runtime_error(fmt::format("{}: cannot write: {}", tmp, std::strerror(errno)));
+    const std::size_t written = std::fwrite(content.data(), 1, content.size(), f);
+    const bool ok = written == content.size() && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
+    const int err = errno;
+    if (std::fclose(f) != 0 || !ok) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error(fmt::format("{}: cannot write: {}", tmp, std::strerror(err)));
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(tmp.c_str());
+    throw std::runtime_error(fmt::format("{}: cannot rename into place: {}", path, std::strerror(err)));
+  }
+}
+
+}  // namespace pardel::cli

@@ -1,0 +1,42 @@
+/**
+ * @file trajectory_io.hpp
+ * Trajectory files of the command line: trajectory.csv (k, t, the coordinates and their stored
+ * derivatives) written and read back, and atomic file writes (temporary file, then rename).
+ */
+#ifndef PARDEL_CLI_TRAJECTORY_IO_HPP
+#define PARDEL_CLI_TRAJECTORY_IO_HPP
+
+#include <string>
+#include <vector>
+
+#include "pardel/pardel.hpp"
+
+namespace pardel::cli {
+
+/** Names of the stored components of a node: the coordinates, then x', y', ..., up to order-1 primes. */
+std::vector<std::string> state_column_names(const pardel_model& model);
+
+/**
+ * trajectory.csv: header "k,t,<state columns>" and, for order-1 models, the velocity columns
+ * x', y', ... estimated by finite differences in t (central inside, one-sided at the ends), which
+ * are not part of the stored state. Numbers are printed with 17 significant digits.
+ */
+std::string trajectory_csv(const pardel_model& model, const Trajectory& trajectory);
+
+/**
+ * Reads a trajectory.csv written by trajectory_csv (columns found by name; extra columns ignored).
+ * Throws std::runtime_error "PATH:LINE:COL: error: ..." on a missing column, a non-numeric cell,
+ * a wrong row count or k out of sequence.
+ */
+Trajectory read_trajectory_csv(const std::string& path, const pardel_model& model);
+
+/** Writes `content` to `path` through a temporary file in the same folder and a rename, so that
+ *  readers never see a half-written file. Throws std::runtime_error naming the path on failure. */
+void write_file_atomic(const std::string& path, const std::string& content);
+
+/** Formats a double with 17 significant digits ("nan", "inf" and "-inf" when not finite). */
+std::string format_double(double value);
+
+}  // namespace pardel::cli
+
+#endif  // PARDEL_CLI_TRAJECTORY_IO_HPP
