@@ -1,0 +1,108 @@
+// Tests of the solve outputs (tools/pardel/outputs.hpp): exit codes, convergence.csv, the
+// certificate's JSON and the physical cost (the summed clock checked against path length).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "outputs.hpp"
+
+namespace {
+
+using namespace pardel;
+using namespace pardel::cli;
+
+TEST(Outputs, ExitCodesAreDistinctPerTermination) {
+  EXPECT_EQ(exit_code(Termination::converged), 0);
+  EXPECT_EQ(exit_code(Termination::invalid_input), 2);
+  EXPECT_EQ(exit_code(Termination::max_iterations), 3);
+  EXPECT_EQ(exit_code(Termination::diverged), 4);
+  EXPECT_EQ(exit_code(Termination::non_finite), 5);
+  EXPECT_EQ(exit_code(Termination::interrupted), 6);
+}
+
+TEST(Outputs, ConvergenceCsvHasOneRowPerRecord) {
+  Summary summary;
+  for (int i = 0; i < 3; ++i) {
+    IterationRecord r;
+    r.iteration = i;
+    r.N = 10;
+    r.residual = std::pow(10.0, -i);
+    r.action = 2.5;
+    r.seconds = 0.125 * i;
+    summary.history.push_back(r);
+  }
+  EXPECT_EQ(convergence_csv(summary),
+            "iteration,N,residual,action,seconds\n0,10,1,2.5,0\n1,10,0.10000000000000001,2.5,0.125\n"
+            "2,10,0.01,2.5,0.25\n");
+}
+
+TEST(Outputs, CertificateJsonHasEveryFieldAndCapsViolations) {
+  Certificate c;
+  c.theorem_holds = false;
+  c.inertia_positive = 7;
+  c.inertia_negative = 1;
+  c.jacobi_spectral_radius = 0.99;
+  for (int k = 0; k < 5; ++k) {
+    IntervalViolation v;
+    v.k = k;
+    v.hessian_psd = false;
+    v.min_eig_hessian = -k;
+    c.violations.push_back(v);
+  }
+  const auto j = certificate_json(c, 3);
+  for (const char* key : {"theorem_holds", "all_intervals_psd", "all_A_pd", "all_B_pd", "hessian_positive_definite",
+                          "inertia_positive", "inertia_negative", "inertia_zero", "jacobi_spectral_radius",
+                          "expected_iterations", "violations_total", "violations"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["violations_total"], 5);
+  ASSERT_EQ(j["violations"].size(), 3u);
+  EXPECT_EQ(j["violations"][2]["k"], 2);
+  EXPECT_EQ(j["violations"][2]["min_eig_hessian"], -2.0);
+  EXPECT_EQ(j["inertia_negative"], 1);
+}
+
+Scene scene_for(const char* model_name) {
+  Scene scene;
+  scene.model = find_model(model_name);
+  scene.problem.model = scene.model;
+  if (scene.model) {
+    scene.problem.discretization = &scene.model->discretizations[0];
+    scene.problem.params.assign(scene.model->param_defaults, scene.model->param_defaults + scene.model->nparams);
+  }
+  return scene;
+}
+
+TEST(Outputs, FuelIsTheActionForFuelNav) {
+  const Scene scene = scene_for("fuel_nav");
+  ASSERT_NE(scene.model, nullptr);
+  Summary summary;
+  summary.action = 5.25;
+  const PhysicalCost cost = physical_cost(scene, summary, Trajectory{});
+  EXPECT_EQ(cost.name, "fuel");
+  EXPECT_EQ(cost.value, 5.25);
+}
+
+TEST(Outputs, TravelTimeInStillAirIsThePathLength) {
+  // With the wind scale s = 0, Zermelo's F is the Euclidean speed, so the summed clock of any
+  // polyline is its length, whatever the step.
+  Scene scene = scene_for("zermelo");
+  ASSERT_NE(scene.model, nullptr);
+  ASSERT_NE(scene.model->clock, nullptr);
+  ASSERT_EQ(scene.model->nparams, 1);
+  scene.problem.params[0] = 0;
+  scene.problem.T = 2;
+  Trajectory path;
+  path.N = 3;
+  path.dim = 2;
+  path.t = {0, 2.0 / 3, 4.0 / 3, 2};
+  path.q = {0, 0, 3, 4, 3, 5, 6, 9};  // legs of length 5, 1, 5
+  scene.problem.N = 3;
+  Summary summary;
+  const PhysicalCost cost = physical_cost(scene, summary, path);
+  EXPECT_EQ(cost.name, "travel_time");
+  EXPECT_NEAR(cost.value, 11.0, 1e-12);
+}
+
+}  // namespace
