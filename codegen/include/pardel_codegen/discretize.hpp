@@ -1,0 +1,41 @@
+/**
+ * @file discretize.hpp
+ * Discrete Lagrangians of a LagModel as GiNaC expressions in the kernel inputs
+ * (h, t0, t1, q0[0..m), q1[0..m), params), and the model's clock on one interval.
+ * The formulas are documented in docs/discretizations.md.
+ */
+#ifndef PARDEL_CODEGEN_DISCRETIZE_HPP
+#define PARDEL_CODEGEN_DISCRETIZE_HPP
+
+#include <ginac/ginac.h>
+
+#include <vector>
+
+#include "pardel_codegen/lag_model.hpp"
+
+namespace pardel_codegen {
+
+/** The symbols of a kernel's inputs (see pardel/kernel_abi.h for the layout of q0 and q1). */
+struct KernelSymbols {
+  GiNaC::symbol h{"h"}, t0{"t0"}, t1{"t1"};
+  std::vector<GiNaC::symbol> q0, q1;  ///< m = order * ncoords each: [coords, coords', ...]
+  std::vector<GiNaC::symbol> p;       ///< the model's param symbols, in order
+  explicit KernelSymbols(const LagModel& model);
+};
+
+/** Where the stage positions of gauss2 come from. */
+enum class Gauss2Positions {
+  hermite,  ///< the cubic Hermite interpolant at the Gauss points (what pardel-gen emits)
+  seed,     ///< the seed's printed Q_i = linear interpolation - h/12 (v1 - v0)
+};
+
+/** The discrete Lagrangian L_d(h, t0, t1, q0, q1, p) of `spec` for `model`. */
+GiNaC::ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                              Gauss2Positions positions = Gauss2Positions::hermite);
+
+/** h * clock at (t0, q0, v) with v = (q1 - q0)/h for order 1, or q0's stored derivatives otherwise. */
+GiNaC::ex interval_clock(const LagModel& model, const KernelSymbols& s);
+
+}  // namespace pardel_codegen
+
+#endif  // PARDEL_CODEGEN_DISCRETIZE_HPP

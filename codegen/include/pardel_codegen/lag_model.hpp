@@ -1,0 +1,62 @@
+/**
+ * @file lag_model.hpp
+ * A parsed .lag model: its declarations as GiNaC symbols and expressions, and the
+ * discretizations it asks for. Produced by parse_lag() (lag_parser.hpp).
+ */
+#ifndef PARDEL_CODEGEN_LAG_MODEL_HPP
+#define PARDEL_CODEGEN_LAG_MODEL_HPP
+
+#include <ginac/ginac.h>
+
+#include <string>
+#include <vector>
+
+namespace pardel_codegen {
+
+/** The discrete Lagrangians pardel-gen knows (see docs/discretizations.md). */
+enum class DiscretizationKind {
+  trapezoid,        ///< order 1: h/2 [L(t0,q0,v) + L(t1,q1,v)], v = (q1-q0)/h
+  midpoint,         ///< order 1: h L((t0+t1)/2, (q0+q1)/2, v)
+  trapezoid_alpha,  ///< order 2: the seed's L_d^alpha family
+  gauss2,           ///< order 2: 2-stage Gauss on the cubic Hermite interpolant
+};
+
+/** One requested discretization with its canonical names. */
+struct DiscretizationSpec {
+  DiscretizationKind kind = DiscretizationKind::trapezoid;
+  GiNaC::numeric alpha = 1;   ///< the parameter of trapezoid_alpha (exact rational)
+  std::string name;           ///< canonical name: "trapezoid", "trapezoid(alpha=1)", "gauss2", ...
+  std::string ident;          ///< C-identifier form: "trapezoid", "trapezoid_alpha_1", ...
+  int consistency_order = 2;  ///< order of the discrete Lagrangian
+};
+
+/** A named run-time constant. */
+struct ParamDecl {
+  std::string name;
+  double default_value = 0;
+  GiNaC::symbol symbol;
+};
+
+/** Everything a .lag file declares. */
+struct LagModel {
+  std::string name;
+  int order = 1;                                   ///< gamma >= 1
+  std::vector<std::string> coords;                 ///< coordinate names, in order
+  /** coord_symbols[k][i] stands for the k-th derivative of coordinate i, k = 0..order. */
+  std::vector<std::vector<GiNaC::symbol>> coord_symbols;
+  std::vector<ParamDecl> params;                   ///< in declaration order
+  GiNaC::symbol time{"t"};                         ///< the time t
+  GiNaC::ex lagrangian;                            ///< L(t, q, q', ..., q^(order), params)
+  bool has_clock = false;
+  GiNaC::ex clock;                                 ///< dt/ds (derivatives up to order-1 only,
+                                                   ///< or q' for order-1 models)
+  std::vector<DiscretizationSpec> discretizations; ///< in the order asked for
+  /** True when L or the clock depends on t. */
+  bool time_dependent() const;
+  int ncoords() const { return static_cast<int>(coords.size()); }
+  int dim() const { return order * ncoords(); }
+};
+
+}  // namespace pardel_codegen
+
+#endif  // PARDEL_CODEGEN_LAG_MODEL_HPP

@@ -1,0 +1,58 @@
+/**
+ * @file model_ir.hpp
+ * The intermediate description (IR) of a model's generated code: for every discretization and
+ * kernel variant (full, sweep, grad, action) and for the clock, the CSE'd straight-line code.
+ * Written as JSON by pardel-gen and rendered to C++ by codegen/render.py (format: codegen/README.md).
+ */
+#ifndef PARDEL_CODEGEN_MODEL_IR_HPP
+#define PARDEL_CODEGEN_MODEL_IR_HPP
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pardel_codegen/cse.hpp"
+#include "pardel_codegen/lag_model.hpp"
+
+namespace pardel_codegen {
+
+/** The version of pardel-gen, written into every banner and IR. */
+const char* generator_version();
+
+/** The kernel variants of a discretization, in IR order. */
+const std::vector<std::string>& kernel_variants();
+
+/** One generated function. */
+struct KernelIR {
+  std::string variant;   ///< "full", "sweep", "grad", "action" or "clock"
+  std::string function;  ///< the C symbol: <model>_<disc-ident>_<variant>, or <model>_clock
+  std::vector<std::string> unused_inputs;  ///< kernel arguments the code never reads
+  KernelCode code;
+};
+
+struct DiscretizationIR {
+  DiscretizationSpec spec;
+  std::vector<KernelIR> kernels;  ///< in kernel_variants() order
+};
+
+struct ModelIR {
+  LagModel model;
+  std::string source_name;
+  std::vector<DiscretizationIR> discretizations;
+  std::optional<KernelIR> clock;
+};
+
+/** Discretizes, differentiates and CSEs every kernel of `model`. @throws CodegenError */
+ModelIR build_model_ir(const LagModel& model, const std::string& source_name,
+                       const CseOptions& options = CseOptions());
+
+/** The IR as deterministic JSON text. */
+std::string ir_to_json(const ModelIR& ir);
+
+/** Operation counts per kernel before and after CSE: a text table, or JSON. */
+std::string stats_table(const ModelIR& ir);
+std::string stats_json(const ModelIR& ir);
+
+}  // namespace pardel_codegen
+
+#endif  // PARDEL_CODEGEN_MODEL_IR_HPP

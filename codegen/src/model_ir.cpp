@@ -1,0 +1,251 @@
+/**
+ * @file model_ir.cpp
+ * Builds the IR of a model (discrete Lagrangian, its first and second derivatives, CSE per
+ * kernel variant) and writes it, and its operation counts, as JSON or text.
+ */
+#include "pardel_codegen/model_ir.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+#include "pardel_codegen/discretize.hpp"
+
+#ifndef PARDEL_GEN_VERSION
+#define PARDEL_GEN_VERSION "0.0.0"
+#endif
+
+namespace pardel_codegen {
+
+const char* generator_version() { return PARDEL_GEN_VERSION; }
+
+const std::vector<std::string>& kernel_variants() {
+  static const std::vector<std::string> v = {"full", "sweep", "grad", "action"};
+  return v;
+}
+
+namespace {
+
+using GiNaC::ex;
+
+std::vector<KernelInput> kernel_inputs(const KernelSymbols& s) {
+  std::vector<KernelInput> in;
+  in.push_back({s.h, "h", "h"});
+  in.push_back({s.t0, "t0", "t0"});
+  in.push_back({s.t1, "t1", "t1"});
+  for (std::size_t i = 0; i < s.q0.size(); ++i) in.push_back({s.q0[i], "q0[" + std::to_string(i) + "]", "q0"});
+  for (std::size_t i = 0; i < s.q1.size(); ++i) in.push_back({s.q1[i], "q1[" + std::to_string(i) + "]", "q1"});
+  for (std::size_t i = 0; i < s.p.size(); ++i) in.push_back({s.p[i], "p[" + std::to_string(i) + "]", "p"});
+  return in;
+}
+
+struct Derivatives {
+  ex Ld;
+  std::vector<ex> D1, D2, D11, D12, D22;  // matrices row-major m x m
+};
+
+Derivatives differentiate(const ex& Ld, const KernelSymbols& s) {
+  const std::size_t m = s.q0.size();
+  Derivatives d;
+  d.Ld = Ld;
+  for (std::size_t i = 0; i < m; ++i) {
+    d.D1.push_back(Ld.diff(s.q0[i]));
+    d.D2.push_back(Ld.diff(s.q1[i]));
+  }
+  d.D11.assign(m * m, 0);
+  d.D12.assign(m * m, 0);
+  d.D22.assign(m * m, 0);
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t j = 0; j < m; ++j) {
+      if (j >= i) {
+        d.D11[i * m + j] = d.D11[j * m + i] = d.D1[i].diff(s.q0[j]);
+        d.D22[i * m + j] = d.D22[j * m + i] = d.D2[i].diff(s.q1[j]);
+      }
+      d.D12[i * m + j] = d.D1[i].diff(s.q1[j]);
+    }
+  }
+  return d;
+}
+
+void add_vector(std::vector<KernelOutput>& out, const std::string& name, const std::vector<ex>& v) {
+  for (std::size_t i = 0; i < v.size(); ++i) out.push_back({name + "[" + std::to_string(i) + "]", v[i]});
+}
+
+std::vector<std::string> unused(const KernelCode& code, const std::vector<std::string>& args) {
+  std::vector<std::string> out;
+  for (const std::string& a : args) {
+    if (!code.used_groups.count(a)) out.push_back(a);
+  }
+  return out;
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (unsigned char c : s) {
+    if (c == '"') out += "\\\"";
+    else if (c == '\\') out += "\\\\";
+    else if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
+
+void write_kernel(std::ostringstream& j, const KernelIR& k, const std::string& indent) {
+  j << indent << "{\"variant\": " << json_string(k.variant) << ", \"function\": " << json_string(k.function)
+    << ",\n" << indent << " \"ops_before_cse\": " << k.code.ops_before << ", \"ops_after_cse\": " << k.code.ops_after
+    << ",\n" << indent << " \"unused_inputs\": [";
+  for (std::size_t i = 0; i < k.unused_inputs.size(); ++i) j << (i ? ", " : "") << json_string(k.unused_inputs[i]);
+  j << "],\n" << indent << " \"temporaries\": [";
+  for (std::size_t i = 0; i < k.code.temporaries.size(); ++i) {
+    j << (i ? ",\n" : "\n") << indent << "  {\"name\": " << json_string(k.code.temporaries[i].name)
+      << ", \"expr\": " << json_string(k.code.temporaries[i].expr) << "}";
+  }
+  j << "],\n" << indent << " \"outputs\": [";
+  for (std::size_t i = 0; i < k.code.outputs.size(); ++i) {
+    j << (i ? ",\n" : "\n") << indent << "  {\"target\": " << json_string(k.code.outputs[i].name)
+      << ", \"expr\": " << json_string(k.code.outputs[i].expr) << "}";
+  }
+  j << "]}";
+}
+
+}  // namespace
+
+ModelIR build_model_ir(const LagModel& model, const std::string& source_name, const CseOptions& options) {
+  ModelIR ir;
+  ir.model = model;
+  ir.source_name = source_name;
+  KernelSymbols s(model);
+  const std::vector<KernelInput> inputs = kernel_inputs(s);
+  const std::vector<std::string> args = {"h", "t0", "t1", "q0", "q1", "p"};
+  for (const DiscretizationSpec& spec : model.discretizations) {
+    DiscretizationIR dir;
+    dir.spec = spec;
+    Derivatives d = differentiate(discrete_lagrangian(model, spec, s), s);
+    for (const std::string& variant : kernel_variants()) {
+      std::vector<KernelOutput> outs;
+      if (variant == "action") {
+        outs.push_back({"return", d.Ld});
+      } else {
+        if (variant != "sweep") outs.push_back({"Ld[0]", d.Ld});
+        add_vector(outs, "D1", d.D1);
+        add_vector(outs, "D2", d.D2);
+        if (variant != "grad") {
+          add_vector(outs, "D11", d.D11);
+          if (variant == "full") add_vector(outs, "D12", d.D12);
+          add_vector(outs, "D22", d.D22);
+        }
+      }
+      KernelIR k;
+      k.variant = variant;
+      k.function = model.name + "_" + spec.ident + "_" + variant;
+      k.code = generate_kernel_code(outs, inputs, options);
+      k.unused_inputs = unused(k.code, args);
+      dir.kernels.push_back(std::move(k));
+    }
+    ir.discretizations.push_back(std::move(dir));
+  }
+  if (model.has_clock) {
+    KernelIR k;
+    k.variant = "clock";
+    k.function = model.name + "_clock";
+    k.code = generate_kernel_code({{"return", interval_clock(model, s)}}, inputs, options);
+    k.unused_inputs = unused(k.code, {"h", "t0", "q0", "q1", "p"});
+    ir.clock = std::move(k);
+  }
+  return ir;
+}
+
+std::string ir_to_json(const ModelIR& ir) {
+  const LagModel& m = ir.model;
+  std::ostringstream j;
+  j << "{\n";
+  j << "  \"format\": \"pardel-ir\",\n";
+  j << "  \"format_version\": 1,\n";
+  j << "  \"generator\": " << json_string(std::string("pardel-gen ") + generator_version()) << ",\n";
+  j << "  \"generator_version\": " << json_string(generator_version()) << ",\n";
+  j << "  \"abi_version\": 1,\n";
+  j << "  \"model\": {\n";
+  j << "    \"name\": " << json_string(m.name) << ",\n";
+  j << "    \"source\": " << json_string(ir.source_name) << ",\n";
+  j << "    \"order\": " << m.order << ",\n";
+  j << "    \"ncoords\": " << m.ncoords() << ",\n";
+  j << "    \"dim\": " << m.dim() << ",\n";
+  j << "    \"coords\": [";
+  for (std::size_t i = 0; i < m.coords.size(); ++i) j << (i ? ", " : "") << json_string(m.coords[i]);
+  j << "],\n    \"params\": [";
+  for (std::size_t i = 0; i < m.params.size(); ++i) {
+    j << (i ? ", " : "") << "{\"name\": " << json_string(m.params[i].name)
+      << ", \"default\": " << json_string(c_double_literal(m.params[i].default_value)) << "}";
+  }
+  j << "],\n";
+  j << "    \"time_dependent\": " << (m.time_dependent() ? "true" : "false") << "\n";
+  j << "  },\n";
+  j << "  \"discretizations\": [";
+  for (std::size_t i = 0; i < ir.discretizations.size(); ++i) {
+    const DiscretizationIR& d = ir.discretizations[i];
+    j << (i ? ",\n" : "\n") << "    {\"name\": " << json_string(d.spec.name) << ", \"ident\": " << json_string(d.spec.ident)
+      << ", \"consistency_order\": " << d.spec.consistency_order << ",\n     \"kernels\": [\n";
+    for (std::size_t k = 0; k < d.kernels.size(); ++k) {
+      write_kernel(j, d.kernels[k], "      ");
+      j << (k + 1 < d.kernels.size() ? ",\n" : "\n");
+    }
+    j << "     ]}";
+  }
+  j << "],\n";
+  j << "  \"clock\": ";
+  if (ir.clock) {
+    j << "\n";
+    write_kernel(j, *ir.clock, "    ");
+    j << "\n";
+  } else {
+    j << "null\n";
+  }
+  j << "}\n";
+  return j.str();
+}
+
+std::string stats_table(const ModelIR& ir) {
+  std::ostringstream s;
+  char line[256];
+  std::snprintf(line, sizeof line, "%-28s %-8s %12s %12s %8s\n", "discretization", "kernel", "ops before", "ops after",
+                "ratio");
+  s << "model " << ir.model.name << " (" << ir.source_name << ")\n" << line;
+  auto row = [&](const std::string& disc, const KernelIR& k) {
+    double ratio = k.code.ops_after ? static_cast<double>(k.code.ops_before) / static_cast<double>(k.code.ops_after) : 0.0;
+    std::snprintf(line, sizeof line, "%-28s %-8s %12lld %12lld %7.1fx\n", disc.c_str(), k.variant.c_str(),
+                  k.code.ops_before, k.code.ops_after, ratio);
+    s << line;
+  };
+  for (const DiscretizationIR& d : ir.discretizations) {
+    for (const KernelIR& k : d.kernels) row(d.spec.name, k);
+  }
+  if (ir.clock) row("-", *ir.clock);
+  return s.str();
+}
+
+std::string stats_json(const ModelIR& ir) {
+  std::ostringstream j;
+  j << "{\"model\": " << json_string(ir.model.name) << ", \"source\": " << json_string(ir.source_name)
+    << ", \"op_convention\": \"each binary + - * /, each unary minus and each function call is one operation\""
+    << ", \"kernels\": [";
+  bool first = true;
+  auto row = [&](const std::string& disc, const KernelIR& k) {
+    j << (first ? "\n" : ",\n") << "  {\"discretization\": " << json_string(disc) << ", \"variant\": "
+      << json_string(k.variant) << ", \"function\": " << json_string(k.function)
+      << ", \"ops_before_cse\": " << k.code.ops_before << ", \"ops_after_cse\": " << k.code.ops_after
+      << ", \"temporaries\": " << k.code.temporaries.size() << "}";
+    first = false;
+  };
+  for (const DiscretizationIR& d : ir.discretizations) {
+    for (const KernelIR& k : d.kernels) row(d.spec.name, k);
+  }
+  if (ir.clock) row("", *ir.clock);
+  j << "\n]}\n";
+  return j.str();
+}
+
+}  // namespace pardel_codegen
