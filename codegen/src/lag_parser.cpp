@@ -211,8 +211,11 @@ Line Reader::tokenize(int number) const {
       if (dots > 1) fail(number, t.col, "malformed number '" + t.text + "'");
       if (t.text.size() > 40) fail(number, t.col, "number is too long (at most 40 characters)");
       if (j < s.size() && (std::isalpha(static_cast<unsigned char>(s[j])) || s[j] == '_')) {
-        fail(number, static_cast<int>(j) + 1,
-             "expected an operator after the number (write 2*x, not 2x)");
+        std::size_t k = j;
+        while (k < s.size() && (std::isalnum(static_cast<unsigned char>(s[k])) || s[k] == '_')) ++k;
+        fail(number, t.col,
+             "'" + s.substr(i, k - i) + "' is neither a number nor a name (names start with a letter; "
+             "write 2*x for a product)");
       }
       i = j;
     } else if (std::strchr("+-*/^(),=", static_cast<int>(c)) != nullptr && c != 0) {
