@@ -1,0 +1,115 @@
+// Tests of the model loader: bundled models by name, .lag files generated, compiled and loaded at
+// run time (checked against the bundled build of the same file), and the errors a user sees.
+#include "pardel/model_loader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "pardel/pardel.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+class ModelLoaderTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { setenv("PARDEL_CACHE_DIR", PARDEL_TEST_CACHE_DIR, 1); }
+  static fs::path write_lag(const std::string& name, const std::string& text) {
+    fs::path dir = fs::path(PARDEL_TEST_CACHE_DIR).parent_path() / "lag";
+    fs::create_directories(dir);
+    fs::path path = dir / name;
+    std::ofstream(path) << text;
+    return path;
+  }
+};
+
+TEST_F(ModelLoaderTest, ResolvesBundledModelsByName) {
+  ASSERT_FALSE(pardel::bundled_models().empty());
+  for (const pardel_model* model : pardel::bundled_models()) {
+    EXPECT_EQ(pardel::resolve_model(model->name), model);
+  }
+}
+
+TEST_F(ModelLoaderTest, UnknownNameListsTheCompiledModels) {
+  try {
+    pardel::resolve_model("no_such_model");
+    FAIL() << "expected an error";
+  } catch (const pardel::ModelLoadError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("unknown model 'no_such_model'"), std::string::npos) << what;
+    EXPECT_NE(what.find(pardel::bundled_models().front()->name), std::string::npos) << what;
+  }
+}
+
+TEST_F(ModelLoaderTest, MissingFileIsAnError) {
+  EXPECT_THROW(pardel::resolve_model("/nonexistent/dir/model.lag"), pardel::ModelLoadError);
+}
+
+// The same .lag compiled at run time evaluates to exactly what the bundled build computes.
+TEST_F(ModelLoaderTest, CompiledLagMatchesTheBundledBuild) {
+  if (!pardel::can_compile_lag_files()) GTEST_SKIP() << "this build has no generator";
+  const pardel_model* bundled = pardel::find_model("fuel_nav");
+  ASSERT_NE(bundled, nullptr);
+  const pardel_model* loaded =
+      pardel::resolve_model(std::string(PARDEL_SOURCE_DIR) + "/lagrangians/fuel_nav.lag");
+  ASSERT_NE(loaded, nullptr);
+  ASSERT_NE(loaded, bundled);
+  EXPECT_STREQ(loaded->name, "fuel_nav");
+  ASSERT_EQ(loaded->dim, bundled->dim);
+  ASSERT_EQ(loaded->ndiscretizations, bundled->ndiscretizations);
+  const int m = loaded->dim;
+  const double q0[] = {0.3, -0.7}, q1[] = {0.45, -0.5};
+  for (int d = 0; d < loaded->ndiscretizations; ++d) {
+    std::vector<double> a(1 + 2 * m + 3 * m * m), b(a.size());
+    auto eval = [&](const pardel_model* model, std::vector<double>& out) {
+      double* o = out.data();
+      model->discretizations[d].full(0.05, 1.0, 1.05, q0, q1, model->param_defaults, o, o + 1,
+                                     o + 1 + m, o + 1 + 2 * m, o + 1 + 2 * m + m * m,
+                                     o + 1 + 2 * m + 2 * m * m);
+    };
+    eval(loaded, a);
+    eval(bundled, b);
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << "output " << i;
+  }
+  // A second resolve is served from memory.
+  EXPECT_EQ(pardel::resolve_model(std::string(PARDEL_SOURCE_DIR) + "/lagrangians/fuel_nav.lag"), loaded);
+}
+
+TEST_F(ModelLoaderTest, BadLagReportsFileLineAndColumn) {
+  if (!pardel::can_compile_lag_files()) GTEST_SKIP() << "this build has no generator";
+  const fs::path lag = write_lag("broken.lag",
+                                 "model broken\ncoords x\nL = 1/2*x'^2 + undefined_thing\n"
+                                 "discretizations trapezoid\n");
+  try {
+    pardel::resolve_model(lag.string());
+    FAIL() << "expected an error";
+  } catch (const pardel::ModelLoadError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("broken.lag:3:"), std::string::npos) << what;
+    EXPECT_NE(what.find("error"), std::string::npos) << what;
+  }
+}
+
+TEST_F(ModelLoaderTest, NewModelIsUsable) {
+  if (!pardel::can_compile_lag_files()) GTEST_SKIP() << "this build has no generator";
+  const fs::path lag = write_lag("spring_pair.lag",
+                                 "model spring_pair\ncoords a b\nparam k = 2\n"
+                                 "L = 1/2*(a'^2 + b'^2) - k/2*(a - b)^2\n"
+                                 "discretizations midpoint\n");
+  const pardel_model* model = pardel::resolve_model(lag.string());
+  ASSERT_NE(model, nullptr);
+  EXPECT_STREQ(model->name, "spring_pair");
+  ASSERT_EQ(model->ndiscretizations, 1);
+  // Midpoint: Ld = h*(|v|^2/2 - k/2 (am - bm)^2), v = (q1 - q0)/h, checked by hand.
+  const double h = 0.1, q0[] = {1.0, 0.0}, q1[] = {1.2, 0.1}, p[] = {2.0};
+  const double ld = model->discretizations[0].action(h, 0, h, q0, q1, p);
+  const double va = 2.0, vb = 1.0, am = 1.1, bm = 0.05;
+  EXPECT_NEAR(ld, h * (0.5 * (va * va + vb * vb) - 1.0 * (am - bm) * (am - bm)), 1e-13);
+}
+
+}  // namespace
