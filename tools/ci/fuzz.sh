@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Fuzzing job of continuous integration: configures build-fuzz (or $1) with clang, builds the
+# libFuzzer targets of tests/fuzz/ (the .lag reader and the scene reader, instrumented with
+# ASan + UBSan + coverage) and runs each for a fixed number of executions from the seed corpus.
+# Fails on any crash, contract violation (abort), leak, UB report or input slower than -timeout.
+# New interesting inputs are kept in BUILD_DIR/corpus_*; a failing input in BUILD_DIR/artifacts/.
+#
+# usage: tools/ci/fuzz.sh [BUILD_DIR]
+# environment: JOBS (build parallelism, 2), LAG_RUNS (200000), SCENE_RUNS (200000),
+#              MAX_SECONDS (per fuzzer, a guard on slow machines: 240), MAX_LEN (4096)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+build_dir="${1:-build-fuzz}"
+jobs="${JOBS:-2}"
+lag_runs="${LAG_RUNS:-200000}"
+scene_runs="${SCENE_RUNS:-200000}"
+max_seconds="${MAX_SECONDS:-240}"
+max_len="${MAX_LEN:-4096}"
+
+if ! command -v clang++ >/dev/null; then
+  echo "fuzz.sh: clang++ not found (Debian packages clang and libclang-rt-dev)" >&2
+  exit 1
+fi
+
+# Libraries get coverage instrumentation without libFuzzer's main; the fuzz targets link it.
+san_flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+
+CC=clang CXX=clang++ cmake -S . -B "$build_dir" -G Ninja \
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_C_FLAGS="$san_flags" \
+  -DCMAKE_CXX_FLAGS="$san_flags" \
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DPARDEL_BUILD_BENCHMARKS=OFF
+cmake --build "$build_dir" -j "$jobs" --target fuzz_lag_parser fuzz_scene_parser
+
+# Seed folders as configured by tests/fuzz/CMakeLists.txt (the corpora and the catalogues).
+seeds() {
+  sed -n "s/^$1:INTERNAL=//p" "$build_dir/CMakeCache.txt" | tr ';' ' '
+}
+
+status=0
+run_fuzzer() {  # NAME RUNS DICT SEED_VARIABLE
+  local name=$1 runs=$2 dict=$3 seed_var=$4
+  local corpus="$build_dir/corpus_${name#fuzz_}"
+  mkdir -p "$corpus" "$build_dir/artifacts"
+  echo "== $name: $runs executions (at most $max_seconds s), max_len $max_len"
+  # shellcheck disable=SC2046
+  if ! "$build_dir/$name" -runs="$runs" -max_total_time="$max_seconds" -max_len="$max_len" -timeout=10 \
+      -rss_limit_mb=2048 -dict="$dict" -print_final_stats=1 \
+      -artifact_prefix="$build_dir/artifacts/$name-" "$corpus" $(seeds "$seed_var"); then
+    echo "fuzz.sh: $name FAILED; the input is in $build_dir/artifacts/" >&2
+    status=1
+  fi
+}
+run_fuzzer fuzz_lag_parser "$lag_runs" tests/fuzz/lag.dict PARDEL_FUZZ_LAG_SEEDS
+run_fuzzer fuzz_scene_parser "$scene_runs" tests/fuzz/scene.dict PARDEL_FUZZ_SCENE_SEEDS
+exit $status
