@@ -507,11 +507,26 @@ void rebuild(NDag& dag, std::vector<Scaled>& roots) {
     int& m = map[static_cast<std::size_t>(id)];
     if (m >= 0) return m;
     NNode n = dag.nodes[static_cast<std::size_t>(id)];
-    for (NTerm& t : n.terms) t.node = copy(t.node);
-    for (NFactor& f : n.factors) f.node = copy(f.node);
+    // Children that were duplicates merge here, so terms and factors are gathered again.
+    std::map<int, double> terms;
+    for (const NTerm& t : n.terms) terms[copy(t.node)] += t.coef;
+    std::map<int, int> factors;
+    for (const NFactor& f : n.factors) factors[copy(f.node)] += f.exp;
+    n.terms.clear();
+    for (const auto& [node, coef] : terms) {
+      if (coef != 0) n.terms.push_back({coef, node});
+    }
+    n.factors.clear();
+    for (const auto& [node, e] : factors) {
+      if (e != 0) n.factors.push_back({node, e});
+    }
     for (int& a : n.args) a = copy(a);
     n.shash = 0;
-    if (n.kind == NKind::sum && n.terms.size() == 1 && n.terms[0].coef == 1 && n.constant == 0) {
+    if (n.kind == NKind::sum && n.terms.empty()) {
+      m = fresh.constant(n.constant);
+    } else if (n.kind == NKind::product && n.factors.empty()) {
+      m = fresh.constant(1.0);
+    } else if (n.kind == NKind::sum && n.terms.size() == 1 && n.terms[0].coef == 1 && n.constant == 0) {
       m = n.terms[0].node;
     } else if (n.kind == NKind::product && n.factors.size() == 1 && n.factors[0].exp == 1) {
       m = n.factors[0].node;
@@ -541,6 +556,7 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
         if (n.terms.size() < 2 || n.terms.size() > kMaxTermsForPairs) continue;
         for (std::size_t i = 0; i < n.terms.size(); ++i) {
           for (std::size_t j = i + 1; j < n.terms.size(); ++j) {
+            if (n.terms[i].node == n.terms[j].node) continue;
             PairKey k{n.terms[i].node, n.terms[j].node, n.terms[j].coef / n.terms[i].coef, 0, 0};
             holders[k].push_back(static_cast<int>(id));
           }
@@ -549,6 +565,7 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
         if (n.factors.size() < 2 || n.factors.size() > kMaxTermsForPairs) continue;
         for (std::size_t i = 0; i < n.factors.size(); ++i) {
           for (std::size_t j = i + 1; j < n.factors.size(); ++j) {
+            if (n.factors[i].node == n.factors[j].node) continue;
             holders[product_key(n.factors[i], n.factors[j])].push_back(static_cast<int>(id));
           }
         }

@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "pardel_codegen/cse.hpp"
+#include "pardel_codegen/discretize.hpp"
+#include "pardel_codegen/lag_parser.hpp"
 
 namespace {
 
@@ -318,6 +320,71 @@ TEST(Cse, ReportsTheInputsItReads) {
   EXPECT_EQ(code.used_groups, std::set<std::string>{"x"});
   KernelCode none = pardel_codegen::generate_kernel_code({{"a", GiNaC::ex(1)}}, f.inputs);
   EXPECT_TRUE(none.used_groups.empty());
+}
+
+// Factoring (a + b) out of X = k a + k b + c makes X identical to Y = k (a + b) + c; the merge of
+// such duplicates between rounds must then also merge the terms and factors that held both.
+TEST(Cse, NodesMadeIdenticalByFactoringMergeCorrectly) {
+  Fixture f;
+  const GiNaC::ex a = GiNaC::sin(f.x[0]), b = GiNaC::cos(f.x[1]), c = GiNaC::exp(f.x[2]), d = f.x[3];
+  const GiNaC::ex k = GiNaC::sqrt(GiNaC::ex(3));
+  const GiNaC::ex X = k * a + k * b + c;
+  const GiNaC::ex Y = k * (a + b) + c;
+  const GiNaC::ex u = GiNaC::sqrt(GiNaC::ex(2)), w = GiNaC::sqrt(GiNaC::ex(5));
+  std::vector<KernelOutput> outs = {{"o1", GiNaC::sin(a + b)}, {"o2", u * X + w * Y},
+                                    {"o3", u * X + w * Y + d},  {"o4", X * Y * d},
+                                    {"o5", X * Y * (d + 1)},    {"o6", GiNaC::log(X) + GiNaC::log(Y)}};
+  const KernelCode code = pardel_codegen::generate_kernel_code(outs, f.inputs);
+  const std::vector<double> at = {0.3, -0.4, 0.2, 0.7};
+  std::map<std::string, double> vars;
+  for (int i = 0; i < 4; ++i) vars["x[" + std::to_string(i) + "]"] = at[static_cast<std::size_t>(i)];
+  const std::vector<double> got = CEvaluator(vars).run(code);
+  for (std::size_t i = 0; i < outs.size(); ++i) {
+    const double want = ginac_value(outs[i].value, f, at);
+    EXPECT_NEAR(got[i], want, 1e-12 * std::max(1.0, std::fabs(want))) << outs[i].target;
+  }
+}
+
+// Factoring rewrites the DAG in place and merges duplicates between rounds; on the derivatives
+// of a real discrete Lagrangian (many shared sums) the factored code must compute the same
+// values as the plain hash-consed code.
+TEST(Cse, FactoringPreservesValuesOnDiscreteLagrangianDerivatives) {
+  pardel_codegen::LagModel model = pardel_codegen::parse_lag(
+      "model m\norder 2\ncoords x y\nparam c = 3\nlet W = cos(2*x - y - 6)\n"
+      "L = 1/2*((x' - W)^2 + (y' - sin(y))^2 + c*(x'' + W*x' - y*y')^2 + c*y''^2)\n"
+      "discretizations gauss2\n",
+      "m.lag");
+  pardel_codegen::KernelSymbols s(model);
+  const GiNaC::ex Ld = pardel_codegen::discrete_lagrangian(model, model.discretizations[0], s);
+  std::vector<KernelInput> inputs = {{s.h, "h", "h"}, {s.t0, "t0", "t0"}, {s.t1, "t1", "t1"}, {s.p[0], "p[0]", "p"}};
+  std::map<std::string, double> at = {{"h", 0.1}, {"t0", 0.0}, {"t1", 0.1}, {"p[0]", 3.0}};
+  for (std::size_t i = 0; i < s.q0.size(); ++i) {
+    inputs.push_back({s.q0[i], "q0[" + std::to_string(i) + "]", "q0"});
+    inputs.push_back({s.q1[i], "q1[" + std::to_string(i) + "]", "q1"});
+    at["q0[" + std::to_string(i) + "]"] = 0.3 + 0.1 * static_cast<double>(i);
+    at["q1[" + std::to_string(i) + "]"] = 0.35 + 0.12 * static_cast<double>(i);
+  }
+  std::vector<KernelOutput> outs = {{"Ld", Ld}};
+  for (std::size_t i = 0; i < s.q0.size(); ++i) {
+    const GiNaC::ex d1 = Ld.diff(s.q0[i]);
+    outs.push_back({"D1", d1});
+    for (std::size_t j = 0; j < s.q0.size(); ++j) {
+      outs.push_back({"D11", d1.diff(s.q0[j])});
+      outs.push_back({"D12", d1.diff(s.q1[j])});
+    }
+  }
+  CseOptions off;
+  off.factor_sums = false;
+  off.factor_products = false;
+  const KernelCode plain = pardel_codegen::generate_kernel_code(outs, inputs, off);
+  const KernelCode factored = pardel_codegen::generate_kernel_code(outs, inputs);
+  EXPECT_LT(factored.ops_after, plain.ops_after);
+  const std::vector<double> want = CEvaluator(at).run(plain);
+  const std::vector<double> got = CEvaluator(at).run(factored);
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_NEAR(got[k], want[k], 1e-10 * std::max(1.0, std::fabs(want[k]))) << outs[k].target << " #" << k;
+  }
 }
 
 }  // namespace
