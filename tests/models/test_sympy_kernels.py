@@ -89,9 +89,8 @@ class DifferentiationPaths(unittest.TestCase):
 
     CASES = [
         (bundled, "fuel_nav", "trapezoid", (0.1, 0.0, 0.1, [1.0, 2.0], [1.05, 2.1], [])),
-        (bundled, "zermelo", "midpoint", (0.2, 0.0, 0.3, [1.0, 1.5], [1.1, 1.55], [1.7])),
         (bundled, "zermelo_tv", "trapezoid", (0.2, 1.0, 1.4, [1.0, 1.5], [1.1, 1.55], [0.8])),
-        (bundled, "interp_fuel", "gauss2", (0.3, 2.0, 2.5, [1.0, 2.0, 0.3, -0.2], [1.1, 1.9, 0.2, 0.1], [50.0])),
+        (unseen, "elastica", "gauss2", (0.2, 0.0, 0.2, [0.0, 0.0, 1.0, 0.1], [0.2, 0.03, 0.9, 0.2], [2.0, 100.0, 0.5])),
         (unseen, "elastica", "trapezoid(alpha=1)", (0.2, 0.0, 0.2, [0.0, 0.0, 1.0, 0.1], [0.2, 0.03, 0.9, 0.2],
                                                     [2.0, 100.0, 0.5])),
         (unseen, "function_zoo", "midpoint", (0.2, 0.3, 0.45, [0.3, -0.2], [0.35, -0.1], [0.7, 1.3])),
