@@ -90,6 +90,15 @@ const char* to_string(Method method);
 /** Parses "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"; false if unknown. */
 bool parse_method(std::string_view text, Method* method);
 
+/** How Newton-type methods solve the block-tridiagonal systems. */
+enum class LinearSolver {
+  block_ldlt,        ///< block LDL^T (block Thomas), O(N) sequential
+  cyclic_reduction,  ///< block cyclic reduction, O(N) work, O(log N) parallel depth
+};
+const char* to_string(LinearSolver solver);
+/** Parses "ldlt", "cyclic-reduction"; false if unknown. */
+bool parse_linear_solver(std::string_view text, LinearSolver* solver);
+
 enum class Termination { converged, max_iterations, diverged, non_finite, invalid_input, interrupted };
 const char* to_string(Termination termination);
 
@@ -113,6 +122,9 @@ struct Options {
   double refine_factor = 1.2;    ///< growth of N per refinement
   int clock_update_every = 100;  ///< iterations between node-time updates under a clock
   long history_every = 1;        ///< record the history every this many iterations
+  LinearSolver linear_solver = LinearSolver::block_ldlt;  ///< newton and hybrid
+  double refine_settle = 1e-3;   ///< a coarse level is settled when its residual fell by this factor
+  double divergence_factor = 1e8;  ///< diverged when the residual exceeds this times the initial one
   /** Called after each recorded iteration; returning false interrupts the solve. */
   std::function<bool(const IterationRecord&)> on_iteration;
   /** Checks the options; on failure writes a message naming the option and value. */
@@ -141,6 +153,12 @@ struct Certificate {
   // Jacobi iteration matrix J = -D^{-1} C
   double jacobi_spectral_radius = 0;
   double expected_iterations = 0;  ///< sweeps to reduce the residual by tol/initial residual
+  bool spectral_radius_converged = false;  ///< the Lanczos estimate settled (else a lower bound)
+  long intervals_violating = 0;    ///< violations holds at most the first 100 of them
+  double residual = 0;             ///< DEL residual at the trajectory
+  double tol = 1e-10;              ///< the target residual used for expected_iterations
+  long free_components = 0;        ///< size of the (restricted) Hessian
+  std::string error;               ///< non-empty when the problem or trajectory was invalid
   std::string report() const;      ///< human-readable
 };
 
@@ -171,7 +189,10 @@ double residual_norm(const Problem& problem, const Trajectory& trajectory);
 double discrete_action(const Problem& problem, const Trajectory& trajectory);
 
 /** The convergence certificate at a trajectory. */
-Certificate certify(const Problem& problem, const Trajectory& trajectory, int threads = 0);
+Certificate certify(const Problem& problem, const Trajectory& trajectory, int threads = 0, double tol = 1e-10);
+
+/** Checks a problem and a trajectory for it; on failure writes a message naming the field. */
+bool validate(const Problem& problem, const Trajectory& trajectory, std::string* error);
 
 }  // namespace pardel
 

@@ -1,0 +1,203 @@
+/**
+ * @file api.cpp
+ * Names, parsing and validation of the public API: methods, terminations, linear solvers,
+ * Options::is_valid, problem validation, discretization lookup and the Summary's report.
+ */
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "pardel/pardel.hpp"
+
+namespace pardel {
+namespace {
+
+std::string number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+bool all_finite(const std::vector<double>& v) {
+  for (double x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+/** Removes spaces, so that "trapezoid(alpha = 1)" matches "trapezoid(alpha=1)". */
+std::string compact(std::string_view s) {
+  std::string out;
+  for (char c : s)
+    if (c != ' ' && c != '\t') out += c;
+  return out;
+}
+
+}  // namespace
+
+const pardel_discretization* find_discretization(const pardel_model& model, std::string_view name) {
+  for (int i = 0; i < model.ndiscretizations; ++i)
+    if (model.discretizations[i].name && name == model.discretizations[i].name) return &model.discretizations[i];
+  const std::string key = compact(name);
+  for (int i = 0; i < model.ndiscretizations; ++i)
+    if (model.discretizations[i].name && key == compact(model.discretizations[i].name))
+      return &model.discretizations[i];
+  return nullptr;
+}
+
+const char* to_string(Method method) {
+  switch (method) {
+    case Method::jacobi: return "jacobi";
+    case Method::jacobi_newton: return "jacobi-newton";
+    case Method::newton: return "newton";
+    case Method::multigrid: return "multigrid";
+    case Method::hybrid: return "hybrid";
+  }
+  return "unknown";
+}
+
+bool parse_method(std::string_view text, Method* method) {
+  static const Method all[] = {Method::jacobi, Method::jacobi_newton, Method::newton, Method::multigrid,
+                               Method::hybrid};
+  for (Method m : all) {
+    if (text == to_string(m)) {
+      *method = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* to_string(LinearSolver solver) {
+  switch (solver) {
+    case LinearSolver::block_ldlt: return "ldlt";
+    case LinearSolver::cyclic_reduction: return "cyclic-reduction";
+  }
+  return "unknown";
+}
+
+bool parse_linear_solver(std::string_view text, LinearSolver* solver) {
+  if (text == "ldlt") {
+    *solver = LinearSolver::block_ldlt;
+    return true;
+  }
+  if (text == "cyclic-reduction") {
+    *solver = LinearSolver::cyclic_reduction;
+    return true;
+  }
+  return false;
+}
+
+const char* to_string(Termination termination) {
+  switch (termination) {
+    case Termination::converged: return "converged";
+    case Termination::max_iterations: return "max_iterations";
+    case Termination::diverged: return "diverged";
+    case Termination::non_finite: return "non_finite";
+    case Termination::invalid_input: return "invalid_input";
+    case Termination::interrupted: return "interrupted";
+  }
+  return "unknown";
+}
+
+bool Options::is_valid(std::string* error) const {
+  auto bad = [&](const char* name, const std::string& value, const char* rule) {
+    if (error) *error = std::string("option ") + name + " = " + value + " is invalid: " + rule;
+    return false;
+  };
+  if (!(tol > 0) || !std::isfinite(tol)) return bad("tol", number(tol), "must be a positive finite number");
+  if (max_iterations < 0) return bad("max_iterations", std::to_string(max_iterations), "must be >= 0");
+  if (!(damping >= 0 && damping < 1)) return bad("damping", number(damping), "must be in [0, 1)");
+  if (newton_substeps < 1) return bad("newton_substeps", std::to_string(newton_substeps), "must be >= 1");
+  if (threads < 0) return bad("threads", std::to_string(threads), "must be >= 0 (0: all cores)");
+  if (refine_start_N < 0 || refine_start_N == 1)
+    return bad("refine_start_N", std::to_string(refine_start_N), "must be 0 (off) or >= 2");
+  if (!(refine_factor > 1) || !std::isfinite(refine_factor))
+    return bad("refine_factor", number(refine_factor), "must be a finite number > 1");
+  if (clock_update_every < 1) return bad("clock_update_every", std::to_string(clock_update_every), "must be >= 1");
+  if (history_every < 1) return bad("history_every", std::to_string(history_every), "must be >= 1");
+  if (!(refine_settle > 0 && refine_settle < 1))
+    return bad("refine_settle", number(refine_settle), "must be in (0, 1)");
+  if (!(divergence_factor > 1)) return bad("divergence_factor", number(divergence_factor), "must be > 1");
+  if (method != Method::jacobi && method != Method::jacobi_newton && method != Method::newton &&
+      method != Method::multigrid && method != Method::hybrid)
+    return bad("method", std::to_string(static_cast<int>(method)), "is not a known method");
+  if (linear_solver != LinearSolver::block_ldlt && linear_solver != LinearSolver::cyclic_reduction)
+    return bad("linear_solver", std::to_string(static_cast<int>(linear_solver)), "is not a known linear solver");
+  return true;
+}
+
+bool validate(const Problem& problem, const Trajectory& trajectory, std::string* error) {
+  auto bad = [&](const std::string& msg) {
+    if (error) *error = msg;
+    return false;
+  };
+  if (!problem.model) return bad("problem.model is null");
+  const pardel_model& m = *problem.model;
+  if (m.abi_version != PARDEL_KERNEL_ABI_VERSION)
+    return bad("problem.model '" + std::string(m.name ? m.name : "?") + "' has kernel ABI version " +
+               std::to_string(m.abi_version) + ", this runtime expects " + std::to_string(PARDEL_KERNEL_ABI_VERSION));
+  if (m.dim != m.order * m.ncoords || m.dim < 1)
+    return bad("problem.model has inconsistent sizes (dim " + std::to_string(m.dim) + ", order " +
+               std::to_string(m.order) + ", ncoords " + std::to_string(m.ncoords) + ")");
+  if (!problem.discretization) return bad("problem.discretization is null");
+  const pardel_discretization& d = *problem.discretization;
+  if (!d.full || !d.sweep || !d.grad || !d.action)
+    return bad(std::string("problem.discretization '") + (d.name ? d.name : "?") + "' lacks kernels");
+  if (problem.N < 2) return bad("problem.N = " + std::to_string(problem.N) + " is invalid: must be >= 2");
+  if (!std::isfinite(problem.t0)) return bad("problem.t0 = " + number(problem.t0) + " is not finite");
+  if (!(problem.T > 0) || !std::isfinite(problem.T))
+    return bad("problem.T = " + number(problem.T) + " is invalid: must be a positive finite number");
+  const std::size_t dim = static_cast<std::size_t>(m.dim);
+  if (problem.q0.size() != dim)
+    return bad("problem.q0 has " + std::to_string(problem.q0.size()) + " values, the model needs dim = " +
+               std::to_string(dim));
+  if (problem.qN.size() != dim)
+    return bad("problem.qN has " + std::to_string(problem.qN.size()) + " values, the model needs dim = " +
+               std::to_string(dim));
+  if (!all_finite(problem.q0)) return bad("problem.q0 has a non-finite value");
+  if (!all_finite(problem.qN)) return bad("problem.qN has a non-finite value");
+  if (!problem.params.empty() && problem.params.size() != static_cast<std::size_t>(m.nparams))
+    return bad("problem.params has " + std::to_string(problem.params.size()) + " values, the model has " +
+               std::to_string(m.nparams) + " params");
+  if (!all_finite(problem.params)) return bad("problem.params has a non-finite value");
+  if (problem.clock != ClockMode::none && !m.clock)
+    return bad("problem.clock needs a clock but model '" + std::string(m.name ? m.name : "?") + "' declares none");
+  if (problem.clock != ClockMode::none && !problem.knots.empty())
+    return bad("problem.knots cannot be combined with a clock (knot times are grid times)");
+  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
+    const Knot& k = problem.knots[a];
+    if (!std::isfinite(k.t)) return bad("problem.knots[" + std::to_string(a) + "].t is not finite");
+    if (k.q.size() != static_cast<std::size_t>(m.ncoords))
+      return bad("problem.knots[" + std::to_string(a) + "].q has " + std::to_string(k.q.size()) +
+                 " values, the model has ncoords = " + std::to_string(m.ncoords));
+    if (!all_finite(k.q)) return bad("problem.knots[" + std::to_string(a) + "].q has a non-finite value");
+  }
+  if (trajectory.dim != m.dim)
+    return bad("trajectory.dim = " + std::to_string(trajectory.dim) + " differs from the model's dim = " +
+               std::to_string(m.dim));
+  if (trajectory.N < 1) return bad("trajectory.N = " + std::to_string(trajectory.N) + " is invalid: must be >= 1");
+  if (trajectory.q.size() != (static_cast<std::size_t>(trajectory.N) + 1) * dim)
+    return bad("trajectory.q has " + std::to_string(trajectory.q.size()) + " values, expected (N+1)*dim = " +
+               std::to_string((static_cast<std::size_t>(trajectory.N) + 1) * dim));
+  if (!trajectory.t.empty() && trajectory.t.size() != static_cast<std::size_t>(trajectory.N) + 1)
+    return bad("trajectory.t has " + std::to_string(trajectory.t.size()) + " values, expected N+1 = " +
+               std::to_string(trajectory.N + 1));
+  for (std::size_t i = 0; i < trajectory.q.size(); ++i)
+    if (!std::isfinite(trajectory.q[i]))
+      return bad("trajectory has a non-finite value at node " + std::to_string(i / dim));
+  return true;
+}
+
+std::string Summary::brief_report() const {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%s: %s after %ld iterations (N = %d, %d thread%s): DEL residual %.3e, action %.10g, "
+                "final time %.10g, %.3f ms",
+                to_string(method), to_string(termination), iterations, N, threads, threads == 1 ? "" : "s", residual,
+                action, final_time, wall_seconds * 1e3);
+  std::string out = buf;
+  if (!message.empty()) out += "\n  " + message;
+  return out;
+}
+
+}  // namespace pardel

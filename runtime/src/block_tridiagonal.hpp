@@ -1,0 +1,279 @@
+/**
+ * @file block_tridiagonal.hpp
+ * The Hessian of the discrete action over the unknown nodes 1..N-1 (seed eq. blocktridiagonal):
+ * diagonal blocks D_k = D22(k-1) + D11(k) (+ mu I), off-diagonal blocks C_k = D12(k), restricted
+ * to free components (a fixed component gets an identity row and column and a zero right-hand
+ * side). Two factorizations, templated on the block size D (Eigen::Dynamic for other sizes):
+ *  - block LDL^T (block Thomas), O(N) sequential; pivots S_k = D_k - C_{k-1}^T S_{k-1}^{-1} C_{k-1}
+ *    are Cholesky-factored, so success certifies positive definiteness (Sylvester's law);
+ *  - block cyclic reduction, O(N) work in O(log N) parallel levels; its pivots are those of an
+ *    odd-even permutation of H, so success certifies positive definiteness just the same.
+ * All storage is allocated by resize(); factorizations and solves do not allocate.
+ */
+#ifndef PARDEL_RUNTIME_BLOCK_TRIDIAGONAL_HPP
+#define PARDEL_RUNTIME_BLOCK_TRIDIAGONAL_HPP
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "engine.hpp"
+
+namespace pardel::detail {
+
+template <int D>
+class BlockTridiagonal {
+ public:
+  using Mat = Eigen::Matrix<double, D, D>;
+  using Vec = Eigen::Matrix<double, D, 1>;
+  using RowMap = Eigen::Map<const Eigen::Matrix<double, D, D, (D == 1 ? Eigen::ColMajor : Eigen::RowMajor)>>;
+  using VecMap = Eigen::Map<const Vec>;
+
+  /** Allocates for n = N-1 unknown blocks of size d. */
+  void resize(int N, int d) {
+    d_ = d;
+    n_ = N - 1;
+    const std::size_t n = static_cast<std::size_t>(std::max(n_, 0));
+    diag_.assign(n, Mat::Zero(d, d));
+    off_.assign(n, Mat::Zero(d, d));
+    W_.assign(n, Mat::Zero(d, d));
+    y_.assign(n, Vec::Zero(d));
+    llt_.assign(n, Eigen::LLT<Mat>(d));
+    // Cyclic reduction levels.
+    levels_.clear();
+    int m = n_;
+    while (m >= 1) {
+      Level L;
+      L.n = m;
+      L.Dg.assign(static_cast<std::size_t>(m), Mat::Zero(d, d));
+      L.Lo.assign(static_cast<std::size_t>(m), Mat::Zero(d, d));
+      L.Up.assign(static_cast<std::size_t>(m), Mat::Zero(d, d));
+      L.b.assign(static_cast<std::size_t>(m), Vec::Zero(d));
+      L.x.assign(static_cast<std::size_t>(m), Vec::Zero(d));
+      L.llt.assign(static_cast<std::size_t>(m), Eigen::LLT<Mat>(d));
+      L.ok.assign(static_cast<std::size_t>(m), 1);
+      levels_.push_back(std::move(L));
+      if (m == 1) break;
+      m /= 2;
+    }
+  }
+
+  int blocks() const { return n_; }
+  Mat& diag(int i) { return diag_[static_cast<std::size_t>(i)]; }
+  Mat& off(int i) { return off_[static_cast<std::size_t>(i)]; }
+  const Mat& diag(int i) const { return diag_[static_cast<std::size_t>(i)]; }
+  const Mat& off(int i) const { return off_[static_cast<std::size_t>(i)]; }
+
+  /** Fills the blocks from the full-kernel arrays of ctx with diagonal shift mu on free components. */
+  void assemble(const Context& ctx, double mu) {
+    const int d = d_;
+    const std::size_t dd = static_cast<std::size_t>(d) * d;
+#pragma omp parallel for if (ctx.parallel(n_)) num_threads(ctx.threads) schedule(static)
+    for (int i = 0; i < n_; ++i) {
+      const int k = i + 1;
+      const std::size_t kk = static_cast<std::size_t>(k);
+      Mat& Dk = diag_[static_cast<std::size_t>(i)];
+      Dk = RowMap(ctx.D22.data() + (kk - 1) * dd, d, d);
+      Dk += RowMap(ctx.D11.data() + kk * dd, d, d);
+      Mat& Ck = off_[static_cast<std::size_t>(i)];
+      if (k < ctx.N - 1)
+        Ck = RowMap(ctx.D12.data() + kk * dd, d, d);
+      else
+        Ck.setZero();
+      const unsigned char* f = ctx.is_free.data() + kk * d;
+      const unsigned char* fn = ctx.is_free.data() + (kk + 1) * d;
+      for (int a = 0; a < d; ++a) {
+        if (!f[a]) {
+          Dk.row(a).setZero();
+          Dk.col(a).setZero();
+          Dk(a, a) = 1;
+          Ck.row(a).setZero();
+        } else {
+          Dk(a, a) += mu;
+        }
+        if (!fn[a]) Ck.col(a).setZero();
+      }
+    }
+  }
+
+  /** Block LDL^T with Cholesky pivots; false (and failed_block() = index) if a pivot is not p.d. */
+  bool factor_ldlt() {
+    failed_ = -1;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      if (i == 0) {
+        W_[ii] = diag_[ii];
+      } else {
+        W_[ii].noalias() = diag_[ii] - off_[ii - 1].transpose() * W_[ii - 1];
+      }
+      llt_[ii].compute(W_[ii]);
+      if (llt_[ii].info() != Eigen::Success || !finite_positive_diag(llt_[ii])) {
+        failed_ = i;
+        return false;
+      }
+      W_[ii] = llt_[ii].solve(off_[ii]);  // S_i^{-1} C_i
+    }
+    return true;
+  }
+
+  /** Solves H x = b after factor_ldlt; b and x in node layout of nodes 1..N-1 (dim each). */
+  void solve_ldlt(const double* b, double* x) {
+    const int d = d_;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      y_[ii] = VecMap(b + ii * d, d);
+      if (i > 0) y_[ii].noalias() -= W_[ii - 1].transpose() * y_[ii - 1];
+    }
+    for (int i = n_ - 1; i >= 0; --i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      Vec xi = llt_[ii].solve(y_[ii]);
+      if (i < n_ - 1) xi.noalias() -= W_[ii] * Eigen::Map<const Vec>(x + (ii + 1) * d, d);
+      Eigen::Map<Vec>(x + ii * d, d) = xi;
+    }
+  }
+
+  /** Block cyclic reduction (factor and solve together); false if a pivot is not p.d. */
+  bool solve_cyclic_reduction(const double* b, double* x, int threads) {
+    failed_ = -1;
+    if (n_ <= 0) return true;
+    const int d = d_;
+    Level& L0 = levels_[0];
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      L0.Dg[ii] = diag_[ii];
+      L0.Up[ii] = off_[ii];
+      if (i > 0)
+        L0.Lo[ii] = off_[ii - 1].transpose();
+      else
+        L0.Lo[ii].setZero();
+      L0.b[ii] = VecMap(b + ii * d, d);
+    }
+    // Reduction: keep the odd rows of each level.
+    for (std::size_t l = 0; l + 1 < levels_.size(); ++l) {
+      Level& A = levels_[l];
+      Level& B = levels_[l + 1];
+      const int n = A.n;
+      bool ok = true;
+#pragma omp parallel if (threads > 1 && n >= kParallelMin) num_threads(threads)
+      {
+#pragma omp for schedule(static)
+        for (int j = 0; j < n; j += 2) {
+          const std::size_t jj = static_cast<std::size_t>(j);
+          A.llt[jj].compute(A.Dg[jj]);
+          A.ok[jj] = A.llt[jj].info() == Eigen::Success && finite_positive_diag(A.llt[jj]);
+        }
+#pragma omp single
+        {
+          for (int j = 0; j < n; j += 2)
+            if (!A.ok[static_cast<std::size_t>(j)]) ok = false;
+        }
+        if (ok) {
+#pragma omp for schedule(static)
+          for (int m = 0; m < B.n; ++m) {
+            const int i = 2 * m + 1;
+            const std::size_t ii = static_cast<std::size_t>(i);
+            const std::size_t mm = static_cast<std::size_t>(m);
+            // alpha = -Lo_i Dg_{i-1}^{-1}, beta = -Up_i Dg_{i+1}^{-1} (Dg symmetric)
+            const Mat alphaT = A.llt[ii - 1].solve(A.Lo[ii].transpose());
+            B.Dg[mm] = A.Dg[ii];
+            B.Dg[mm].noalias() -= alphaT.transpose() * A.Up[ii - 1];
+            B.b[mm] = A.b[ii];
+            B.b[mm].noalias() -= alphaT.transpose() * A.b[ii - 1];
+            if (i - 1 > 0)
+              B.Lo[mm].noalias() = -alphaT.transpose() * A.Lo[ii - 1];
+            else
+              B.Lo[mm].setZero();
+            if (i + 1 < n) {
+              const Mat betaT = A.llt[ii + 1].solve(A.Up[ii].transpose());
+              B.Dg[mm].noalias() -= betaT.transpose() * A.Lo[ii + 1];
+              B.b[mm].noalias() -= betaT.transpose() * A.b[ii + 1];
+              if (i + 2 < n)
+                B.Up[mm].noalias() = -betaT.transpose() * A.Up[ii + 1];
+              else
+                B.Up[mm].setZero();
+            } else {
+              B.Up[mm].setZero();
+            }
+          }
+        }
+      }
+      if (!ok) return false;
+    }
+    // The last level has one block.
+    Level& top = levels_.back();
+    top.llt[0].compute(top.Dg[0]);
+    if (top.llt[0].info() != Eigen::Success || !finite_positive_diag(top.llt[0])) {
+      failed_ = 0;
+      return false;
+    }
+    top.x[0] = top.llt[0].solve(top.b[0]);
+    // Back substitution: odd rows come from the level above, even rows are solved.
+    for (std::size_t l = levels_.size() - 1; l-- > 0;) {
+      Level& A = levels_[l];
+      const Level& B = levels_[l + 1];
+      const int n = A.n;
+#pragma omp parallel for if (threads > 1 && n >= kParallelMin) num_threads(threads) schedule(static)
+      for (int i = 0; i < n; ++i) {
+        const std::size_t ii = static_cast<std::size_t>(i);
+        if (i % 2 == 1) {
+          A.x[ii] = B.x[ii / 2];
+        }
+      }
+#pragma omp parallel for if (threads > 1 && n >= kParallelMin) num_threads(threads) schedule(static)
+      for (int j = 0; j < n; j += 2) {
+        const std::size_t jj = static_cast<std::size_t>(j);
+        Vec r = A.b[jj];
+        if (j > 0) r.noalias() -= A.Lo[jj] * A.x[jj - 1];
+        if (j + 1 < n) r.noalias() -= A.Up[jj] * A.x[jj + 1];
+        A.x[jj] = A.llt[jj].solve(r);
+      }
+    }
+    const Level& L = levels_[0];
+    for (int i = 0; i < n_; ++i) Eigen::Map<Vec>(x + static_cast<std::size_t>(i) * d, d) = L.x[static_cast<std::size_t>(i)];
+    return true;
+  }
+
+  /** x^T H x (unshifted blocks as assembled), summed in a fixed order; x in node layout 1..N-1. */
+  double quadratic_form(const double* x) const {
+    const int d = d_;
+    double s = 0;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      const VecMap xi(x + ii * d, d);
+      s += xi.dot(diag_[ii] * xi);
+      if (i + 1 < n_) s += 2 * xi.dot(off_[ii] * VecMap(x + (ii + 1) * d, d));
+    }
+    return s;
+  }
+
+  int failed_block() const { return failed_; }
+  /** Cholesky factor of pivot i after a successful factor_ldlt(). */
+  const Eigen::LLT<Mat>& pivot(int i) const { return llt_[static_cast<std::size_t>(i)]; }
+
+ private:
+  struct Level {
+    int n = 0;
+    std::vector<Mat> Dg, Lo, Up;
+    std::vector<Vec> b, x;
+    std::vector<Eigen::LLT<Mat>> llt;
+    std::vector<unsigned char> ok;
+  };
+
+  static bool finite_positive_diag(const Eigen::LLT<Mat>& llt) {
+    const auto& L = llt.matrixLLT();
+    for (int a = 0; a < L.rows(); ++a)
+      if (!(L(a, a) > 0) || !std::isfinite(L(a, a))) return false;
+    return true;
+  }
+
+  int n_ = 0, d_ = 0, failed_ = -1;
+  std::vector<Mat> diag_, off_, W_;
+  std::vector<Vec> y_;
+  std::vector<Eigen::LLT<Mat>> llt_;
+  std::vector<Level> levels_;
+};
+
+}  // namespace pardel::detail
+
+#endif  // PARDEL_RUNTIME_BLOCK_TRIDIAGONAL_HPP

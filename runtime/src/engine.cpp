@@ -1,0 +1,248 @@
+/**
+ * @file engine.cpp
+ * The solve context and what every method shares: kernel evaluation over all intervals in
+ * parallel (each interval once, shared by its two nodes), the DEL residual on free components,
+ * the discrete action summed in a fixed order, constraints (boundaries, knots) and node times.
+ */
+#include "engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace pardel::detail {
+
+int resolve_threads(int requested) {
+#ifdef _OPENMP
+  if (requested <= 0) return std::max(1, omp_get_num_procs());
+  return requested;
+#else
+  (void)requested;
+  return 1;
+#endif
+}
+
+void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
+  const pardel_model& m = *problem.model;
+  ctx.model = problem.model;
+  ctx.disc = problem.discretization;
+  ctx.dim = m.dim;
+  ctx.ncoords = m.ncoords;
+  ctx.order = m.order;
+  ctx.N = N;
+  ctx.threads = threads;
+  ctx.params = problem.params;
+  if (ctx.params.empty() && m.nparams > 0) ctx.params.assign(m.param_defaults, m.param_defaults + m.nparams);
+  ctx.clock = problem.clock;
+  ctx.t0 = problem.t0;
+  ctx.T = problem.T;
+  const std::size_t n1 = static_cast<std::size_t>(N) + 1, d = static_cast<std::size_t>(m.dim);
+  ctx.t.assign(n1, 0.0);
+  ctx.hk.assign(static_cast<std::size_t>(N), problem.T / N);
+  for (int k = 0; k <= N; ++k) ctx.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / N;
+  ctx.t[static_cast<std::size_t>(N)] = problem.t0 + problem.T;
+  ctx.is_free.assign(n1 * d, 1);
+  ctx.free_count.assign(n1, m.dim);
+  ctx.q.assign(n1 * d, 0.0);
+  ctx.q_next.assign(n1 * d, 0.0);
+  const std::size_t nd = static_cast<std::size_t>(N) * d;
+  ctx.Ld.assign(static_cast<std::size_t>(N), 0.0);
+  ctx.D1.assign(nd, 0.0);
+  ctx.D2.assign(nd, 0.0);
+  ctx.D11.assign(nd * d, 0.0);
+  ctx.D12.assign(nd * d, 0.0);
+  ctx.D22.assign(nd * d, 0.0);
+  ctx.res.assign(n1 * d, 0.0);
+  ctx.node_max.assign(n1, 0.0);
+  ctx.evaluated = Evaluated::nothing;
+  ctx.residual = 0;
+  ctx.action = 0;
+}
+
+bool apply_constraints(const Problem& problem, Context& ctx, std::string* message) {
+  const int d = ctx.dim, N = ctx.N;
+  std::fill(ctx.is_free.begin(), ctx.is_free.end(), 1);
+  std::fill(ctx.free_count.begin(), ctx.free_count.end(), d);
+  auto fix = [&](int k, int from, int to) {
+    for (int i = from; i < to; ++i) {
+      unsigned char& f = ctx.is_free[static_cast<std::size_t>(k) * d + i];
+      if (f) {
+        f = 0;
+        --ctx.free_count[static_cast<std::size_t>(k)];
+      }
+    }
+  };
+  fix(0, 0, d);
+  fix(N, 0, d);
+  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
+    const Knot& knot = problem.knots[a];
+    const double s = (knot.t - problem.t0) / problem.T * N;
+    const double k_near = std::floor(s);
+    const int k = static_cast<int>(std::lround(s));
+    if (std::fabs(s - k) > 1e-9 * std::max(1.0, std::fabs(s)) || k <= 0 || k >= N) {
+      char buf[320];
+      const int lo = static_cast<int>(std::max(0.0, std::min<double>(N, k_near)));
+      const int hi = std::min(N, lo + 1);
+      std::snprintf(buf, sizeof buf,
+                    "knot %zu at t = %.17g is not on an interior grid node with N = %d; nearest nodes: "
+                    "%d (t = %.17g) and %d (t = %.17g)",
+                    a, knot.t, N, lo, problem.t0 + problem.T * lo / N, hi, problem.t0 + problem.T * hi / N);
+      if (message) *message = buf;
+      return false;
+    }
+    // Order 1: the whole node is fixed; order >= 2: only the coordinates (seed eq2-interpolation).
+    fix(k, 0, ctx.order == 1 ? d : ctx.ncoords);
+    double* qk = ctx.node(ctx.q, k);
+    for (int i = 0; i < ctx.ncoords; ++i) qk[i] = knot.q[static_cast<std::size_t>(i)];
+  }
+  ctx.free_total = 0;
+  for (int c : ctx.free_count) ctx.free_total += c;
+  return true;
+}
+
+void eval_sweep(Context& ctx, const std::vector<double>& q) {
+  const int d = ctx.dim, N = ctx.N;
+  const std::size_t dd = static_cast<std::size_t>(d) * d;
+  const pardel_sweep_kernel kern = ctx.disc->sweep;
+  const double* p = ctx.p();
+#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
+  for (int k = 0; k < N; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q.data() + kk * d, q.data() + (kk + 1) * d, p,
+         ctx.D1.data() + kk * d, ctx.D2.data() + kk * d, ctx.D11.data() + kk * dd, ctx.D22.data() + kk * dd);
+  }
+  ctx.evaluated = Evaluated::sweep;
+}
+
+void eval_full(Context& ctx, const std::vector<double>& q) {
+  const int d = ctx.dim, N = ctx.N;
+  const std::size_t dd = static_cast<std::size_t>(d) * d;
+  const pardel_full_kernel kern = ctx.disc->full;
+  const double* p = ctx.p();
+#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
+  for (int k = 0; k < N; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q.data() + kk * d, q.data() + (kk + 1) * d, p, &ctx.Ld[kk],
+         ctx.D1.data() + kk * d, ctx.D2.data() + kk * d, ctx.D11.data() + kk * dd, ctx.D12.data() + kk * dd,
+         ctx.D22.data() + kk * dd);
+  }
+  ctx.evaluated = Evaluated::full;
+}
+
+void eval_grad(Context& ctx, const std::vector<double>& q) {
+  const int d = ctx.dim, N = ctx.N;
+  const pardel_grad_kernel kern = ctx.disc->grad;
+  const double* p = ctx.p();
+#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
+  for (int k = 0; k < N; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q.data() + kk * d, q.data() + (kk + 1) * d, p, &ctx.Ld[kk],
+         ctx.D1.data() + kk * d, ctx.D2.data() + kk * d);
+  }
+  ctx.evaluated = Evaluated::grad;
+}
+
+int compute_residual(Context& ctx) {
+  const int d = ctx.dim, N = ctx.N;
+  const std::size_t dz = static_cast<std::size_t>(d);
+#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
+  for (int k = 0; k <= N; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    double* r = ctx.res.data() + kk * dz;
+    const unsigned char* f = ctx.is_free.data() + kk * dz;
+    double mx = 0;
+    bool finite = true;
+    for (int i = 0; i < d; ++i) {
+      double v = 0;
+      if (f[i]) {
+        v = ctx.D2[(kk - 1) * dz + i] + ctx.D1[kk * dz + i];
+        if (!std::isfinite(v)) finite = false;
+      }
+      r[i] = v;
+      mx = std::max(mx, std::fabs(v));
+    }
+    ctx.node_max[kk] = finite ? mx : std::numeric_limits<double>::infinity();
+  }
+  double mx = 0;
+  int bad = -1;
+  for (int k = 0; k <= N; ++k) {
+    const double v = ctx.node_max[static_cast<std::size_t>(k)];
+    if (!std::isfinite(v) && bad < 0) bad = k;
+    mx = std::max(mx, v);
+  }
+  ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : mx;
+  return bad;
+}
+
+double sum_action(const Context& ctx) {
+  double s = 0;
+  for (double v : ctx.Ld) s += v;
+  return s;
+}
+
+double action_at(Context& ctx, const std::vector<double>& q) {
+  const int d = ctx.dim, N = ctx.N;
+  const pardel_action_kernel kern = ctx.disc->action;
+  const double* p = ctx.p();
+  std::vector<double>& out = ctx.node_max;  // N+1 scratch, only the first N used here
+#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
+  for (int k = 0; k < N; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    out[kk] = kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q.data() + kk * d, q.data() + (kk + 1) * d, p);
+  }
+  double s = 0;
+  for (int k = 0; k < N; ++k) s += out[static_cast<std::size_t>(k)];
+  return s;
+}
+
+void update_times(Context& ctx, const std::vector<double>& q) {
+  if (ctx.clock == ClockMode::none || ctx.model->clock == nullptr) return;
+  const int d = ctx.dim, N = ctx.N;
+  const double hs = ctx.T / N;
+  const double* p = ctx.p();
+  if (ctx.clock == ClockMode::free_final_time) {
+    // A sequential prefix sum: each step needs the time reached so far.
+    ctx.t[0] = ctx.t0;
+    for (int k = 0; k < N; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      ctx.t[kk + 1] = ctx.t[kk] + ctx.model->clock(hs, ctx.t[kk], q.data() + kk * d, q.data() + (kk + 1) * d, p);
+      ctx.hk[kk] = hs;
+    }
+  } else {
+    // Sundman adaptive step: dt_k proportional to the clock of interval k (evaluated at the
+    // previous times), normalized so that the steps sum to T.
+    std::vector<double>& c = ctx.hk;
+    double total = 0;
+    for (int k = 0; k < N; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      c[kk] = ctx.model->clock(hs, ctx.t[kk], q.data() + kk * d, q.data() + (kk + 1) * d, p);
+      total += c[kk];
+    }
+    ctx.t[0] = ctx.t0;
+    for (int k = 0; k < N; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      ctx.t[kk + 1] = ctx.t[kk] + ctx.T * c[kk] / total;
+    }
+    ctx.t[static_cast<std::size_t>(N)] = ctx.t0 + ctx.T;
+    for (int k = 0; k < N; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      ctx.hk[kk] = ctx.t[kk + 1] - ctx.t[kk];
+    }
+  }
+  ctx.evaluated = Evaluated::nothing;
+}
+
+int first_non_finite_node(const Context& ctx, const std::vector<double>& q) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  for (int k = 0; k <= ctx.N; ++k)
+    for (std::size_t i = 0; i < d; ++i)
+      if (!std::isfinite(q[static_cast<std::size_t>(k) * d + i])) return k;
+  return -1;
+}
+
+}  // namespace pardel::detail

@@ -1,0 +1,139 @@
+/**
+ * @file engine.hpp
+ * Internals shared by every solver method: the solve context (grid, node times, free components,
+ * preallocated interval arrays), kernel evaluation over all intervals, the DEL residual, the
+ * discrete action, node-time updates by the model's clock, and the interface a method implements.
+ *
+ * Array layout: nodes 0..N, node k at q[k*dim]; interval k = [k, k+1], k = 0..N-1, with its
+ * derivatives at D1[k*dim], D11[k*dim*dim] (row-major, as in kernel_abi.h).
+ */
+#ifndef PARDEL_RUNTIME_ENGINE_HPP
+#define PARDEL_RUNTIME_ENGINE_HPP
+
+#include <memory>
+#include <type_traits>
+#include <string>
+#include <vector>
+
+#include "pardel/pardel.hpp"
+
+namespace pardel::detail {
+
+/** Below this many nodes (or blocks) a loop runs on one thread: a parallel region costs more. */
+constexpr int kParallelMin = 512;
+
+/** Which kernel filled the interval arrays. */
+enum class Evaluated { nothing, sweep, grad, full };
+
+struct Context {
+  const pardel_model* model = nullptr;
+  const pardel_discretization* disc = nullptr;
+  int dim = 0, ncoords = 0, order = 1, N = 0;
+  int threads = 1;
+  std::vector<double> params;
+  ClockMode clock = ClockMode::none;
+  double t0 = 0, T = 1;
+  std::vector<double> t;   ///< N+1 node times
+  std::vector<double> hk;  ///< N steps passed to the kernels (T/N, or t_{k+1}-t_k under fixed_total_time)
+  std::vector<unsigned char> is_free;  ///< (N+1)*dim: 1 where the component is an unknown
+  std::vector<int> free_count;         ///< N+1: free components of each node
+  long free_total = 0;
+
+  std::vector<double> q;       ///< current iterate, (N+1)*dim
+  std::vector<double> q_next;  ///< next iterate written by a method
+
+  // Interval arrays at q (which kernel filled them: `evaluated`).
+  std::vector<double> Ld, D1, D2, D11, D12, D22;
+  Evaluated evaluated = Evaluated::nothing;
+
+  // Node residual r_k = D2(k-1) + D1(k) on free components (0 elsewhere), (N+1)*dim.
+  std::vector<double> res;
+  std::vector<double> node_max;  ///< N+1 scratch: max |r_k| per node
+  double residual = 0;           ///< infinity-norm of res
+  double action = 0;
+  bool action_known = false;     ///< whether `action` belongs to q
+
+  bool parallel(int n) const { return threads > 1 && n >= kParallelMin; }
+  double h(int k) const { return hk[static_cast<std::size_t>(k)]; }
+  double* node(std::vector<double>& v, int k) const { return v.data() + static_cast<std::size_t>(k) * dim; }
+  const double* node(const std::vector<double>& v, int k) const {
+    return v.data() + static_cast<std::size_t>(k) * dim;
+  }
+  const double* p() const { return params.empty() ? nullptr : params.data(); }
+};
+
+/** Builds the context for `problem` at N intervals from `trajectory` (resampled by the caller). */
+void setup_context(const Problem& problem, int N, int threads, Context& ctx);
+/** Marks knots and boundaries; `message` is set and false returned for a knot off the grid. */
+bool apply_constraints(const Problem& problem, Context& ctx, std::string* message);
+
+/** Evaluates a kernel on every interval at `q` into the context's arrays (parallel over k). */
+void eval_sweep(Context& ctx, const std::vector<double>& q);
+void eval_full(Context& ctx, const std::vector<double>& q);
+void eval_grad(Context& ctx, const std::vector<double>& q);
+
+/** Residual from the D1, D2 arrays: fills res and node_max, returns the first node whose residual is
+ *  not finite (or -1) and sets ctx.residual. */
+int compute_residual(Context& ctx);
+/** Fixed-order sum of the Ld array (filled by full or grad). */
+double sum_action(const Context& ctx);
+/** Discrete action at q through the action kernel (parallel evaluation, fixed-order sum). */
+double action_at(Context& ctx, const std::vector<double>& q);
+
+/** Recomputes node times (and kernel steps) from q with the model's clock; no-op without a clock. */
+void update_times(Context& ctx, const std::vector<double>& q);
+
+/** First node (0..N) with a non-finite value in q, or -1. */
+int first_non_finite_node(const Context& ctx, const std::vector<double>& q);
+
+/** What one iteration of a method reports. */
+struct StepOutcome {
+  Termination failure = Termination::converged;  ///< `converged` here means "no failure"
+  std::string message;
+  bool next_evaluated = false;  ///< the interval arrays already hold the evaluation at q_next
+  bool ok() const { return failure == Termination::converged; }
+};
+
+/**
+ * A solver method. The driver owns the loop: it calls evaluate() at the current iterate ctx.q
+ * (which must leave ctx.residual set and the D1/D2 arrays valid), decides convergence, then
+ * calls iterate(), which writes the next iterate into ctx.q_next from ctx.q.
+ */
+class Method_ {
+ public:
+  virtual ~Method_() = default;
+  /** Called whenever the context is (re)built (new N) or node times changed. */
+  virtual void reset(Context& ctx) = 0;
+  /** Evaluates at ctx.q; returns the first node with a non-finite residual or -1. */
+  virtual int evaluate(Context& ctx) = 0;
+  virtual StepOutcome iterate(Context& ctx, long iteration) = 0;
+};
+
+/** The methods, each in its own file; dim selects the fixed-size block specialization. */
+std::unique_ptr<Method_> make_jacobi(const Options& options, int dim);
+std::unique_ptr<Method_> make_jacobi_newton(const Options& options, int dim);
+std::unique_ptr<Method_> make_newton(const Options& options, int dim);
+std::unique_ptr<Method_> make_hybrid(const Options& options, int dim);
+/** nullptr when this build has no multigrid (message says why). */
+std::unique_ptr<Method_> make_multigrid(const Options& options, int dim, std::string* message);
+
+/** Number of threads to use for Options::threads (0: all cores). */
+int resolve_threads(int requested);
+
+/** Calls f with an integral constant D in {1,2,3,4,6,8} equal to dim, or Eigen::Dynamic (-1). */
+template <class F>
+auto dispatch_dim(int dim, F&& f) {
+  switch (dim) {
+    case 1: return f(std::integral_constant<int, 1>{});
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 6: return f(std::integral_constant<int, 6>{});
+    case 8: return f(std::integral_constant<int, 8>{});
+    default: return f(std::integral_constant<int, -1>{});
+  }
+}
+
+}  // namespace pardel::detail
+
+#endif  // PARDEL_RUNTIME_ENGINE_HPP

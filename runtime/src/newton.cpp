@@ -1,0 +1,163 @@
+/**
+ * @file newton.cpp
+ * Newton's method on the whole DEL system (beyond the seed), globalized as Levenberg-Marquardt
+ * on the discrete action that these problems minimize: the Hessian is shifted by mu I until its
+ * block factorization certifies positive definiteness, and a step is accepted by the ratio of
+ * actual to predicted decrease of the action (or, once both are at round-off level, by a
+ * decrease of the residual). Linear solves by block LDL^T or block cyclic reduction.
+ */
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <utility>
+
+#include "block_tridiagonal.hpp"
+#include "engine.hpp"
+
+namespace pardel::detail {
+namespace {
+
+template <int D>
+class Newton : public Method_ {
+ public:
+  explicit Newton(const Options& o) : cyclic_(o.linear_solver == LinearSolver::cyclic_reduction) {}
+
+  void reset(Context& ctx) override {
+    H_.resize(ctx.N, ctx.dim);
+    const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
+    rhs_.assign(n, 0.0);
+    dx_.assign(n, 0.0);
+    Ld_ = ctx.Ld;
+    D1_ = ctx.D1;
+    D2_ = ctx.D2;
+    D11_ = ctx.D11;
+    D12_ = ctx.D12;
+    D22_ = ctx.D22;
+    res_ = ctx.res;
+    mu_ = 0;
+  }
+
+  int evaluate(Context& ctx) override {
+    if (ctx.evaluated != Evaluated::full) eval_full(ctx, ctx.q);
+    const int bad = compute_residual(ctx);
+    ctx.action = sum_action(ctx);
+    ctx.action_known = true;
+    return bad;
+  }
+
+  StepOutcome iterate(Context& ctx, long iteration) override {
+    const int d = ctx.dim, N = ctx.N;
+    const std::size_t dz = static_cast<std::size_t>(d);
+    const std::size_t n = rhs_.size();
+    const double F = ctx.action, r0 = ctx.residual;
+    for (std::size_t i = 0; i < n; ++i) rhs_[i] = -ctx.res[dz + i];
+    // Scale of the shift: the largest diagonal entry of the unshifted Hessian.
+    H_.assemble(ctx, 0.0);
+    double scale = 0;
+    for (int i = 0; i < H_.blocks(); ++i) scale = std::max(scale, H_.diag(i).diagonal().cwiseAbs().maxCoeff());
+    if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
+    const double mu_min = 1e-10 * scale;
+    if (mu_ > 0 && mu_ < mu_min) mu_ = mu_min;
+    for (int attempt = 0; attempt < 200; ++attempt) {
+      if (attempt > 0 || mu_ != 0) H_.assemble(ctx, mu_);
+      bool ok;
+      if (cyclic_) {
+        ok = H_.solve_cyclic_reduction(rhs_.data(), dx_.data(), ctx.threads);
+      } else {
+        ok = H_.factor_ldlt();
+        if (ok) H_.solve_ldlt(rhs_.data(), dx_.data());
+      }
+      if (!ok) {
+        raise(mu_min);
+        if (mu_ > 1e30 * scale) break;
+        continue;
+      }
+      // Quadratic model of the action with the unshifted Hessian: m(dx) = g.dx + dx.H.dx/2.
+      double gdx = 0, dx2 = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        gdx -= rhs_[i] * dx_[i];
+        dx2 += dx_[i] * dx_[i];
+      }
+      const double pred = -(gdx + 0.5 * (H_.quadratic_form(dx_.data()) - mu_ * dx2));
+      // Trial point.
+      for (std::size_t i = 0; i < dz; ++i) {
+        ctx.q_next[i] = ctx.q[i];
+        ctx.q_next[static_cast<std::size_t>(N) * dz + i] = ctx.q[static_cast<std::size_t>(N) * dz + i];
+      }
+      for (std::size_t i = 0; i < n; ++i) ctx.q_next[dz + i] = ctx.q[dz + i] + dx_[i];
+      swap_arrays(ctx);
+      eval_full(ctx, ctx.q_next);
+      const int bad = compute_residual(ctx);
+      const double Fn = sum_action(ctx);
+      const double ared = F - Fn;
+      const double roundoff = 1e-13 * (1 + std::fabs(F));
+      bool accept = false;
+      double rho = 0;
+      if (bad < 0 && std::isfinite(Fn)) {
+        if (pred > roundoff) {
+          rho = ared / pred;
+          accept = rho >= 1e-4;
+        } else {
+          accept = ctx.residual < r0 && ared > -roundoff;
+          rho = accept ? 1 : 0;
+        }
+      }
+      if (accept) {
+        ctx.action = Fn;
+        ctx.action_known = true;
+        if (rho > 0.75) {
+          mu_ /= 4;
+          if (mu_ < mu_min) mu_ = 0;
+        } else if (rho < 0.25) {
+          mu_ = std::max(2 * mu_, mu_min);
+        }
+        StepOutcome done;
+        done.next_evaluated = true;
+        return done;
+      }
+      swap_arrays(ctx);  // restore the evaluation at q
+      ctx.residual = r0;
+      raise(mu_min);
+      if (mu_ > 1e30 * scale) break;
+    }
+    StepOutcome out;
+    out.failure = Termination::diverged;
+    char buf[240];
+    std::snprintf(buf, sizeof buf,
+                  "newton found no step that decreases the action in iteration %ld (shift mu = %.3g, "
+                  "residual %.3g): the action may be unbounded below or the Hessian singular",
+                  iteration, mu_, r0);
+    out.message = buf;
+    return out;
+  }
+
+ private:
+  void raise(double mu_min) { mu_ = mu_ == 0 ? mu_min : 4 * mu_; }
+
+  void swap_arrays(Context& ctx) {
+    std::swap(ctx.Ld, Ld_);
+    std::swap(ctx.D1, D1_);
+    std::swap(ctx.D2, D2_);
+    std::swap(ctx.D11, D11_);
+    std::swap(ctx.D12, D12_);
+    std::swap(ctx.D22, D22_);
+    std::swap(ctx.res, res_);
+  }
+
+  bool cyclic_;
+  BlockTridiagonal<D> H_;
+  std::vector<double> rhs_, dx_;
+  std::vector<double> Ld_, D1_, D2_, D11_, D12_, D22_, res_;
+  double mu_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Method_> make_newton(const Options& options, int dim) {
+  return dispatch_dim(dim, [&](auto D) -> std::unique_ptr<Method_> {
+    return std::make_unique<Newton<decltype(D)::value>>(options);
+  });
+}
+
+}  // namespace pardel::detail

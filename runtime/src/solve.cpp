@@ -1,0 +1,346 @@
+/**
+ * @file solve.cpp
+ * The solve driver shared by every method: validation, coarse-to-fine refinement, node-time
+ * updates under a clock, convergence and failure detection (non-finite values, divergence,
+ * interruption), bounded history and the Summary. A method only supplies evaluate/iterate.
+ */
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <utility>
+
+#include "engine.hpp"
+
+namespace pardel {
+namespace {
+
+using detail::Context;
+
+std::string format(const char* fmt, double a, double b = 0, double c = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+
+/** Whether every knot lies on an interior node of the uniform grid with n intervals. */
+bool knots_on_grid(const Problem& problem, int n) {
+  for (const Knot& knot : problem.knots) {
+    const double s = (knot.t - problem.t0) / problem.T * n;
+    const long k = std::lround(s);
+    if (std::fabs(s - static_cast<double>(k)) > 1e-9 * std::max(1.0, std::fabs(s)) || k <= 0 || k >= n) return false;
+  }
+  return true;
+}
+
+/** Grid sizes of coarse-to-fine refinement, ending at problem.N. */
+std::vector<int> refinement_levels(const Problem& problem, const Options& options) {
+  std::vector<int> levels;
+  const int N = problem.N;
+  if (options.refine_start_N <= 0 || options.refine_start_N >= N) return {N};
+  int n = options.refine_start_N;
+  while (n < N && !knots_on_grid(problem, n)) ++n;
+  while (n < N) {
+    levels.push_back(n);
+    int next = std::max(n + 1, static_cast<int>(std::ceil(n * options.refine_factor)));
+    while (next < N && !knots_on_grid(problem, next)) ++next;
+    n = next;
+  }
+  levels.push_back(N);
+  return levels;
+}
+
+class Driver {
+ public:
+  Driver(const Problem& problem, const Options& options, detail::Method_& method, Summary& summary)
+      : problem_(problem), options_(options), method_(method), s_(summary),
+        start_(std::chrono::steady_clock::now()) {}
+
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+  /** Sets up ctx_ at N from `from`; false (with the summary filled) on bad constraints. */
+  bool enter_level(const Trajectory& from, int N) {
+    detail::setup_context(problem_, N, s_.threads, ctx_);
+    const Trajectory& src = from.N == N ? from : (resampled_ = resample(problem_, from, N));
+    ctx_.q = src.q;
+    const std::size_t d = static_cast<std::size_t>(ctx_.dim);
+    for (std::size_t i = 0; i < d; ++i) {
+      ctx_.q[i] = problem_.q0[i];
+      ctx_.q[static_cast<std::size_t>(N) * d + i] = problem_.qN[i];
+    }
+    std::string message;
+    if (!detail::apply_constraints(problem_, ctx_, &message)) {
+      s_.termination = Termination::invalid_input;
+      s_.message = message;
+      return false;
+    }
+    if (problem_.clock != ClockMode::none) detail::update_times(ctx_, ctx_.q);
+    method_.reset(ctx_);
+    return true;
+  }
+
+  /** Iterates at the current level. Returns true when an intermediate level has settled; on the
+   *  last level (or on any failure) fills the summary's termination and returns false. */
+  bool run_level(bool last) {
+    long level_it = 0, since_clock = 0;
+    double r_level0 = 0, r_checkpoint = std::numeric_limits<double>::infinity();
+    const bool clocked = problem_.clock != ClockMode::none;
+    for (;;) {
+      if (clocked && since_clock >= options_.clock_update_every) {
+        detail::update_times(ctx_, ctx_.q);
+        since_clock = 0;
+      }
+      int bad = method_.evaluate(ctx_);
+      if (bad >= 0) return non_finite_residual(bad);
+      double r = ctx_.residual;
+      if (clocked && r <= options_.tol && since_clock > 0) {
+        // Declare convergence only with node times consistent with this trajectory.
+        detail::update_times(ctx_, ctx_.q);
+        since_clock = 0;
+        bad = method_.evaluate(ctx_);
+        if (bad >= 0) return non_finite_residual(bad);
+        r = ctx_.residual;
+      }
+      if (level_it == 0) r_level0 = r;
+      if (!have_initial_) {
+        r_initial_ = r;
+        have_initial_ = true;
+      }
+      last_good_residual_ = r;
+      if (should_record()) {
+        if (!record()) {
+          finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
+          return false;
+        }
+      }
+      if (last && r <= options_.tol) {
+        finish(Termination::converged, format("DEL residual %.3g <= tol %.3g", r, options_.tol));
+        return false;
+      }
+      if (!last) {
+        if (r <= std::max(options_.tol, options_.refine_settle * r_level0)) return true;
+        if (level_it > 0 && level_it % 50 == 0) {
+          if (r > 0.99 * r_checkpoint) return true;  // stagnating: less than 1% over 50 iterations
+          r_checkpoint = r;
+        }
+      }
+      if (iteration_ >= options_.max_iterations) {
+        finish(Termination::max_iterations,
+               format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
+                      static_cast<double>(options_.max_iterations), r, options_.tol));
+        return false;
+      }
+      if (iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_) {
+        finish(Termination::diverged, format("DEL residual %.3g grew beyond divergence_factor x initial residual "
+                                             "%.3g at iteration %.0f",
+                                             r, r_initial_, static_cast<double>(iteration_)));
+        return false;
+      }
+      const detail::StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
+      if (!outcome.ok()) {
+        finish(outcome.failure, outcome.message);
+        return false;
+      }
+      const int node = detail::first_non_finite_node(ctx_, ctx_.q_next);
+      if (node >= 0) {
+        finish(Termination::non_finite,
+               "non-finite value at node " + std::to_string(node) + " in iteration " +
+                   std::to_string(iteration_ + 1) + "; the last finite iterate is returned");
+        return false;
+      }
+      double qmax = 0;
+      for (double v : ctx_.q_next) qmax = std::max(qmax, std::fabs(v));
+      if (qmax > 1e150) {
+        finish(Termination::diverged, format("iterates exploded (max |q| = %.3g) in iteration %.0f", qmax,
+                                             static_cast<double>(iteration_ + 1)));
+        return false;
+      }
+      std::swap(ctx_.q, ctx_.q_next);
+      if (!outcome.next_evaluated) ctx_.evaluated = detail::Evaluated::nothing;
+      ++iteration_;
+      ++level_it;
+      ++since_clock;
+    }
+  }
+
+  bool non_finite_residual(int node) {
+    std::string msg = "non-finite DEL residual at node " + std::to_string(node) + " in iteration " +
+                      std::to_string(iteration_);
+    if (iteration_ > 0) {
+      std::swap(ctx_.q, ctx_.q_next);  // back to the last finite iterate
+      ctx_.evaluated = detail::Evaluated::nothing;
+      ctx_.residual = last_good_residual_;
+      msg += "; the last finite iterate (iteration " + std::to_string(iteration_ - 1) + ") is returned";
+      --iteration_;
+    } else {
+      msg += " (the initial guess)";
+    }
+    finish(Termination::non_finite, msg);
+    return false;
+  }
+
+  bool should_record() {
+    if (iteration_ < next_record_) return false;
+    const long every = options_.history_every;
+    if (s_.history.size() < 1000) {
+      next_record_ = (iteration_ / every + 1) * every;
+    } else {
+      // Long runs: geometrically spaced records keep the history bounded.
+      next_record_ = std::max(iteration_ + every, static_cast<long>(std::ceil(iteration_ * 1.01)));
+    }
+    return true;
+  }
+
+  bool record() {
+    IterationRecord rec;
+    rec.iteration = iteration_;
+    rec.N = ctx_.N;
+    rec.residual = ctx_.residual;
+    if (!ctx_.action_known) {
+      ctx_.action = detail::action_at(ctx_, ctx_.q);
+      ctx_.action_known = true;
+    }
+    rec.action = ctx_.action;
+    rec.seconds = seconds();
+    s_.history.push_back(rec);
+    if (options_.on_iteration) return options_.on_iteration(rec);
+    return true;
+  }
+
+  void finish(Termination termination, std::string message) {
+    s_.termination = termination;
+    s_.message = std::move(message);
+  }
+
+  void write_result(Trajectory& out) {
+    out.N = ctx_.N;
+    out.dim = ctx_.dim;
+    out.t = ctx_.t;
+    out.q = ctx_.q;
+    s_.N = ctx_.N;
+    s_.iterations = iteration_;
+    s_.residual = ctx_.residual;
+    s_.action = detail::action_at(ctx_, ctx_.q);
+    s_.final_time = ctx_.t.back();
+    if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != ctx_.N) {
+      IterationRecord rec;
+      rec.iteration = iteration_;
+      rec.N = ctx_.N;
+      rec.residual = s_.residual;
+      rec.action = s_.action;
+      rec.seconds = seconds();
+      s_.history.push_back(rec);
+    }
+    s_.wall_seconds = seconds();
+  }
+
+  Context& context() { return ctx_; }
+
+ private:
+  const Problem& problem_;
+  const Options& options_;
+  detail::Method_& method_;
+  Summary& s_;
+  std::chrono::steady_clock::time_point start_;
+  Context ctx_;
+  Trajectory resampled_;
+  long iteration_ = 0, next_record_ = 0;
+  double r_initial_ = 0, last_good_residual_ = 0;
+  bool have_initial_ = false;
+};
+
+std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, std::string* message) {
+  switch (options.method) {
+    case Method::jacobi: return detail::make_jacobi(options, dim);
+    case Method::jacobi_newton: return detail::make_jacobi_newton(options, dim);
+    case Method::newton: return detail::make_newton(options, dim);
+    case Method::hybrid: return detail::make_hybrid(options, dim);
+    case Method::multigrid: return detail::make_multigrid(options, dim, message);
+  }
+  *message = "unknown method";
+  return nullptr;
+}
+
+}  // namespace
+
+Summary solve(const Problem& problem, const Options& options, Trajectory& trajectory) {
+  const auto start = std::chrono::steady_clock::now();
+  Summary summary;
+  summary.method = options.method;
+  summary.N = problem.N;
+  summary.threads = detail::resolve_threads(options.threads);
+  std::string error;
+  if (!options.is_valid(&error) || !validate(problem, trajectory, &error)) {
+    summary.termination = Termination::invalid_input;
+    summary.message = error;
+    return summary;
+  }
+  std::unique_ptr<detail::Method_> method = make_method(options, problem.model->dim, &error);
+  if (!method) {
+    summary.termination = Termination::invalid_input;
+    summary.message = error;
+    return summary;
+  }
+  const std::vector<int> levels = refinement_levels(problem, options);
+  Driver driver(problem, options, *method, summary);
+  Trajectory current = trajectory;
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const bool last = l + 1 == levels.size();
+    if (!driver.enter_level(current, levels[l])) {
+      summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      return summary;
+    }
+    const bool settled = driver.run_level(last);
+    if (settled && !last) {
+      Context& ctx = driver.context();
+      current.N = ctx.N;
+      current.dim = ctx.dim;
+      current.t = ctx.t;
+      current.q = ctx.q;
+      continue;
+    }
+    break;
+  }
+  driver.write_result(trajectory);
+  if (summary.termination != Termination::converged && trajectory.N != problem.N)
+    summary.message += " (stopped at the refinement level N = " + std::to_string(trajectory.N) + ")";
+  return summary;
+}
+
+double residual_norm(const Problem& problem, const Trajectory& trajectory) {
+  std::string error;
+  if (!validate(problem, trajectory, &error) || trajectory.N != problem.N)
+    return std::numeric_limits<double>::quiet_NaN();
+  Context ctx;
+  detail::setup_context(problem, trajectory.N, 1, ctx);
+  ctx.q = trajectory.q;
+  if (!detail::apply_constraints(problem, ctx, &error)) return std::numeric_limits<double>::quiet_NaN();
+  ctx.q = trajectory.q;  // the trajectory as given, knots included
+  if (trajectory.t.size() == ctx.t.size()) {
+    ctx.t = trajectory.t;
+    if (problem.clock == ClockMode::fixed_total_time)
+      for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+  }
+  detail::eval_grad(ctx, ctx.q);
+  if (detail::compute_residual(ctx) >= 0) return std::numeric_limits<double>::quiet_NaN();
+  return ctx.residual;
+}
+
+double discrete_action(const Problem& problem, const Trajectory& trajectory) {
+  std::string error;
+  if (!validate(problem, trajectory, &error) || trajectory.N != problem.N)
+    return std::numeric_limits<double>::quiet_NaN();
+  Context ctx;
+  detail::setup_context(problem, trajectory.N, 1, ctx);
+  if (trajectory.t.size() == ctx.t.size()) {
+    ctx.t = trajectory.t;
+    if (problem.clock == ClockMode::fixed_total_time)
+      for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+  }
+  return detail::action_at(ctx, trajectory.q);
+}
+
+}  // namespace pardel

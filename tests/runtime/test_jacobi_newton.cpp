@@ -1,0 +1,151 @@
+/**
+ * @file test_jacobi_newton.cpp
+ * The seed's block Jacobi-Newton (eq. NewtonRaphson): against the exact discrete solution of the
+ * harmonic oscillator's trapezoid DEL (a three-term recurrence solved in closed form), m-step
+ * variants, damping, bit-identical results for 1 and 2 threads, and failure statuses.
+ */
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hand_models.hpp"
+#include "pardel/pardel.hpp"
+
+namespace {
+
+pardel::Problem harmonic_problem(double omega, double T, int N, double a, double b) {
+  pardel::Problem p;
+  p.model = &hand::harmonic;
+  p.discretization = pardel::find_discretization(hand::harmonic, "trapezoid");
+  p.params = {omega};
+  p.T = T;
+  p.N = N;
+  p.q0 = {a};
+  p.qN = {b};
+  return p;
+}
+
+/** x_{k+1} = (2 - h^2 w^2) x_k - x_{k-1}: x_k = a cos(k th) + (b - a cos(N th)) sin(k th) / sin(N th). */
+double exact_discrete(double omega, double T, int N, double a, double b, int k) {
+  const double h = T / N, th = std::acos(1 - h * h * omega * omega / 2);
+  return a * std::cos(k * th) + (b - a * std::cos(N * th)) * std::sin(k * th) / std::sin(N * th);
+}
+
+TEST(JacobiNewton, HarmonicMatchesExactDiscreteSolution) {
+  const auto problem = harmonic_problem(1.0, 2.0, 40, 0.3, -0.7);
+  auto traj = pardel::linear_guess(problem);
+  pardel::Options opt;
+  opt.threads = 1;
+  opt.tol = 1e-13;  // the error is at most residual / lambda_min(H) ~ residual * T^2 / (pi^2 h)
+  const auto s = pardel::solve(problem, opt, traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  EXPECT_LE(s.residual, 1e-13);
+  EXPECT_LE(pardel::residual_norm(problem, traj), 1e-13);
+  for (int k = 0; k <= problem.N; ++k)
+    EXPECT_NEAR(traj.node(k)[0], exact_discrete(1.0, 2.0, 40, 0.3, -0.7, k), 1e-11) << "node " << k;
+  EXPECT_NEAR(s.action, pardel::discrete_action(problem, traj), 1e-14);
+  EXPECT_FALSE(s.history.empty());
+  EXPECT_EQ(s.history.back().iteration, s.iterations);
+}
+
+TEST(JacobiNewton, SubstepsAndDampingReachTheSameSolution) {
+  const auto problem = harmonic_problem(1.5, 1.5, 24, 1.0, 0.5);
+  pardel::Options base;
+  base.threads = 1;
+  auto ref = pardel::linear_guess(problem);
+  ASSERT_TRUE(pardel::solve(problem, base, ref).converged());
+  for (int m : {2, 3}) {
+    pardel::Options opt = base;
+    opt.newton_substeps = m;
+    auto traj = pardel::linear_guess(problem);
+    const auto s = pardel::solve(problem, opt, traj);
+    ASSERT_TRUE(s.converged()) << "m = " << m << ": " << s.brief_report();
+    for (int k = 0; k <= problem.N; ++k) EXPECT_NEAR(traj.node(k)[0], ref.node(k)[0], 1e-9);
+  }
+  pardel::Options damped = base;
+  damped.damping = 0.3;
+  auto traj = pardel::linear_guess(problem);
+  const auto s = pardel::solve(problem, damped, traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  for (int k = 0; k <= problem.N; ++k) EXPECT_NEAR(traj.node(k)[0], ref.node(k)[0], 1e-9);
+}
+
+TEST(JacobiNewton, BitIdenticalForOneAndTwoThreads) {
+  // N above the size where loops go parallel; the same iterate after the same number of sweeps.
+  const auto problem = harmonic_problem(2.0, 1.0, 3000, -0.2, 0.9);
+  pardel::Options opt;
+  opt.max_iterations = 40;
+  opt.threads = 1;
+  auto a = pardel::linear_guess(problem);
+  const auto sa = pardel::solve(problem, opt, a);
+  opt.threads = 2;
+  auto b = pardel::linear_guess(problem);
+  const auto sb = pardel::solve(problem, opt, b);
+  EXPECT_EQ(sa.iterations, sb.iterations);
+  EXPECT_EQ(sa.residual, sb.residual);
+  EXPECT_EQ(a.q, b.q);
+  EXPECT_EQ(sb.threads, 2);
+}
+
+TEST(JacobiNewton, BeyondTheConjugatePointDoesNotConverge) {
+  // omega T = 4 > pi: the Hessian of the action is indefinite, the linear iteration diverges.
+  const auto problem = harmonic_problem(1.0, 4.0, 40, 1.0, 1.0);
+  auto traj = pardel::linear_guess(problem);
+  pardel::Options opt;
+  opt.threads = 1;
+  opt.max_iterations = 100000;
+  const auto s = pardel::solve(problem, opt, traj);
+  EXPECT_FALSE(s.converged()) << s.brief_report();
+  EXPECT_EQ(s.termination, pardel::Termination::diverged) << s.brief_report();
+}
+
+TEST(JacobiNewton, MaxIterationsIsReported) {
+  const auto problem = harmonic_problem(1.0, 2.0, 200, 0.0, 1.0);
+  auto traj = pardel::linear_guess(problem);
+  pardel::Options opt;
+  opt.max_iterations = 7;
+  const auto s = pardel::solve(problem, opt, traj);
+  EXPECT_EQ(s.termination, pardel::Termination::max_iterations);
+  EXPECT_EQ(s.iterations, 7);
+  EXPECT_NE(s.brief_report().find("max_iterations"), std::string::npos);
+}
+
+TEST(JacobiNewton, InterruptedByCallback) {
+  const auto problem = harmonic_problem(1.0, 2.0, 100, 0.0, 1.0);
+  auto traj = pardel::linear_guess(problem);
+  pardel::Options opt;
+  long seen = 0;
+  opt.on_iteration = [&](const pardel::IterationRecord& r) {
+    seen = r.iteration;
+    return r.iteration < 5;
+  };
+  const auto s = pardel::solve(problem, opt, traj);
+  EXPECT_EQ(s.termination, pardel::Termination::interrupted);
+  EXPECT_EQ(seen, 5);
+  EXPECT_EQ(s.iterations, 5);
+}
+
+TEST(JacobiNewton, NonFiniteIterateIsCaughtWithNodeAndIteration) {
+  // Bratu far beyond its fold: exp overflows after a few sweeps.
+  pardel::Problem p;
+  p.model = &hand::bratu;
+  p.discretization = &hand::bratu.discretizations[0];
+  p.params = {400.0};
+  p.N = 20;
+  p.q0 = {0.0};
+  p.qN = {0.0};
+  auto traj = pardel::linear_guess(p);
+  pardel::Options opt;
+  opt.divergence_factor = 1e300;
+  const auto s = pardel::solve(p, opt, traj);
+  EXPECT_FALSE(s.converged());
+  EXPECT_TRUE(s.termination == pardel::Termination::non_finite || s.termination == pardel::Termination::diverged)
+      << s.brief_report();
+  for (double v : traj.q) EXPECT_TRUE(std::isfinite(v));
+  if (s.termination == pardel::Termination::non_finite) {
+    EXPECT_NE(s.message.find("node"), std::string::npos) << s.message;
+    EXPECT_NE(s.message.find("iteration"), std::string::npos) << s.message;
+  }
+}
+
+}  // namespace
