@@ -104,6 +104,7 @@ class Reader {
   struct Cursor {
     const Line* line;
     std::size_t pos;
+    int depth = 0;  ///< nesting of unary operators, powers, parentheses and calls
     const Token& peek() const { return line->tokens[pos]; }
     const Token& next() { return line->tokens[pos++]; }
     bool at_op(char c) const { return peek().kind == Tok::op && peek().text[0] == c; }
@@ -593,7 +594,18 @@ GiNaC::ex Reader::parse_power(Cursor& c, const ExprContext& ctx) const {
   return base;
 }
 
+/** Deeper expressions are rejected rather than risking the stack (here or in GiNaC). */
+constexpr int kMaxNesting = 200;
+
 GiNaC::ex Reader::parse_unary(Cursor& c, const ExprContext& ctx) const {
+  struct Depth {
+    int& d;
+    explicit Depth(int& v) : d(v) { ++d; }
+    ~Depth() { --d; }
+  } depth(c.depth);
+  if (c.depth > kMaxNesting) {
+    fail(*c.line, c.peek(), "expression is nested too deeply (at most " + std::to_string(kMaxNesting) + " levels)");
+  }
   if (c.at_op('-')) {
     c.next();
     return -parse_unary(c, ctx);
