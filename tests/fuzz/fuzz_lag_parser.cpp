@@ -6,7 +6,8 @@
  *   - a LagError names a LINE:COL inside the input (line 1..number of lines, column 1..length+1)
  *     and its text starts with "fuzz.lag:LINE:COL: error: ";
  *   - when a small model is accepted, the symbolic pipeline (discretize, differentiate, CSE,
- *     JSON IR) runs on it too and either succeeds or throws CodegenError.
+ *     JSON IR) runs on it too and either succeeds or throws CodegenError. The pipeline costs about
+ *     100 times the reading; with PARDEL_FUZZ_PARSE_ONLY set in the environment it is skipped.
  * Built as a libFuzzer target with clang (fuzz_lag_parser) and, with any compiler, as a corpus
  * replay program (fuzz_lag_parser_replay, see corpus_replay_main.cpp).
  */
@@ -93,7 +94,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const std::exception& error) {
     violated("parse_lag threw something other than LagError", error.what());
   }
-  if (!cheap_enough(model)) return 0;
+  if (std::getenv("PARDEL_FUZZ_PARSE_ONLY") != nullptr || !cheap_enough(model)) return 0;
   try {
     const pardel_codegen::ModelIR ir = pardel_codegen::build_model_ir(model, kSourceName);
     const std::string json = pardel_codegen::ir_to_json(ir);

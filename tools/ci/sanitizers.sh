@@ -19,6 +19,8 @@ san_flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-re
 # Leaks stay fatal everywhere; UBSan prints a stack and stops at the first report.
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# A one-time allocation of the CLN library at start-up (see the file) is not pardel's leak.
+export LSAN_OPTIONS="suppressions=$PWD/tools/ci/lsan.supp:print_suppressions=0"
 # Models compiled at run time by the tests go to a cache inside the build folder.
 export PARDEL_CACHE_DIR="$PWD/$build_dir/model-cache"
 
