@@ -102,8 +102,8 @@ def block_difference(got, ref):
     return diff / scale
 
 
-def check(pardel, model_arg, discs, points, seed, tol, out):
-    path = sympy_kernels.resolve_model_path(model_arg)
+def check(pardel, model_arg, discs, points, seed, tol, out, reference_path=None):
+    path = reference_path or sympy_kernels.resolve_model_path(model_arg)
     model = sympy_kernels.parse_lag(path)
     ok = True
     for disc in discs or model.discretizations:
@@ -134,6 +134,8 @@ def main(argv=None):
     parser.add_argument("--points", type=int, default=4)
     parser.add_argument("--seed", type=int, default=20240601)
     parser.add_argument("--tol", type=float, default=1e-10)
+    parser.add_argument("--reference", help="evaluate the SymPy side from this .lag instead (one --model only; "
+                                            "used to show that a wrong model is caught)")
     args = parser.parse_args(argv)
     models = list(args.model)
     if args.all_bundled:
@@ -141,10 +143,13 @@ def main(argv=None):
                          for p in glob.glob(os.path.join(sympy_kernels.PROJECT_ROOT, "lagrangians", "*.lag")))
     if not models:
         parser.error("name at least one --model, or --all-bundled")
+    if args.reference and len(models) != 1:
+        parser.error("--reference needs exactly one --model")
     ok = True
     try:
         for model_arg in models:
-            ok = check(args.pardel, model_arg, args.disc, args.points, args.seed, args.tol, sys.stdout) and ok
+            ok = check(args.pardel, model_arg, args.disc, args.points, args.seed, args.tol, sys.stdout,
+                       args.reference) and ok
     except sympy_kernels.LagError as exc:
         print(exc, file=sys.stderr)
         return 2
