@@ -296,9 +296,13 @@ std::string apply_override(toml::table& root, const std::string& assignment) {
 
 std::string resolve_relative(const std::string& scene_path, const std::string& path) {
   namespace fs = std::filesystem;
-  const fs::path p(path);
-  if (p.is_absolute()) return path;
-  return (fs::path(scene_path).parent_path() / p).lexically_normal().string();
+  try {
+    const fs::path p(path);
+    if (p.is_absolute()) return path;
+    return (fs::path(scene_path).parent_path() / p).lexically_normal().string();
+  } catch (const std::exception&) {
+    return path;
+  }
 }
 
 bool looks_like_path(const std::string& spec) {
@@ -338,7 +342,8 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
   std::string to_resolve = *model_spec;
   if (looks_like_path(to_resolve)) {
     const std::string beside_scene = resolve_relative(source_name, to_resolve);
-    if (std::filesystem::exists(beside_scene)) to_resolve = beside_scene;
+    std::error_code ec;
+    if (std::filesystem::exists(beside_scene, ec)) to_resolve = beside_scene;
   }
   const toml::node& model_node = *root.get("model");
   try {
@@ -555,13 +560,13 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
       k.q = r.vector(*knot->get("q"), name + ".q", static_cast<std::size_t>(model.ncoords),
                      fmt::format("model {} has coords {}", model.name, coords_text));
       const double position = (*t - problem.t0) / h;
-      const long node_index = std::lround(position);
       const toml::node& t_node = *knot->get("t");
       if (!(position > 0.5 && position < problem.N - 0.5)) {
         r.fail(t_node, name + ".t",
                fmt::format("{}.t = {} must lie strictly inside the grid ({}, {}); the ends are set by [boundary]", name,
                            *t, problem.t0, problem.t0 + problem.T));
       }
+      const long node_index = std::lround(position);
       const double node_time = problem.t0 + node_index * h;
       if (std::abs(*t - node_time) > 1e-9 * std::max(1.0, std::abs(problem.T))) {
         const long below = static_cast<long>(std::floor(position));
@@ -622,7 +627,8 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
       const auto csv = r.string(guess, "path", "guess.path");
       if (!csv) r.fail(guess->source(), "guess", "missing key 'guess.path' (a trajectory.csv file)");
       scene.guess.csv_path = resolve_relative(source_name, *csv);
-      if (!std::filesystem::exists(scene.guess.csv_path)) {
+      std::error_code ec;
+      if (!std::filesystem::exists(scene.guess.csv_path, ec)) {
         r.fail(*path, "guess.path", fmt::format("guess.path: file '{}' not found", scene.guess.csv_path));
       }
     }
