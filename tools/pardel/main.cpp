@@ -151,7 +151,7 @@ int run_models(bool json) {
     for (int i = 0; i < m->ncoords; ++i) coords += (i ? " " : "") + std::string(m->coords[i]);
     std::string params;
     for (int i = 0; i < m->nparams; ++i) {
-      params += fmt::format("{}{}={}", i ? " " : "", m->param_names[i], format_double(m->param_defaults[i]));
+      params += fmt::format("{}{}={}", i ? " " : "", m->param_names[i], m->param_defaults[i]);
     }
     std::string discs;
     for (int i = 0; i < m->ndiscretizations; ++i) discs += (i ? " " : "") + std::string(m->discretizations[i].name);

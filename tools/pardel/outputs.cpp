@@ -101,6 +101,9 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   nlohmann::ordered_json params = nlohmann::ordered_json::object();
   for (int i = 0; i < scene.model->nparams; ++i) params[scene.model->param_names[i]] = problem.params[i];
   j["params"] = params;
+  nlohmann::ordered_json knots = nlohmann::ordered_json::array();
+  for (const auto& knot : problem.knots) knots.push_back({{"t", knot.t}, {"q", knot.q}});
+  j["knots"] = knots;
   j["t0"] = problem.t0;
   j["T"] = problem.T;
   j["tol"] = scene.options.tol;

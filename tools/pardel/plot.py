@@ -226,6 +226,10 @@ def plot_trajectory(summary, traj, coords, lag, out_path):
         strm = ax.streamplot(gx, gy, u, v, color=speed, cmap="Blues", density=1.4, linewidth=0.8)
         fig.colorbar(strm.lines, ax=ax, shrink=0.7, label="|W|")
     draw_path(ax, xs, ys)
+    for knot in summary.get("knots", []):
+        ax.plot(knot["q"][0], knot["q"][1], "D", color="tab:green", ms=8, zorder=5)
+        ax.annotate("t = %g" % knot["t"], (knot["q"][0], knot["q"][1]), textcoords="offset points",
+                    xytext=(6, 6), fontsize=8, color="tab:green")
     ax.set_aspect("equal")
     ax.set_xlim(limits[0], limits[1])
     ax.set_ylim(limits[2], limits[3])
