@@ -321,7 +321,8 @@ int run_solve(const SolveArgs& args) {
   if (have_trajectory) certificate = certify(final_problem, trajectory, scene.options.threads);
 
   const pardel_model& model = *scene.model;
-  const std::string source = model_source_path(model);
+  std::string source = model_source_path(model);
+  if (!scene.model_path.empty()) source = fs::absolute(scene.model_path, ec).lexically_normal().string();
   write_file_atomic((fs::path(out_dir) / "summary.json").string(),
                     summary_json(scene, summary, trajectory, certificate, source).dump(2) + "\n");
   if (have_trajectory) {

@@ -22,9 +22,9 @@ struct PhysicalCost {
 };
 
 /**
- * Travel time for models with a clock solved without the Sundman mode (Summary::final_time - t0
- * under free_final_time, else the summed clock kernel); otherwise the discrete action, named
- * "fuel" (fuel_nav, spacecraft), "cost" (interp_fuel) or "action" (any other model).
+ * The discrete action named "fuel" (fuel_nav, spacecraft*) or "cost" (interp_fuel); for other
+ * models with a clock, the travel time: Summary::final_time - t0 under free_final_time, the summed
+ * clock kernel for zermelo* models under a fixed grid; otherwise the discrete action ("action").
  */
 PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Trajectory& trajectory);
 

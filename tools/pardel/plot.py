@@ -189,7 +189,7 @@ def plot_trajectory(summary, traj, coords, lag, out_path):
         return
     xs, ys = traj[coords[0]], traj[coords[1]]
     field = lag.field() if lag else None
-    if summary["model"] == "spacecraft" and lag is not None:
+    if summary["model"].startswith("spacecraft") and lag is not None:
         plot_spacecraft(summary, traj, coords, lag, title, out_path)
         return
     if field is not None and field[1]:

@@ -344,6 +344,7 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
     const std::string beside_scene = resolve_relative(source_name, to_resolve);
     std::error_code ec;
     if (std::filesystem::exists(beside_scene, ec)) to_resolve = beside_scene;
+    scene.model_path = to_resolve;
   }
   const toml::node& model_node = *root.get("model");
   try {

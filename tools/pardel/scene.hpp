@@ -39,6 +39,7 @@ struct GuessSpec {
 struct Scene {
   std::string path;        ///< the scene file (or the source name given to parse_scene)
   std::string model_spec;  ///< the `model` value as written
+  std::string model_path;  ///< the .lag file it resolved to (relative paths against the scene's folder), or ""
   const pardel_model* model = nullptr;
   std::string discretization;  ///< canonical name of problem.discretization
   Problem problem;
