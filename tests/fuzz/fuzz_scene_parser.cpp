@@ -8,11 +8,13 @@
  *     hang or a leak is a defect;
  *   - a SceneError starts with "fuzz.toml:LINE:COL: error: " (LINE inside the input),
  *     "fuzz.toml: error: " or "--set KEY=VALUE: error: ";
- *   - an accepted scene has consistent sizes, and its initial guess (linear or polyline) is a
+ *   - an accepted scene has consistent sizes, a grid with finite end time t0 + T and a non-zero
+ *     step T/N, and its initial guess (linear or polyline) is a
  *     trajectory on the scene's grid that starts and ends at the boundary values.
  * Built as a libFuzzer target with clang (fuzz_scene_parser) and, with any compiler, as a corpus
  * replay program (fuzz_scene_parser_replay, see corpus_replay_main.cpp).
  */
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -78,6 +80,12 @@ void check_scene(const pardel::cli::Scene& scene) {
   const std::size_t dim = static_cast<std::size_t>(scene.model->dim);
   if (problem.q0.size() != dim || problem.qN.size() != dim) violated("boundary sizes differ from the model's dim", "");
   if (!(problem.T > 0) || problem.N < 2) violated("accepted a grid with T <= 0 or N < 2", "");
+  // Every node time t0 + k T/N must be finite and distinct from its neighbours.
+  if (!std::isfinite(problem.t0 + problem.T) || !(problem.T / problem.N > 0)) {
+    violated("accepted a grid whose end time t0 + T is not finite or whose step T/N is zero",
+             "t0 = " + std::to_string(problem.t0) + ", T = " + std::to_string(problem.T) + ", N = " +
+                 std::to_string(problem.N));
+  }
   // The guess allocates (N+1)*dim values: only small grids are built while fuzzing.
   if (scene.guess.kind == pardel::cli::GuessKind::csv || (problem.N + 1.0) * dim > 1e6) return;
   const pardel::Trajectory guess = pardel::cli::make_initial_guess(scene);

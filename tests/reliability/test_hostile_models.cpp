@@ -201,8 +201,8 @@ TEST_F(HostileModel, SourcePathWithQuotesAndCommentTerminatorsCompiles) {
 // Sizes and depths
 
 TEST_F(HostileModel, ModerateNestingIsAcceptedAndEvaluatesCorrectly) {
-  const std::string text = "model nested\ncoords x\nL = 1/2*x'^2 + " + std::string(2000, '(') + "x" +
-                           std::string(2000, ')') + " + sin(sin(sin(sin(sin(sin(sin(sin(x))))))))\n";
+  const std::string text = "model nested\ncoords x\nL = 1/2*x'^2 + " + std::string(150, '(') + "x" +
+                           std::string(150, ')') + " + sin(sin(sin(sin(sin(sin(sin(sin(x))))))))\n";
   const Generated g = generate("nested.lag", text);
   expect_compiled(g);
   if (g.model) {
@@ -217,16 +217,15 @@ TEST_F(HostileModel, ModerateNestingIsAcceptedAndEvaluatesCorrectly) {
   }
 }
 
-// The reader is recursive-descent without a depth limit: 200000 nested parentheses (400 kB,
-// under its 1 MiB file limit) overflow the stack of pardel-gen (SIGSEGV). A defect of the
-// .lag reader (codegen/src/lag_parser.cpp): it must refuse excessive nesting with FILE:LINE:COL.
+// 200000 nested parentheses (400 kB, under the reader's 1 MiB file limit): a recursive-descent
+// reader without a depth limit overflows its stack here; pardel's must refuse with FILE:LINE:COL.
 TEST_F(HostileModel, DeepNestingIsRefusedWithoutACrash) {
   const std::string text = "model m\ncoords x\nL = x'^2 + " + std::string(200000, '(') + "x" +
                            std::string(200000, ')') + "\n";
   expect_located_rejection(generate("deep.lag", text), text);
 }
 
-// The same defect through unary minus: parse_unary recurses once per sign.
+// The same depth through unary minus: one recursion per sign.
 TEST_F(HostileModel, LongUnaryMinusChainIsRefusedOrAcceptedWithoutACrash) {
   const std::string text = "model minus_chain\ncoords x\nL = x'^2 + " + std::string(500000, '-') + "x\n";
   const Generated g = generate("minus_chain.lag", text);
