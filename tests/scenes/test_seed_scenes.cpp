@@ -26,6 +26,7 @@ struct SeedScene {
   const char* extra;      ///< extra pardel solve arguments
   const char* cost_name;  ///< summary.json cost.name
   double cost;            ///< recorded value
+  double rel_tol = 1e-7;  ///< relative tolerance on the cost
 };
 
 std::ostream& operator<<(std::ostream& out, const SeedScene& s) { return out << s.scene; }
@@ -49,7 +50,7 @@ TEST_P(SeedSceneTest, ConvergesToTheRecordedCost) {
   EXPECT_LE(summary["residual"].get<double>(), summary["tol"].get<double>());
   EXPECT_EQ(summary["cost"]["name"], s.cost_name);
   const double cost = summary["cost"]["value"].get<double>();
-  EXPECT_NEAR(cost, s.cost, 1e-7 * std::abs(s.cost)) << s.scene;
+  EXPECT_NEAR(cost, s.cost, s.rel_tol * std::abs(s.cost)) << s.scene;
   fs::remove_all(out);
 }
 
@@ -58,7 +59,18 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(SeedScene{"fuel_nav.toml", "--set solver.method=newton", "fuel", 5.5968321457527104},
                       SeedScene{"fuel_nav_T8.toml", "--set solver.method=newton", "fuel", 4.2133361826879439},
                       SeedScene{"interp_fuel.toml", "--set solver.method=newton", "cost", 109.19457318750032},
-                      SeedScene{"zermelo_tv.toml", "--set solver.method=newton", "travel_time", 5.8153951751708952}),
+                      SeedScene{"zermelo_tv.toml", "--set solver.method=newton", "travel_time", 5.8153951751708952},
+                      // Six guesses, four distinct local solutions (docs/examples.md).
+                      SeedScene{"zermelo_1.toml", "--set solver.method=newton", "travel_time", 8.926253376625844},
+                      SeedScene{"zermelo_2.toml", "--set solver.method=newton", "travel_time", 9.078747735348953},
+                      SeedScene{"zermelo_3.toml", "--set solver.method=newton", "travel_time", 9.662035876120543},
+                      SeedScene{"zermelo_4.toml", "--set solver.method=newton", "travel_time", 9.737325202891293},
+                      SeedScene{"zermelo_5.toml", "--set solver.method=newton", "travel_time", 9.662035876121928},
+                      SeedScene{"zermelo_6.toml", "--set solver.method=newton", "travel_time", 8.92625337662602},
+                      // These two solve to a residual of 1e-7 (the scenes' tol; round-off floor near
+                      // 1e-8 with gradients of 1e5), hence a looser 1e-6 on the cost.
+                      SeedScene{"spacecraft_fixed.toml", "", "fuel", 1.10256313438894, 1e-6},
+                      SeedScene{"spacecraft_sundman.toml", "", "fuel", 0.20202522949061943, 1e-6}),
     [](const ::testing::TestParamInfo<SeedScene>& info) {
       std::string name = fs::path(info.param.scene).stem().string();
       for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';

@@ -44,7 +44,7 @@ constexpr int kExitInternal = 1;
 const char* const kExitCodesHelp =
     "Exit codes: 0 converged (or success), 1 internal error (e.g. an output file cannot be written),\n"
     "2 invalid input (bad scene, option or model), 3 max_iterations, 4 diverged, 5 non_finite,\n"
-    "6 interrupted (Ctrl-C).";
+    "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate).";
 
 /** A bad command-line value: the message names the option; exit code 2. */
 class UsageError : public std::runtime_error {
@@ -306,9 +306,11 @@ int run_solve(const SolveArgs& args) {
     return !g_interrupted.load();
   };
   g_interrupted.store(false);
-  auto previous_handler = std::signal(SIGINT, on_sigint);
+  auto previous_int = std::signal(SIGINT, on_sigint);
+  auto previous_term = std::signal(SIGTERM, on_sigint);
   const Summary summary = solve(scene.problem, scene.options, trajectory);
-  std::signal(SIGINT, previous_handler);
+  std::signal(SIGINT, previous_int);
+  std::signal(SIGTERM, previous_term);
   progress.finish();
   scene.options.on_iteration = nullptr;
 
