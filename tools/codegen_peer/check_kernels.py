@@ -36,8 +36,9 @@ SAMPLING = {
     "fuel_nav": {"coords": (0.0, 6.0), "t0": (0.0, 30.0)},
     "interp_fuel": {"coords": (0.0, 6.0), "t0": (0.0, 60.0)},
     "sphere_geodesic": {"coords": (0.3, 2.8)},
-    # Between the Earth (origin) and beyond the Moon (r_M ~ 0.00257 AU); velocities in s-units.
-    "spacecraft": {"coords": (-0.004, 0.004), "derivs": (-0.01, 0.01), "h": (0.02, 0.1), "t0": (0.0, 0.2)},
+    # Between the Earth (origin) and beyond the Moon (r_M ~ 0.00257 AU), up to about the speed on
+    # a geosynchronous orbit (0.1 AU per year/2pi), steps of 0.2 to 3 days.
+    "spacecraft": {"coords": (-0.004, 0.004), "derivs": (-0.1, 0.1), "h": (0.0005, 0.005), "t0": (0.0, 0.2)},
 }
 
 
