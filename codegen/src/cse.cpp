@@ -107,6 +107,26 @@ struct Scaled {
   int node;
 };
 
+/** The same with an exact constant coefficient (rationals, sqrt(3), pi, ...), kept exact while
+ *  converting so that the doubles finally printed do not depend on how GiNaC happened to
+ *  write an equal constant (2/3 sqrt(3) or 2 3^(-1/2)). */
+struct Exact {
+  GiNaC::ex coef;
+  int node;
+};
+
+/** A constant expression rounded once to double (GiNaC::Digits is raised while generating). */
+double value_of(const GiNaC::ex& c) {
+  if (GiNaC::is_a<GiNaC::numeric>(c) && GiNaC::ex_to<GiNaC::numeric>(c).is_rational()) {
+    return checked(GiNaC::ex_to<GiNaC::numeric>(c).to_double(), "a number");
+  }
+  GiNaC::ex v = c.evalf();
+  if (!GiNaC::is_a<GiNaC::numeric>(v)) throw CodegenError("internal: a constant has no numeric value");
+  const GiNaC::numeric& n = GiNaC::ex_to<GiNaC::numeric>(v);
+  if (!n.is_real()) throw CodegenError("the model has a complex constant");
+  return checked(n.to_double(), "a constant");
+}
+
 std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
   h ^= h >> 31;
@@ -223,36 +243,37 @@ class NDag {
     return intern(std::move(n));
   }
 
-  Scaled make_sum(std::vector<NTerm> raw, double constant_term) {
-    NNode sorter;
-    sorter.terms = std::move(raw);
-    canonicalize(sorter);
-    std::map<int, double> acc;
-    for (const NTerm& t : sorter.terms) acc[t.node] += t.coef;
-    std::vector<NTerm> terms;
+  /**
+   * A sum of exact coefficient * node terms plus an exact constant. A common sign, or a common
+   * magnitude of all coefficients, is pulled out and returned as the scale.
+   */
+  Exact make_sum(const std::vector<std::pair<GiNaC::ex, int>>& raw, const GiNaC::ex& constant_term) {
+    std::map<int, GiNaC::ex> acc;
+    for (const auto& [coef, node] : raw) acc[node] += coef;
+    std::vector<std::pair<GiNaC::ex, int>> terms;
     for (const auto& [node, coef] : acc) {
-      if (coef != 0) terms.push_back({coef, node});
+      if (value_of(coef) != 0) terms.emplace_back(coef, node);
     }
-    NNode ordered;
-    ordered.terms = std::move(terms);
-    canonicalize(ordered);
-    terms = std::move(ordered.terms);
+    std::sort(terms.begin(), terms.end(), [&](const auto& x, const auto& y) {
+      if (shash(x.second) != shash(y.second)) return shash(x.second) < shash(y.second);
+      return value_of(x.first) < value_of(y.first);
+    });
+    const double c = value_of(constant_term);
     if (terms.empty()) return {constant_term, -1};
-    if (terms.size() == 1 && constant_term == 0) return {terms[0].coef, terms[0].node};
-    double scale = terms[0].coef < 0 ? -1 : 1;
-    const double a = std::fabs(terms[0].coef);
-    bool equal = constant_term == 0 || std::fabs(constant_term) == a;
-    for (const NTerm& t : terms) equal = equal && std::fabs(t.coef) == a;
-    if (equal) scale *= a;
+    if (terms.size() == 1 && c == 0) return {terms[0].first, terms[0].second};
+    const double first = value_of(terms[0].first);
+    GiNaC::ex scale = first < 0 ? -1 : 1;
+    bool equal = c == 0 || std::fabs(c) == std::fabs(first);
+    for (const auto& t : terms) equal = equal && std::fabs(value_of(t.first)) == std::fabs(first);
+    if (equal) scale = terms[0].first;
     NNode n;
     n.kind = NKind::sum;
-    for (NTerm& t : terms) t.coef /= scale;
-    n.terms = std::move(terms);
-    n.constant = constant_term / scale;
+    for (const auto& [coef, node] : terms) n.terms.push_back(NTerm{value_of(coef / scale), node});
+    n.constant = value_of(constant_term / scale);
     return {scale, intern(std::move(n))};
   }
 
-  Scaled make_product(double coef, const std::map<int, int>& raw) {
+  Exact make_product(const GiNaC::ex& coef, const std::map<int, int>& raw) {
     std::vector<NFactor> factors;
     for (const auto& [node, e] : raw) {
       if (e != 0) factors.push_back({node, e});
@@ -289,9 +310,12 @@ class Converter {
     for (const KernelInput& in : inputs) inputs_.emplace(in.symbol, &in);
   }
 
-  Scaled convert(const GiNaC::ex& e) {
+  Exact convert(const GiNaC::ex& e) {
     using namespace GiNaC;
-    if (is_a<numeric>(e)) return {numeric_value(ex_to<numeric>(e)), -1};
+    if (is_a<numeric>(e)) {
+      if (!ex_to<numeric>(e).is_real()) throw CodegenError("the model has a complex constant (" + to_string(e) + ")");
+      return {e, -1};
+    }
     if (is_a<symbol>(e)) {
       auto it = inputs_.find(e);
       if (it == inputs_.end()) throw CodegenError("internal: the expression reads an unknown symbol " + to_string(e));
@@ -302,15 +326,20 @@ class Converter {
       return {1, dag_.intern(std::move(n))};
     }
     if (is_a<constant>(e)) {
-      ex v = e.evalf();
-      if (!is_a<numeric>(v)) throw CodegenError("internal: constant " + to_string(e) + " has no value");
-      return {numeric_value(ex_to<numeric>(v)), -1};
+      value_of(e);
+      return {e, -1};
     }
     auto memo = memo_.find(e);
     if (memo != memo_.end()) return memo->second;
-    Scaled result = convert_composite(e);
+    Exact result = convert_composite(e);
     memo_.emplace(e, result);
     return result;
+  }
+
+  /** The node of a converted value (a constant node, the node itself, or a scaled node). */
+  int materialize(const Exact& x) {
+    if (x.node < 0) return dag_.constant(value_of(x.coef));
+    return dag_.materialize({value_of(x.coef), x.node});
   }
 
  private:
@@ -318,11 +347,6 @@ class Converter {
     std::ostringstream s;
     s << e;
     return s.str();
-  }
-
-  static double numeric_value(const GiNaC::numeric& n) {
-    if (!n.is_real()) throw CodegenError("the model has a complex constant (" + to_string(n) + ")");
-    return checked(n.to_double(), "a number");
   }
 
   static bool small_integer(const GiNaC::ex& e, int* out) {
@@ -333,55 +357,44 @@ class Converter {
     return true;
   }
 
-  /** Sums and products of constants in a fixed order (GiNaC's operand order varies between runs). */
-  static double ordered_sum(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    double s = 0;
-    for (double x : v) s += x;
-    return s;
-  }
-  static double ordered_product(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    double s = 1;
-    for (double x : v) s *= x;
-    return s;
-  }
-
-  Scaled power_of(const Scaled& base, int k) {
-    if (base.node < 0) return {checked(std::pow(base.coef, k), "a power"), -1};
+  Exact power_of(const Exact& base, int k) {
+    const GiNaC::ex coef = GiNaC::pow(base.coef, k);
+    value_of(coef);  // finite
+    if (base.node < 0) return {coef, -1};
     std::map<int, int> f;
     dag_.add_factor(f, base.node, k);
-    return dag_.make_product(std::pow(base.coef, k), f);
+    return dag_.make_product(coef, f);
   }
 
-  Scaled convert_composite(const GiNaC::ex& e) {
+  Exact convert_composite(const GiNaC::ex& e) {
     using namespace GiNaC;
     if (is_a<add>(e)) {
-      std::vector<NTerm> terms;
-      std::vector<double> constants;
+      std::vector<std::pair<ex, int>> terms;
+      ex constant_term = 0;
       for (std::size_t i = 0; i < e.nops(); ++i) {
-        Scaled s = convert(e.op(i));
-        if (s.node < 0) constants.push_back(s.coef);
-        else terms.push_back({s.coef, s.node});
+        Exact x = convert(e.op(i));
+        if (x.node < 0) constant_term += x.coef;
+        else terms.emplace_back(x.coef, x.node);
       }
-      return dag_.make_sum(terms, ordered_sum(constants));
+      return dag_.make_sum(terms, constant_term);
     }
     if (is_a<mul>(e)) {
-      std::vector<double> coefs;
+      ex coef = 1;
       std::map<int, int> factors;
       for (std::size_t i = 0; i < e.nops(); ++i) {
         const ex& f = e.op(i);
         int k = 0;
-        Scaled s{1, -1};
+        Exact x{1, -1};
         if (is_a<power>(f) && small_integer(f.op(1), &k)) {
-          s = power_of(convert(f.op(0)), k);
+          x = power_of(convert(f.op(0)), k);
         } else {
-          s = convert(f);
+          x = convert(f);
         }
-        coefs.push_back(s.coef);
-        if (s.node >= 0) dag_.add_factor(factors, s.node, 1);
+        coef *= x.coef;
+        if (x.node >= 0) dag_.add_factor(factors, x.node, 1);
       }
-      return dag_.make_product(ordered_product(coefs), factors);
+      value_of(coef);
+      return dag_.make_product(coef, factors);
     }
     if (is_a<power>(e)) {
       const ex& base = e.op(0);
@@ -391,24 +404,28 @@ class Converter {
       if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_rational() &&
           ex_to<numeric>(exponent).denom() == 2 && abs(ex_to<numeric>(exponent).numer()) < 1000000) {
         int num = ex_to<numeric>(exponent).numer().to_int();
-        Scaled b = convert(base);
+        Exact b = convert(base);
         if (b.node < 0) {
-          if (b.coef < 0) throw CodegenError("the model takes the square root of a negative constant");
-          return {checked(std::pow(b.coef, num / 2.0), "a square root"), -1};
+          if (value_of(b.coef) < 0) throw CodegenError("the model takes the square root of a negative constant");
+          value_of(e);
+          return {e, -1};
         }
         NNode sq;
         sq.kind = NKind::call;
         sq.name = "sqrt";
-        sq.args = {dag_.materialize(b)};
+        sq.args = {materialize(b)};
         return power_of({1, dag_.intern(std::move(sq))}, num);
       }
-      Scaled b = convert(base);
-      Scaled x = convert(exponent);
-      if (b.node < 0 && x.node < 0) return {checked(std::pow(b.coef, x.coef), "a power"), -1};
+      Exact b = convert(base);
+      Exact x = convert(exponent);
+      if (b.node < 0 && x.node < 0) {
+        value_of(e);
+        return {e, -1};
+      }
       NNode n;
       n.kind = NKind::call;
       n.name = "pow";
-      n.args = {dag_.materialize(b), dag_.materialize(x)};
+      n.args = {materialize(b), materialize(x)};
       return {1, dag_.intern(std::move(n))};
     }
     if (is_a<function>(e)) {
@@ -417,20 +434,20 @@ class Converter {
       if (info == nullptr || static_cast<int>(e.nops()) != info->arity) {
         throw CodegenError("the derivatives use the function '" + name + "', which cannot be emitted");
       }
-      std::vector<Scaled> args;
+      std::vector<Exact> args;
       bool all_constant = true;
       for (std::size_t i = 0; i < e.nops(); ++i) {
         args.push_back(convert(e.op(i)));
         all_constant = all_constant && args.back().node < 0;
       }
       if (all_constant) {
-        double v = info->arity == 1 ? info->fold1(args[0].coef) : info->fold2(args[0].coef, args[1].coef);
-        return {checked(v, name.c_str()), -1};
+        value_of(e);
+        return {e, -1};
       }
       NNode n;
       n.kind = NKind::call;
       n.name = name;
-      for (const Scaled& a : args) n.args.push_back(dag_.materialize(a));
+      for (const Exact& a : args) n.args.push_back(materialize(a));
       return {1, dag_.intern(std::move(n))};
     }
     throw CodegenError("cannot emit the expression " + to_string(e));
@@ -439,7 +456,7 @@ class Converter {
   NDag& dag_;
   std::map<GiNaC::ex, const KernelInput*, GiNaC::ex_is_less> inputs_;
   /** Keyed by value (the map holds the expressions, so keys stay valid). */
-  std::map<GiNaC::ex, Scaled, GiNaC::ex_is_less> memo_;
+  std::map<GiNaC::ex, Exact, GiNaC::ex_is_less> memo_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -966,8 +983,16 @@ KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const 
   NDag ndag;
   std::vector<Scaled> roots;
   {
+    struct DigitsGuard {
+      long saved = GiNaC::Digits;
+      DigitsGuard() { GiNaC::Digits = 30; }
+      ~DigitsGuard() { GiNaC::Digits = saved; }
+    } digits;
     Converter converter(ndag, inputs);
-    for (const KernelOutput& out : outputs) roots.push_back(converter.convert(out.value));
+    for (const KernelOutput& out : outputs) {
+      Exact x = converter.convert(out.value);
+      roots.push_back({value_of(x.coef), x.node});
+    }
   }
   rebuild(ndag, roots);
   long long before = 0;
