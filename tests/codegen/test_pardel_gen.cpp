@@ -80,6 +80,13 @@ TEST_F(PardelGen, BadInputLeavesAnEarlierOutputUntouched) {
   EXPECT_EQ(read_file(out), "previous");
 }
 
+TEST_F(PardelGen, AlphaZeroIsGeneratedThoughNotRegular) {
+  const std::string lag = dir_ + "/alpha0.lag";
+  { std::ofstream(lag) << "model alpha0\norder 2\ncoords x\nL = x''^2/2\ndiscretizations trapezoid(alpha=0)\n"; }
+  ASSERT_EQ(gen(lag + " -o " + dir_ + "/alpha0.json"), 0) << read_file(dir_ + "/stderr");
+  EXPECT_NE(read_file(dir_ + "/alpha0.json").find("\"name\": \"trapezoid(alpha=0)\""), std::string::npos);
+}
+
 TEST_F(PardelGen, MissingInputAndBadUsageAreReported) {
   EXPECT_EQ(gen(dir_ + "/none.lag -o " + dir_ + "/x.json"), 1);
   EXPECT_NE(read_file(dir_ + "/stderr").find("cannot read"), std::string::npos);
