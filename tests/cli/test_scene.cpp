@@ -211,7 +211,7 @@ clock = "free_final_time"
 }
 
 TEST(Scene, AKnotOnTheGridIsSnappedToItsNodeTime) {
-  // 0.1 is not exactly representable; 3 * 0.1 differs from the node time t0 + 3h in the last bit.
+  // 0.3 and the node time t0 + 3h = 3 * 0.1 differ in the last bit: the knot takes the node time.
   const Scene scene = parse(R"(model = "fuel_nav"
 [grid]
 T = 1
@@ -220,7 +220,7 @@ N = 10
 q0 = [0, 0]
 qN = [6, 5]
 [[knots]]
-t = 0.30000000000000004
+t = 0.3
 q = [1, 1]
 )");
   ASSERT_EQ(scene.problem.knots.size(), 1u);
