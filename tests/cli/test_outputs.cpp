@@ -19,6 +19,7 @@ TEST(Outputs, ExitCodesAreDistinctPerTermination) {
   EXPECT_EQ(exit_code(Termination::diverged), 4);
   EXPECT_EQ(exit_code(Termination::non_finite), 5);
   EXPECT_EQ(exit_code(Termination::interrupted), 6);
+  EXPECT_EQ(exit_code(Termination::stalled), 7);
 }
 
 TEST(Outputs, ConvergenceCsvHasOneRowPerRecord) {

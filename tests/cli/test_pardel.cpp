@@ -184,7 +184,7 @@ TEST(PardelUsage, HelpSucceedsAndDocumentsExitCodes) {
 // ---------------------------------------------------------------------------------------------
 // solve and check
 
-const char* const kSmallScene = R"(model = "fuel_nav"
+const char* const kSmallScene = R"TOML(model = "fuel_nav"
 discretization = "trapezoid"
 [grid]
 T = 8
@@ -195,7 +195,7 @@ qN = [6, 5]
 [solver]
 method = "newton"
 tol = 1e-10
-)";
+)TOML";
 
 TEST(PardelSolve, WritesEveryOutputAndExitsWith0WhenConverged) {
   TempDir dir;

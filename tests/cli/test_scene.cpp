@@ -41,14 +41,14 @@ std::string error_of(const std::string& text, const std::vector<std::string>& se
   return "(no error)";
 }
 
-const char* const kFuelNav = R"(model = "fuel_nav"
+const char* const kFuelNav = R"TOML(model = "fuel_nav"
 [grid]
 T = 30
 N = 200
 [boundary]
 q0 = [0, 0]
 qN = [6, 5]
-)";
+)TOML";
 
 // ---------------------------------------------------------------------------------------------
 // The catalogue
@@ -107,7 +107,7 @@ TEST(BadSceneCatalogue, HasAtLeastFifteenScenes) { EXPECT_GE(bad_scene_files().s
 // Valid scenes
 
 TEST(Scene, ReadsEveryKey) {
-  const Scene scene = parse(R"(model = "interp_fuel"
+  const Scene scene = parse(R"TOML(model = "interp_fuel"
 discretization = "trapezoid(alpha=1)"
 [params]
 c = 25
@@ -141,7 +141,7 @@ clock_update_every = 10
 clock = "none"
 [output]
 dir = "somewhere"
-)");
+)TOML");
   ASSERT_NE(scene.model, nullptr);
   EXPECT_STREQ(scene.model->name, "interp_fuel");
   EXPECT_EQ(scene.discretization, "trapezoid(alpha=1)");
@@ -181,7 +181,7 @@ TEST(Scene, DefaultsWhenKeysAreLeftOut) {
 }
 
 TEST(Scene, TrapezoidMeansAlphaOneForOrderTwoModels) {
-  const Scene scene = parse(R"(model = "interp_fuel"
+  const Scene scene = parse(R"TOML(model = "interp_fuel"
 discretization = "trapezoid"
 [grid]
 T = 60
@@ -191,12 +191,12 @@ q0 = [0, 0]
 v0 = [0, 0]
 qN = [3, 5]
 vN = [0, 0]
-)");
+)TOML");
   EXPECT_EQ(scene.discretization, "trapezoid(alpha=1)");
 }
 
 TEST(Scene, ClockModesNeedAModelClock) {
-  const std::string zermelo_tv = R"(model = "zermelo_tv"
+  const std::string zermelo_tv = R"TOML(model = "zermelo_tv"
 [grid]
 T = 1
 N = 50
@@ -205,14 +205,14 @@ q0 = [1, 6]
 qN = [6, 2]
 [solver]
 clock = "free_final_time"
-)";
+)TOML";
   if (!find_model("zermelo_tv")) GTEST_SKIP() << "zermelo_tv is not bundled in this build";
   EXPECT_EQ(parse(zermelo_tv).problem.clock, ClockMode::free_final_time);
 }
 
 TEST(Scene, AKnotOnTheGridIsSnappedToItsNodeTime) {
   // 0.3 and the node time t0 + 3h = 3 * 0.1 differ in the last bit: the knot takes the node time.
-  const Scene scene = parse(R"(model = "fuel_nav"
+  const Scene scene = parse(R"TOML(model = "fuel_nav"
 [grid]
 T = 1
 N = 10
@@ -222,7 +222,7 @@ qN = [6, 5]
 [[knots]]
 t = 0.3
 q = [1, 1]
-)");
+)TOML");
   ASSERT_EQ(scene.problem.knots.size(), 1u);
   EXPECT_EQ(scene.problem.knots[0].t, 3 * (1.0 / 10));
 }

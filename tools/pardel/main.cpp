@@ -44,7 +44,8 @@ constexpr int kExitInternal = 1;
 const char* const kExitCodesHelp =
     "Exit codes: 0 converged (or success), 1 internal error (e.g. an output file cannot be written),\n"
     "2 invalid input (bad scene, option or model), 3 max_iterations, 4 diverged, 5 non_finite,\n"
-    "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate).";
+    "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate),\n"
+    "7 stalled (no progress at the round-off level of the problem: tol is unattainable).";
 
 /** A bad command-line value: the message names the option; exit code 2. */
 class UsageError : public std::runtime_error {

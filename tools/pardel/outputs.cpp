@@ -123,6 +123,7 @@ int exit_code(Termination termination) {
     case Termination::diverged: return 4;
     case Termination::non_finite: return 5;
     case Termination::interrupted: return 6;
+    case Termination::stalled: return 7;
   }
   return 1;
 }

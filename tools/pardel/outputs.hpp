@@ -43,7 +43,7 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
                                     const Certificate& certificate, const std::string& model_source);
 
 /** The exit status of `pardel solve` for a termination: 0 converged, 2 invalid_input,
- *  3 max_iterations, 4 diverged, 5 non_finite, 6 interrupted. */
+ *  3 max_iterations, 4 diverged, 5 non_finite, 6 interrupted, 7 stalled (tol below round-off). */
 int exit_code(Termination termination);
 
 }  // namespace pardel::cli
