@@ -115,15 +115,30 @@ struct Exact {
   int node;
 };
 
+/** True when a number in `c` is beyond 1e300 in magnitude: GiNaC's evalf of functions of such
+ *  numbers is not reliable (exp(10^308) evaluates to 1.0), and no double kernel needs them. */
+bool has_huge_number(const GiNaC::ex& c) {
+  if (GiNaC::is_a<GiNaC::numeric>(c)) return GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(c)) > GiNaC::numeric(1e300);
+  for (std::size_t i = 0; i < c.nops(); ++i) {
+    if (has_huge_number(c.op(i))) return true;
+  }
+  return false;
+}
+
 /** A constant expression rounded once to double (GiNaC::Digits is raised while generating). */
 double value_of(const GiNaC::ex& c) {
   if (GiNaC::is_a<GiNaC::numeric>(c) && GiNaC::ex_to<GiNaC::numeric>(c).is_rational()) {
     return checked(GiNaC::ex_to<GiNaC::numeric>(c).to_double(), "a number");
   }
+  if (has_huge_number(c)) throw CodegenError("a constant of the model is beyond 1e300 in magnitude");
   GiNaC::ex v = c.evalf();
   if (!GiNaC::is_a<GiNaC::numeric>(v)) throw CodegenError("internal: a constant has no numeric value");
   const GiNaC::numeric& n = GiNaC::ex_to<GiNaC::numeric>(v);
   if (!n.is_real()) throw CodegenError("the model has a complex constant");
+  // cln converts values beyond the range of double without notice; check the range first.
+  if (GiNaC::abs(n) > GiNaC::numeric(1.7976931348623157e308)) {
+    throw CodegenError("a constant subexpression (a constant) is not finite");
+  }
   return checked(n.to_double(), "a constant");
 }
 

@@ -9,6 +9,7 @@
 
 #include <cctype>
 #include <cstring>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -28,6 +29,7 @@ bool is_function_name(const std::string& s) {
   return unary_functions().count(s) != 0 || s == "atan2" || s == "pow";
 }
 bool is_reserved_name(const std::string& s) { return s == "t" || s == "pi" || is_function_name(s); }
+bool has_huge_number(const GiNaC::ex& e);
 
 enum class Tok { ident, number, op, end };
 
@@ -124,6 +126,7 @@ class Reader {
   GiNaC::ex parse_atom(Cursor& c, const ExprContext& ctx) const;
   GiNaC::ex resolve_identifier(const Line& line, const Token& tok, const ExprContext& ctx) const;
   GiNaC::ex number_value(const Line& line, const Token& tok) const;
+  void check_power(const Line& line, const Token& op, const GiNaC::ex& base, const GiNaC::ex& exponent) const;
   GiNaC::ex parse_full_expression(const Line& line, std::size_t pos, const ExprContext& ctx) const;
   /** Applies a GiNaC operation, turning its exceptions (division by zero, log(0)) into errors. */
   template <class F>
@@ -313,12 +316,15 @@ void Reader::read_declaration(const Line& line) {
     ctx.scope = Scope::constant;
     GiNaC::ex value = parse_full_expression(line, 3, ctx);
     GiNaC::ex num;
+    if (has_huge_number(value)) fail(line, toks[3], "the default of param '" + toks[1].text + "' is beyond 1e300 in magnitude");
     try {
       num = value.evalf();
     } catch (const std::exception&) {
       num = value;
     }
+    // cln converts values beyond the range of double without notice: check the range first.
     if (!GiNaC::is_a<GiNaC::numeric>(num) || !GiNaC::ex_to<GiNaC::numeric>(num).is_real() ||
+        GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(num)) > GiNaC::numeric(1.7976931348623157e308) ||
         !std::isfinite(GiNaC::ex_to<GiNaC::numeric>(num).to_double())) {
       fail(line, toks[3], "the default of param '" + toks[1].text + "' is not a finite real number");
     }
@@ -354,6 +360,16 @@ void Reader::read_declaration(const Line& line) {
   } else {
     fail(line, head, "expected a declaration (" + keywords + "), found " + head.shown());
   }
+}
+
+/** True when a number in `e` is beyond 1e300 in magnitude (GiNaC's evalf of functions of such
+ *  numbers is unreliable: exp(10^308) evaluates to 1.0). */
+bool has_huge_number(const GiNaC::ex& e) {
+  if (GiNaC::is_a<GiNaC::numeric>(e)) return GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(e)) > GiNaC::numeric(1e300);
+  for (std::size_t i = 0; i < e.nops(); ++i) {
+    if (has_huge_number(e.op(i))) return true;
+  }
+  return false;
 }
 
 std::string rational_text(const GiNaC::numeric& n) {
@@ -463,8 +479,15 @@ GiNaC::ex Reader::number_value(const Line& line, const Token& tok) const {
   std::string mant = s.substr(0, epos);
   long exponent = 0;
   if (epos != std::string::npos) {
-    exponent = std::stol(s.substr(epos + 1));
-    if (exponent > 308 || exponent < -308) fail(line, tok, "number '" + s + "' is out of range");
+    std::string digits = s.substr(epos + 1);
+    const bool negative = !digits.empty() && digits[0] == '-';
+    if (!digits.empty() && (digits[0] == '-' || digits[0] == '+')) digits.erase(0, 1);
+    digits.erase(0, std::min(digits.find_first_not_of('0'), digits.size()));
+    if (digits.size() > 3 || (!digits.empty() && std::stoi(digits) > 308)) {
+      fail(line, tok, "number '" + s + "' is out of range");
+    }
+    exponent = digits.empty() ? 0 : std::stoi(digits);
+    if (negative) exponent = -exponent;
   }
   std::size_t dot = mant.find('.');
   std::string digits = mant;
@@ -556,6 +579,8 @@ GiNaC::ex Reader::parse_atom(Cursor& c, const ExprContext& ctx) const {
                             ", got " + std::to_string(args.size()));
       }
       const std::string& f = tok.text;
+      if (f == "pow") check_power(line, tok, args[0], args[1]);
+      if (f == "log" && args[0].is_zero()) fail(line, tok, "log(0) is undefined");
       return guarded(line, tok.col, [&]() -> GiNaC::ex {
         const GiNaC::ex& a = args[0];
         if (f == "sin") return GiNaC::sin(a);
@@ -584,11 +609,32 @@ GiNaC::ex Reader::parse_atom(Cursor& c, const ExprContext& ctx) const {
   fail(line, tok, "expected an expression, found " + tok.shown());
 }
 
+/**
+ * Refuses powers that GiNaC would evaluate exactly at unbounded cost (2^(10^308)) or that it
+ * rejects by throwing after allocating (0^-3): both are reported here, before GiNaC sees them.
+ */
+void Reader::check_power(const Line& line, const Token& op, const GiNaC::ex& base, const GiNaC::ex& exponent) const {
+  if (!GiNaC::is_a<GiNaC::numeric>(exponent)) return;
+  const GiNaC::numeric& e = GiNaC::ex_to<GiNaC::numeric>(exponent);
+  if (GiNaC::is_a<GiNaC::numeric>(base) && GiNaC::ex_to<GiNaC::numeric>(base).is_zero() && e.real().is_negative()) {
+    fail(line, op, "division by zero: 0 raised to a negative power");
+  }
+  if (!GiNaC::is_a<GiNaC::numeric>(base) || !e.is_rational()) return;
+  const GiNaC::numeric& b = GiNaC::ex_to<GiNaC::numeric>(base);
+  if (!b.is_rational() || b.is_zero() || GiNaC::abs(b) == 1) return;
+  // The exact result has about |numerator of e| * (bits of b) bits; keep it within reach.
+  const GiNaC::numeric bits = GiNaC::numeric(static_cast<long>(b.numer().int_length() + b.denom().int_length()));
+  if (GiNaC::abs(e.numer()) * bits > GiNaC::numeric(1L << 20)) {
+    fail(line, op, "exponent is too large for an exact power of a number");
+  }
+}
+
 GiNaC::ex Reader::parse_power(Cursor& c, const ExprContext& ctx) const {
   GiNaC::ex base = parse_atom(c, ctx);
   if (c.at_op('^')) {
     const Token& op = c.next();
     GiNaC::ex exponent = parse_unary(c, ctx);  // right-associative; allows x^-1
+    check_power(*c.line, op, base, exponent);
     return guarded(*c.line, op.col, [&] { return GiNaC::pow(base, exponent); });
   }
   return base;
