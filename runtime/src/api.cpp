@@ -95,6 +95,7 @@ const char* to_string(Termination termination) {
     case Termination::non_finite: return "non_finite";
     case Termination::invalid_input: return "invalid_input";
     case Termination::interrupted: return "interrupted";
+    case Termination::stalled: return "stalled";
   }
   return "unknown";
 }

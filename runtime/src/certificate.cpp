@@ -139,7 +139,8 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
         Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
         es.computeFromTridiagonal(diag, sub.head(std::max(m - 1, 0)), Eigen::EigenvaluesOnly);
         estimate = es.eigenvalues().cwiseAbs().maxCoeff();
-        if (breakdown || std::fabs(estimate - previous) <= 1e-12 * estimate) {
+        // Converged: settled, an invariant subspace found, or the whole space spanned.
+        if (breakdown || m == static_cast<int>(len) || std::fabs(estimate - previous) <= 1e-12 * estimate) {
           c.spectral_radius_converged = true;
           break;
         }

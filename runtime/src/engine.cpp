@@ -59,6 +59,7 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   ctx.D22.assign(nd * d, 0.0);
   ctx.res.assign(n1 * d, 0.0);
   ctx.node_max.assign(n1, 0.0);
+  ctx.node_scale.assign(n1, 0.0);
   ctx.evaluated = Evaluated::nothing;
   ctx.residual = 0;
   ctx.action = 0;
@@ -89,8 +90,8 @@ bool apply_constraints(const Problem& problem, Context& ctx, std::string* messag
       const int lo = static_cast<int>(std::max(0.0, std::min<double>(N, k_near)));
       const int hi = std::min(N, lo + 1);
       std::snprintf(buf, sizeof buf,
-                    "knot %zu at t = %.17g is not on an interior grid node with N = %d; nearest nodes: "
-                    "%d (t = %.17g) and %d (t = %.17g)",
+                    "knot %zu at t = %.12g is not on an interior grid node with N = %d; nearest nodes: "
+                    "%d (t = %.12g) and %d (t = %.12g)",
                     a, knot.t, N, lo, problem.t0 + problem.T * lo / N, hi, problem.t0 + problem.T * hi / N);
       if (message) *message = buf;
       return false;
@@ -155,26 +156,31 @@ int compute_residual(Context& ctx) {
     const std::size_t kk = static_cast<std::size_t>(k);
     double* r = ctx.res.data() + kk * dz;
     const unsigned char* f = ctx.is_free.data() + kk * dz;
-    double mx = 0;
+    double mx = 0, scale = 0;
     bool finite = true;
     for (int i = 0; i < d; ++i) {
       double v = 0;
       if (f[i]) {
-        v = ctx.D2[(kk - 1) * dz + i] + ctx.D1[kk * dz + i];
+        const double a = ctx.D2[(kk - 1) * dz + i], b = ctx.D1[kk * dz + i];
+        v = a + b;
         if (!std::isfinite(v)) finite = false;
+        scale = std::max(scale, std::fabs(a) + std::fabs(b));
       }
       r[i] = v;
       mx = std::max(mx, std::fabs(v));
     }
     ctx.node_max[kk] = finite ? mx : std::numeric_limits<double>::infinity();
+    ctx.node_scale[kk] = scale;
   }
-  double mx = 0;
+  double mx = 0, scale = 0;
   int bad = -1;
   for (int k = 0; k <= N; ++k) {
     const double v = ctx.node_max[static_cast<std::size_t>(k)];
     if (!std::isfinite(v) && bad < 0) bad = k;
     mx = std::max(mx, v);
+    scale = std::max(scale, ctx.node_scale[static_cast<std::size_t>(k)]);
   }
+  ctx.residual_floor = 16 * std::numeric_limits<double>::epsilon() * scale;
   ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : mx;
   return bad;
 }

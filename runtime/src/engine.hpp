@@ -48,8 +48,12 @@ struct Context {
 
   // Node residual r_k = D2(k-1) + D1(k) on free components (0 elsewhere), (N+1)*dim.
   std::vector<double> res;
-  std::vector<double> node_max;  ///< N+1 scratch: max |r_k| per node
-  double residual = 0;           ///< infinity-norm of res
+  std::vector<double> node_max;    ///< N+1 scratch: max |r_k| per node
+  std::vector<double> node_scale;  ///< N+1 scratch: max |D2(k-1)| + |D1(k)| per node
+  double residual = 0;             ///< infinity-norm of res
+  /** Round-off level of the residual: 16 eps max_k (|D2(k-1)| + |D1(k)|); a residual near it cannot
+   *  be reduced further in double precision. */
+  double residual_floor = 0;
   double action = 0;
   bool action_known = false;     ///< whether `action` belongs to q
 
@@ -120,16 +124,15 @@ std::unique_ptr<Method_> make_multigrid(const Options& options, int dim, std::st
 /** Number of threads to use for Options::threads (0: all cores). */
 int resolve_threads(int requested);
 
-/** Calls f with an integral constant D in {1,2,3,4,6,8} equal to dim, or Eigen::Dynamic (-1). */
+/** Calls f with an integral constant D in {1,2,4,6} equal to dim (the sizes of the bundled models),
+ *  or Eigen::Dynamic (-1) for other sizes; each fixed size is one more instantiation to compile. */
 template <class F>
 auto dispatch_dim(int dim, F&& f) {
   switch (dim) {
     case 1: return f(std::integral_constant<int, 1>{});
     case 2: return f(std::integral_constant<int, 2>{});
-    case 3: return f(std::integral_constant<int, 3>{});
     case 4: return f(std::integral_constant<int, 4>{});
     case 6: return f(std::integral_constant<int, 6>{});
-    case 8: return f(std::integral_constant<int, 8>{});
     default: return f(std::integral_constant<int, -1>{});
   }
 }

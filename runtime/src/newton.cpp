@@ -122,8 +122,17 @@ class Newton : public Method_ {
       if (mu_ > 1e30 * scale) break;
     }
     StepOutcome out;
+    char buf[320];
+    if (r0 <= 10 * ctx.residual_floor) {
+      out.failure = Termination::stalled;
+      std::snprintf(buf, sizeof buf,
+                    "newton stalled in iteration %ld: the DEL residual %.3g is at the round-off level %.3g of this "
+                    "problem (terms of size %.3g); the tolerance cannot be reached in double precision",
+                    iteration, r0, ctx.residual_floor, ctx.residual_floor / (16 * 2.220446049250313e-16));
+      out.message = buf;
+      return out;
+    }
     out.failure = Termination::diverged;
-    char buf[240];
     std::snprintf(buf, sizeof buf,
                   "newton found no step that decreases the action in iteration %ld (shift mu = %.3g, "
                   "residual %.3g): the action may be unbounded below or the Hessian singular",

@@ -127,6 +127,18 @@ class Driver {
           r_checkpoint = r;
         }
       }
+      // Stalled: at the round-off level of the residual and no 1% improvement in 200 iterations.
+      if (r < 0.99 * best_residual_) {
+        best_residual_ = r;
+        best_iteration_ = iteration_;
+      }
+      if (r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200) {
+        finish(Termination::stalled,
+               format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has not "
+                      "improved in 200 iterations; tol %.3g cannot be reached in double precision",
+                      r, ctx_.residual_floor, options_.tol));
+        return false;
+      }
       if (iteration_ >= options_.max_iterations) {
         finish(Termination::max_iterations,
                format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
@@ -225,6 +237,7 @@ class Driver {
     s_.residual = ctx_.residual;
     s_.action = detail::action_at(ctx_, ctx_.q);
     s_.final_time = ctx_.t.back();
+    s_.residual_floor = ctx_.residual_floor;
     if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != ctx_.N) {
       IterationRecord rec;
       rec.iteration = iteration_;
@@ -249,6 +262,8 @@ class Driver {
   Trajectory resampled_;
   long iteration_ = 0, next_record_ = 0;
   double r_initial_ = 0, last_good_residual_ = 0;
+  double best_residual_ = std::numeric_limits<double>::infinity();
+  long best_iteration_ = 0;
   bool have_initial_ = false;
 };
 

@@ -99,7 +99,15 @@ const char* to_string(LinearSolver solver);
 /** Parses "ldlt", "cyclic-reduction"; false if unknown. */
 bool parse_linear_solver(std::string_view text, LinearSolver* solver);
 
-enum class Termination { converged, max_iterations, diverged, non_finite, invalid_input, interrupted };
+enum class Termination {
+  converged,
+  max_iterations,
+  diverged,
+  non_finite,
+  invalid_input,
+  interrupted,
+  stalled,  ///< no further progress with the residual at the round-off level of the problem (tol unattainable)
+};
 const char* to_string(Termination termination);
 
 /** One record of the convergence history. */
@@ -173,6 +181,7 @@ struct Summary {
   double action = 0;
   double final_time = 0;  ///< t_N (the travel time under free_final_time)
   double wall_seconds = 0;
+  double residual_floor = 0;  ///< round-off level of the residual at the returned iterate
   std::vector<IterationRecord> history;
   bool converged() const { return termination == Termination::converged; }
   std::string brief_report() const;

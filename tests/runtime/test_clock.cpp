@@ -1,0 +1,149 @@
+/**
+ * @file test_clock.cpp
+ * Time-dependent Lagrangians with a clock (hand-written forced particle L = x'^2/2 + t x, clock
+ * h (1 + c x^2)): under free_final_time the node times are the prefix sums of the clock along
+ * the returned trajectory and the travel time is their total; under fixed_total_time the steps
+ * are proportional to the clock and sum to T. In both, convergence is declared with times
+ * consistent with the final trajectory: the DEL residual at the returned times is below tol.
+ * The bundled zermelo_tv (time-varying wind) is solved when the build has it.
+ */
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hand_models.hpp"
+#include "pardel/pardel.hpp"
+
+namespace {
+
+pardel::Problem forced_problem(pardel::ClockMode mode) {
+  pardel::Problem p;
+  p.model = &hand::forced;
+  p.discretization = &hand::forced.discretizations[0];
+  p.params = {0.5};
+  p.t0 = 0.25;
+  p.T = 1.0;
+  p.N = 40;
+  p.q0 = {0.0};
+  p.qN = {1.0};
+  p.clock = mode;
+  return p;
+}
+
+double clock_value(const pardel::Problem& p, const pardel::Trajectory& tr, int k) {
+  return p.model->clock(p.T / p.N, tr.t[k], tr.node(k), tr.node(k + 1), p.params.data());
+}
+
+TEST(Clock, FreeFinalTimeTimesArePrefixSumsOfTheClock) {
+  for (auto method : {pardel::Method::newton, pardel::Method::jacobi_newton}) {
+    const auto p = forced_problem(pardel::ClockMode::free_final_time);
+    auto traj = pardel::linear_guess(p);
+    pardel::Options opt;
+    opt.method = method;
+    opt.threads = 1;
+    opt.clock_update_every = 5;
+    const auto s = pardel::solve(p, opt, traj);
+    ASSERT_TRUE(s.converged()) << s.brief_report();
+    ASSERT_EQ(traj.t.size(), 41u);
+    double t = p.t0;
+    EXPECT_EQ(traj.t[0], p.t0);
+    for (int k = 0; k < p.N; ++k) {
+      t += clock_value(p, traj, k);
+      EXPECT_NEAR(traj.t[k + 1], t, 1e-12) << "node " << k + 1;
+    }
+    EXPECT_EQ(s.final_time, traj.t.back());
+    EXPECT_GT(s.final_time - p.t0, p.T);  // the clock is at least h on every interval
+    EXPECT_LE(pardel::residual_norm(p, traj), 1e-10);
+  }
+}
+
+TEST(Clock, FixedTotalTimeStepsFollowTheClockAndSumToT) {
+  const auto p = forced_problem(pardel::ClockMode::fixed_total_time);
+  auto traj = pardel::linear_guess(p);
+  pardel::Options opt;
+  opt.method = pardel::Method::newton;
+  const auto s = pardel::solve(p, opt, traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  EXPECT_NEAR(traj.t.back(), p.t0 + p.T, 1e-14);
+  EXPECT_NEAR(s.final_time, p.t0 + p.T, 1e-14);
+  // The clock of this model does not read t: the steps are exactly proportional to it.
+  double total = 0;
+  for (int k = 0; k < p.N; ++k) total += clock_value(p, traj, k);
+  for (int k = 0; k < p.N; ++k)
+    EXPECT_NEAR(traj.t[k + 1] - traj.t[k], p.T * clock_value(p, traj, k) / total, 1e-12) << "interval " << k;
+  EXPECT_LE(pardel::residual_norm(p, traj), 1e-10);
+  // The steps are not uniform: the solution moves away from x = 0.
+  EXPECT_GT(traj.t[p.N] - traj.t[p.N - 1], 1.2 * (traj.t[1] - traj.t[0]));
+}
+
+TEST(Clock, WithoutClockTheForcedParticleMatchesItsExactDiscreteSolution) {
+  // x'' = t: trapezoid DEL (x_{k+1} - 2x_k + x_{k-1})/h = h t_k, solved as a dense linear system.
+  auto p = forced_problem(pardel::ClockMode::none);
+  auto traj = pardel::linear_guess(p);
+  pardel::Options opt;
+  opt.method = pardel::Method::newton;
+  opt.tol = 1e-13;
+  ASSERT_TRUE(pardel::solve(p, opt, traj).converged());
+  const int N = p.N;
+  const double h = p.T / N;
+  // The recurrence with x_0 = 0 and unknown slope s = x_1, fixed by x_N = 1 (linear in s).
+  auto shoot = [&](double s) {
+    double a = 0, b = s;
+    for (int k = 1; k < N; ++k) {
+      const double tk = p.t0 + k * h, c = 2 * b - a + h * h * tk;
+      a = b;
+      b = c;
+    }
+    return b;
+  };
+  const double s = (1 - shoot(0)) / (shoot(1) - shoot(0));
+  double a = 0, b = s;
+  EXPECT_NEAR(traj.node(1)[0], s, 1e-10);
+  for (int k = 1; k < N; ++k) {
+    const double tk = p.t0 + k * h, c = 2 * b - a + h * h * tk;
+    a = b;
+    b = c;
+    EXPECT_NEAR(traj.node(k + 1)[0], b, 1e-10) << "node " << k + 1;
+  }
+}
+
+TEST(Clock, ModelWithoutClockIsInvalidInput) {
+  pardel::Problem p;
+  p.model = &hand::harmonic;
+  p.discretization = &hand::harmonic.discretizations[0];
+  p.q0 = {0};
+  p.qN = {1};
+  p.clock = pardel::ClockMode::free_final_time;
+  auto traj = pardel::linear_guess(p);
+  const auto s = pardel::solve(p, pardel::Options{}, traj);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("clock"), std::string::npos) << s.message;
+}
+
+#ifdef PARDEL_HAVE_BUNDLED_MODELS
+TEST(Clock, ZermeloWithTimeVaryingWind) {
+  const pardel_model* m = pardel::find_model("zermelo_tv");
+  if (!m) GTEST_SKIP() << "zermelo_tv is not bundled";
+  pardel::Problem p;
+  p.model = m;
+  p.discretization = pardel::find_discretization(*m, "trapezoid");
+  p.T = 1;
+  p.N = 100;
+  p.q0 = {0, 0};
+  p.qN = {6, 2};
+  p.clock = pardel::ClockMode::free_final_time;
+  auto traj = pardel::linear_guess(p);
+  pardel::Options opt;
+  opt.method = pardel::Method::newton;
+  opt.clock_update_every = 10;
+  opt.max_iterations = 2000;
+  const auto s = pardel::solve(p, opt, traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  double t = p.t0;
+  for (int k = 0; k < p.N; ++k) t += m->clock(p.T / p.N, traj.t[k], traj.node(k), traj.node(k + 1), m->param_defaults);
+  EXPECT_NEAR(s.final_time, t, 1e-10);
+  EXPECT_LE(pardel::residual_norm(p, traj), 1e-10);
+}
+#endif
+
+}  // namespace

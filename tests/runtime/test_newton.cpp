@@ -1,0 +1,175 @@
+/**
+ * @file test_newton.cpp
+ * Globalized Newton on the whole DEL system: exact harmonic discrete solution, Bratu against its
+ * exact solution, no convergence claimed where no minimizer exists (beyond the first conjugate
+ * point, beyond Bratu's fold), block LDL^T and cyclic reduction agreeing, bit-identical results
+ * for 1 and 2 threads, and the fuel-optimal example of the seed when the bundled models are built.
+ */
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hand_models.hpp"
+#include "pardel/pardel.hpp"
+
+namespace {
+
+pardel::Problem hand_problem(const pardel_model& m, double param, double T, int N, double a, double b) {
+  pardel::Problem p;
+  p.model = &m;
+  p.discretization = &m.discretizations[0];
+  p.params = {param};
+  p.T = T;
+  p.N = N;
+  p.q0 = {a};
+  p.qN = {b};
+  return p;
+}
+
+/** Bratu: theta = sqrt(2 lambda) cosh(theta/4), lower branch, by Newton from theta = 1. */
+double bratu_theta(double lambda) {
+  double th = 1;
+  for (int i = 0; i < 100; ++i) {
+    const double f = th - std::sqrt(2 * lambda) * std::cosh(th / 4);
+    const double df = 1 - std::sqrt(2 * lambda) * std::sinh(th / 4) / 4;
+    th -= f / df;
+  }
+  return th;
+}
+double bratu_exact(double lambda, double x) {
+  const double th = bratu_theta(lambda);
+  return -2 * std::log(std::cosh((x - 0.5) * th / 2) / std::cosh(th / 4));
+}
+
+pardel::Options newton_options(int threads = 1) {
+  pardel::Options o;
+  o.method = pardel::Method::newton;
+  o.threads = threads;
+  o.max_iterations = 500;
+  return o;
+}
+
+TEST(Newton, HarmonicMatchesExactDiscreteSolution) {
+  const auto problem = hand_problem(hand::harmonic, 1.0, 2.0, 40, 0.3, -0.7);
+  auto traj = pardel::linear_guess(problem);
+  auto opt = newton_options();
+  opt.tol = 1e-13;
+  const auto s = pardel::solve(problem, opt, traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  EXPECT_LE(s.iterations, 3);  // a quadratic action: one Newton step up to round-off
+  const double h = 2.0 / 40, th = std::acos(1 - h * h / 2);
+  for (int k = 0; k <= 40; ++k) {
+    const double exact = 0.3 * std::cos(k * th) + (-0.7 - 0.3 * std::cos(40 * th)) * std::sin(k * th) / std::sin(40 * th);
+    EXPECT_NEAR(traj.node(k)[0], exact, 1e-11) << "node " << k;
+  }
+}
+
+TEST(Newton, BratuMatchesExactSolution) {
+  for (double lambda : {1.0, 3.0}) {
+    const int N = 200;
+    const auto problem = hand_problem(hand::bratu, lambda, 1.0, N, 0.0, 0.0);
+    auto traj = pardel::linear_guess(problem);
+    const auto s = pardel::solve(problem, newton_options(), traj);
+    ASSERT_TRUE(s.converged()) << "lambda " << lambda << ": " << s.brief_report();
+    EXPECT_LE(pardel::residual_norm(problem, traj), 1e-10);
+    double err = 0;
+    for (int k = 0; k <= N; ++k) err = std::max(err, std::fabs(traj.node(k)[0] - bratu_exact(lambda, double(k) / N)));
+    // Second order: the error is a small multiple of h^2 = 2.5e-5.
+    EXPECT_LT(err, 2e-4) << "lambda " << lambda;
+    EXPECT_GT(err, 0.0);
+  }
+}
+
+TEST(Newton, NoConvergenceBeyondBratuFold) {
+  // lambda_c ~ 3.5138: no solution exists beyond it.
+  const auto problem = hand_problem(hand::bratu, 4.0, 1.0, 100, 0.0, 0.0);
+  auto traj = pardel::linear_guess(problem);
+  auto opt = newton_options();
+  opt.max_iterations = 2000;
+  const auto s = pardel::solve(problem, opt, traj);
+  EXPECT_FALSE(s.converged()) << s.brief_report();
+  EXPECT_GT(pardel::residual_norm(problem, traj), 1e-10);
+  for (double v : traj.q) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(Newton, NoConvergenceBeyondTheConjugatePoint) {
+  // omega T = 4 > pi: the unique DEL solution is a saddle; the action is unbounded below.
+  const auto problem = hand_problem(hand::harmonic, 1.0, 4.0, 40, 1.0, 1.0);
+  auto traj = pardel::linear_guess(problem);
+  const auto s = pardel::solve(problem, newton_options(), traj);
+  EXPECT_FALSE(s.converged()) << s.brief_report();
+  EXPECT_TRUE(s.termination == pardel::Termination::diverged ||
+              s.termination == pardel::Termination::max_iterations)
+      << s.brief_report();
+}
+
+TEST(Newton, CyclicReductionAgreesWithLdlt) {
+  const int N = 1500;
+  const auto problem = hand_problem(hand::bratu, 2.0, 1.0, N, 0.0, 0.5);
+  auto a = pardel::linear_guess(problem);
+  auto sa = pardel::solve(problem, newton_options(), a);
+  auto opt = newton_options();
+  opt.linear_solver = pardel::LinearSolver::cyclic_reduction;
+  auto b = pardel::linear_guess(problem);
+  auto sb = pardel::solve(problem, opt, b);
+  ASSERT_TRUE(sa.converged()) << sa.brief_report();
+  ASSERT_TRUE(sb.converged()) << sb.brief_report();
+  for (int k = 0; k <= N; ++k) EXPECT_NEAR(a.node(k)[0], b.node(k)[0], 1e-10);
+}
+
+TEST(Newton, BitIdenticalForOneAndTwoThreads) {
+  const int N = 3000;
+  const auto problem = hand_problem(hand::bratu, 2.0, 1.0, N, 0.0, 0.5);
+  for (auto solver : {pardel::LinearSolver::block_ldlt, pardel::LinearSolver::cyclic_reduction}) {
+    auto o1 = newton_options(1);
+    o1.linear_solver = solver;
+    auto o2 = newton_options(2);
+    o2.linear_solver = solver;
+    auto a = pardel::linear_guess(problem);
+    auto b = pardel::linear_guess(problem);
+    const auto sa = pardel::solve(problem, o1, a);
+    const auto sb = pardel::solve(problem, o2, b);
+    ASSERT_TRUE(sa.converged()) << sa.brief_report();
+    EXPECT_EQ(sa.iterations, sb.iterations);
+    EXPECT_EQ(sa.residual, sb.residual);
+    EXPECT_EQ(sa.action, sb.action);
+    EXPECT_EQ(a.q, b.q) << pardel::to_string(solver);
+  }
+}
+
+#ifdef PARDEL_HAVE_BUNDLED_MODELS
+pardel::Problem fuel_problem(int N) {
+  pardel::Problem p;
+  p.model = pardel::find_model("fuel_nav");
+  if (!p.model) return p;
+  p.discretization = pardel::find_discretization(*p.model, "trapezoid");
+  p.T = 30;
+  p.N = N;
+  p.q0 = {0, 0};
+  p.qN = {6, 5};
+  return p;
+}
+
+TEST(Newton, FuelOptimalExampleOfTheSeed) {
+  const auto problem = fuel_problem(200);
+  if (!problem.model || !problem.discretization) GTEST_SKIP() << "fuel_nav/trapezoid is not bundled";
+  auto traj = pardel::linear_guess(problem);
+  const auto s = pardel::solve(problem, newton_options(), traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  EXPECT_LE(s.residual, 1e-10);
+  EXPECT_NEAR(s.action, 5.59683215, 5e-9);
+}
+
+TEST(Newton, FuelOptimalDoesNotStallAtLargeN) {
+  for (int N : {2000, 20000}) {
+    const auto problem = fuel_problem(N);
+    if (!problem.model || !problem.discretization) GTEST_SKIP() << "fuel_nav/trapezoid is not bundled";
+    auto traj = pardel::linear_guess(problem);
+    const auto s = pardel::solve(problem, newton_options(), traj);
+    ASSERT_TRUE(s.converged()) << "N = " << N << ": " << s.brief_report();
+    EXPECT_LE(s.residual, 1e-10);
+  }
+}
+#endif
+
+}  // namespace
