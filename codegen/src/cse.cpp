@@ -752,11 +752,10 @@ class Lowerer {
   /** The binary node of an output value coef * node (node < 0: a constant). */
   int lower_output(const Scaled& s) {
     if (s.node < 0) return b_.constant(s.coef);
-    Signed l = lower(s.node);
-    const double c = s.coef * l.sign;
-    if (c == 1) return l.node;
-    if (c == -1) return b_.op(BOp::neg, {l.node});
-    return b_.op(BOp::mul, {b_.constant(c), l.node});
+    const double magnitude = std::fabs(s.coef);
+    Signed l = magnitude == 1 ? lower(s.node) : lower_scaled(magnitude, s.node);
+    const int sign = (s.coef < 0 ? -1 : 1) * l.sign;
+    return sign > 0 ? l.node : b_.op(BOp::neg, {l.node});
   }
 
  private:
@@ -800,6 +799,53 @@ class Lowerer {
     return (k % 2 == 0) ? sq : b_.op(BOp::mul, {sq, base});
   }
 
+  /**
+   * The product of `factors`; when `scaled_input` >= 0 it is a binary node (constant * input)
+   * that stands in for the input factor of exponent 1 it replaces.
+   */
+  Signed lower_product(const std::vector<NFactor>& factors, int scaled_input, int replaced = -1) {
+    int sign = 1;
+    std::vector<int> num, den;
+    for (const NFactor& f : factors) {
+      if (f.node == replaced) {
+        num.push_back(scaled_input);
+        continue;
+      }
+      Signed l = lower(f.node);
+      if (l.sign < 0 && (f.exp % 2 != 0)) sign = -sign;
+      int p = power(l.node, std::abs(f.exp));
+      (f.exp > 0 ? num : den).push_back(p);
+    }
+    if (den.empty()) return {sign, product_chain(num)};
+    int top = num.empty() ? b_.constant(1.0) : product_chain(num);
+    return {sign, b_.op(BOp::div, {top, product_chain(den)})};
+  }
+
+  /**
+   * magnitude * node (magnitude > 0). When the node is a product with an input factor such as h,
+   * the constant multiplies that input (h*0.5), a node that the outputs sharing the same
+   * coefficient then share; otherwise it multiplies the whole node. Same operation count.
+   */
+  Signed lower_scaled(double magnitude, int id) {
+    const NNode& n = n_.nodes[static_cast<std::size_t>(id)];
+    if (n.kind == NKind::product) {
+      int chosen = -1;
+      for (const NFactor& f : n.factors) {
+        if (f.exp == 1 && n_.nodes[static_cast<std::size_t>(f.node)].kind == NKind::input) {
+          chosen = f.node;
+          break;
+        }
+      }
+      if (chosen >= 0) {
+        const int leaf = lower(chosen).node;
+        const int scaled = b_.op(BOp::mul, {b_.constant(magnitude), leaf});
+        return lower_product(n.factors, scaled, chosen);
+      }
+    }
+    Signed l = lower(id);
+    return {l.sign, b_.op(BOp::mul, {b_.constant(magnitude), l.node})};
+  }
+
   Signed lower_uncached(int id) {
     const NNode& n = n_.nodes[static_cast<std::size_t>(id)];
     switch (n.kind) {
@@ -814,33 +860,31 @@ class Lowerer {
       }
       case NKind::sum: {
         std::map<double, std::vector<Signed>> groups;
+        std::map<double, std::vector<int>> sources;  // the n-ary nodes of each group
         for (const NTerm& t : n.terms) {
           Signed l = lower(t.node);
           const double c = t.coef * l.sign;
           groups[std::fabs(c)].push_back({c < 0 ? -1 : 1, l.node});
+          sources[std::fabs(c)].push_back(t.node);
         }
         if (n.constant != 0) groups[1.0].push_back({n.constant < 0 ? -1 : 1, b_.constant(std::fabs(n.constant))});
         std::vector<Signed> parts;
         for (auto& [magnitude, items] : groups) {
+          if (magnitude != 1 && items.size() == 1) {
+            // One scaled term: the coefficient may fold into one of its factors.
+            Signed g = lower_scaled(magnitude, sources[magnitude][0]);
+            const int sign = items[0].sign * lower(sources[magnitude][0]).sign * g.sign;
+            parts.push_back({sign, g.node});
+            continue;
+          }
           Signed g = sum_chain(items);
           if (magnitude != 1) g.node = b_.op(BOp::mul, {b_.constant(magnitude), g.node});
           parts.push_back(g);
         }
         return sum_chain(parts);
       }
-      case NKind::product: {
-        int sign = 1;
-        std::vector<int> num, den;
-        for (const NFactor& f : n.factors) {
-          Signed l = lower(f.node);
-          if (l.sign < 0 && (f.exp % 2 != 0)) sign = -sign;
-          int p = power(l.node, std::abs(f.exp));
-          (f.exp > 0 ? num : den).push_back(p);
-        }
-        if (den.empty()) return {sign, product_chain(num)};
-        int top = num.empty() ? b_.constant(1.0) : product_chain(num);
-        return {sign, b_.op(BOp::div, {top, product_chain(den)})};
-      }
+      case NKind::product:
+        return lower_product(n.factors, -1);
       case NKind::call: {
         const FunctionInfo* info = function_info(n.name);
         BNode b;
