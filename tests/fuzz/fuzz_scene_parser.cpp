@@ -113,7 +113,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::size_t start = separator + 4;
     while (start < input.size()) {
       const std::size_t nl = input.find('\n', start);
-      const std::string line = input.substr(start, nl == std::string::npos ? std::string::npos : nl - start);
+      std::string line = input.substr(start, nl == std::string::npos ? std::string::npos : nl - start);
+      line = line.substr(0, line.find('\0'));  // a command-line argument ends at its first NUL
       if (!line.empty()) overrides.push_back(line);
       if (nl == std::string::npos) break;
       start = nl + 1;
