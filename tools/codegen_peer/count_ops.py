@@ -10,8 +10,10 @@ expression tree and counts:
     sqrt(3)): the compiler folds it;
   - no op for copies (a = b), array indexing, (void) casts and declarations.
 
+Divisions are also reported apart: they cost several multiplications on current CPUs.
+
 Usage:
-  /usr/bin/python3 count_ops.py FILE FUNCTION   -> prints the count
+  /usr/bin/python3 count_ops.py FILE FUNCTION   -> prints the count and the divisions among them
 """
 
 import re
@@ -61,6 +63,7 @@ class _Parser:
     def __init__(self, tokens):
         self.t = tokens
         self.i = 0
+        self.divisions = 0  # counted (not folded) divisions
 
     def peek(self):
         return self.t[self.i] if self.i < len(self.t) else (None, None)
@@ -83,8 +86,10 @@ class _Parser:
     def term(self):
         ops, const = self.unary()
         while self.peek()[1] in ("*", "/"):
-            self.take()
+            op = self.take()[1]
             o, c = self.unary()
+            if op == "/" and not (const and c):
+                self.divisions += 1
             ops, const = self._binary(ops, const, o, c)
         return ops, const
 
@@ -136,16 +141,20 @@ class _Parser:
         raise CountError("unexpected '%s'" % value)
 
 
-def count_expression(expr):
+def count_expression(expr, tally=None):
+    """Operations in one expression; tally["div"] is increased by its counted divisions."""
     parser = _Parser(_tokens(expr))
     ops, _ = parser.expression()
     if parser.peek()[0] is not None:
         raise CountError("trailing text in '%s'" % expr)
+    if tally is not None:
+        tally["div"] = tally.get("div", 0) + parser.divisions
     return ops
 
 
-def count_function(text, name):
-    """Operations in the body of function `name` of the C/C++ source `text`."""
+def count_function(text, name, tally=None):
+    """Operations in the body of function `name` of the C/C++ source `text`; when `tally` is a
+    dict, tally["div"] receives the number of counted divisions (included in the total)."""
     body = re.sub(r"//[^\n]*", "", function_body(text, name))
     body = re.sub(r"/\*.*?\*/", "", body, flags=re.S)
     total = 0
@@ -154,13 +163,15 @@ def count_function(text, name):
         if not s or s.startswith("(void)"):
             continue
         if s.startswith("return "):
-            total += count_expression(s[len("return "):])
+            total += count_expression(s[len("return "):], tally)
             continue
         m = re.match(r"^(?:const\s+)?(?:double\s+)?[A-Za-z_][A-Za-z0-9_]*(?:\[[^\]]*\])?\s*([-+*/]?)=(?!=)(.*)$",
                      s, re.S)
         if not m:
             raise CountError("not an assignment: '%s'" % s[:60])
-        total += count_expression(m.group(2)) + (1 if m.group(1) else 0)
+        total += count_expression(m.group(2), tally) + (1 if m.group(1) else 0)
+        if tally is not None and m.group(1) == "/":
+            tally["div"] = tally.get("div", 0) + 1
     return total
 
 
@@ -170,7 +181,9 @@ def main(argv):
         return 2
     try:
         with open(argv[1]) as f:
-            print(count_function(f.read(), argv[2]))
+            tally = {}
+            total = count_function(f.read(), argv[2], tally)
+            print("%d ops, of which %d divisions" % (total, tally.get("div", 0)))
     except (OSError, CountError) as exc:
         print("error: %s" % exc, file=sys.stderr)
         return 1

@@ -91,16 +91,18 @@ def main(argv=None):
                 print("sympy peer %-16s %-20s %.0f s" % (name, disc, time.time() - started), file=sys.stderr)
             with open(stats_file) as f:
                 stats = json.load(f)
+            peer_div, pardel_div = {}, {}
             with open(peer_c) as f:
-                peer_ops = count_ops.count_function(f.read(), fn)
+                peer_ops = count_ops.count_function(f.read(), fn, peer_div)
             ours = pardel_full_function(pardel_source, disc)
-            pardel_ops = count_ops.count_function(pardel_source, ours)
+            pardel_ops = count_ops.count_function(pardel_source, ours, pardel_div)
             sources.append(peer_c)
             spec = check_kernels._sampling(model)
             entries.append((name, disc, fn, len(model.coords), model.order * len(model.coords), spec))
             rows.append({"model": name, "disc": disc, "sympy_ops_before_cse": stats["sympy_ops_before_cse"],
                          "sympy_ops_after_cse": stats["sympy_ops_after_cse"], "peer_c_ops": peer_ops,
-                         "pardel_c_ops": pardel_ops})
+                         "pardel_c_ops": pardel_ops, "peer_c_divisions": peer_div.get("div", 0),
+                         "pardel_c_divisions": pardel_div.get("div", 0)})
 
     # The registry and the driver, compiled with the same flags as both kernels' sources.
     registry = os.path.join(out, "bin", "peer_registry.cpp")
@@ -137,14 +139,14 @@ def main(argv=None):
         row.update(pardel_evals_per_s=r["pardel_evals_per_s"], peer_evals_per_s=r["peer_evals_per_s"],
                    max_rel_diff=r["max_rel_diff"])
 
-    lines = ["| model | discretization | SymPy count_ops before → after cse | peer C ops | pardel C ops "
+    lines = ["| model | discretization | SymPy count_ops before → after cse | peer C ops (div) | pardel C ops (div) "
              "| peer evals/s | pardel evals/s | pardel/peer speed | max rel diff |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append("| %s | %s | %d → %d | %d | %d | %.3g | %.3g | %.2f | %.1e |"
+        lines.append("| %s | %s | %d → %d | %d (%d) | %d (%d) | %.3g | %.3g | %.2f | %.1e |"
                      % (r["model"], r["disc"], r["sympy_ops_before_cse"], r["sympy_ops_after_cse"], r["peer_c_ops"],
-                        r["pardel_c_ops"], r["peer_evals_per_s"], r["pardel_evals_per_s"],
-                        r["pardel_evals_per_s"] / r["peer_evals_per_s"], r["max_rel_diff"]))
+                        r["peer_c_divisions"], r["pardel_c_ops"], r["pardel_c_divisions"], r["peer_evals_per_s"],
+                        r["pardel_evals_per_s"], r["pardel_evals_per_s"] / r["peer_evals_per_s"], r["max_rel_diff"]))
     table = "\n".join(lines) + "\n"
     with open(os.path.join(out, "table.md"), "w") as f:
         f.write(table)
