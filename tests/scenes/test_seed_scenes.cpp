@@ -68,8 +68,10 @@ INSTANTIATE_TEST_SUITE_P(
                       SeedScene{"zermelo_5.toml", "--set solver.method=newton", "travel_time", 9.662035876121928},
                       SeedScene{"zermelo_6.toml", "--set solver.method=newton", "travel_time", 8.92625337662602},
                       // These two solve to a residual of 1e-7 (the scenes' tol; round-off floor near
-                      // 1e-8 with gradients of 1e5), hence a looser 1e-6 on the cost.
-                      SeedScene{"spacecraft_fixed.toml", "", "fuel", 1.10256313438894, 1e-6},
+                      // 1e-8 with gradients of 1e5), hence a looser 1e-6 on the cost. The fixed-step
+                      // problem has several nearby local minima (another, fuel 1.1025631, also has a
+                      // positive definite Hessian): a change in Newton's globalization may move it.
+                      SeedScene{"spacecraft_fixed.toml", "", "fuel", 1.0856776289233745, 1e-6},
                       SeedScene{"spacecraft_sundman.toml", "", "fuel", 0.20202522949061943, 1e-6}),
     [](const ::testing::TestParamInfo<SeedScene>& info) {
       std::string name = fs::path(info.param.scene).stem().string();
