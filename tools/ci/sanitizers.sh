@@ -22,7 +22,10 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # A one-time allocation of the CLN library at start-up (see the file) is not pardel's leak.
 export LSAN_OPTIONS="suppressions=$PWD/tools/ci/lsan.supp:print_suppressions=0"
 # Models compiled at run time by the tests go to a cache inside the build folder.
-export PARDEL_CACHE_DIR="$PWD/$build_dir/model-cache"
+case "$build_dir" in
+  /*) export PARDEL_CACHE_DIR="$build_dir/model-cache" ;;
+  *) export PARDEL_CACHE_DIR="$PWD/$build_dir/model-cache" ;;
+esac
 
 start=$(date +%s)
 cmake -S . -B "$build_dir" -G Ninja \
