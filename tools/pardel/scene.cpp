@@ -251,6 +251,8 @@ bool is_bare_key(const std::string& key) {
   });
 }
 
+void check_ascii_outside_strings(std::string_view text, const std::string& source_name);
+
 /** Applies one --set KEY=VALUE to the document; returns the dotted key. */
 std::string apply_override(toml::table& root, const std::string& assignment) {
   const std::string origin = "--set " + assignment;
@@ -269,8 +271,9 @@ std::string apply_override(toml::table& root, const std::string& assignment) {
   toml::table snippet;
   const std::string document = "value = " + text;
   try {
+    check_ascii_outside_strings(document, origin);
     snippet = toml::parse(std::string_view(document), std::string_view("--set"));
-  } catch (const toml::parse_error&) {
+  } catch (const std::exception&) {
     snippet = toml::table{};
     snippet.insert_or_assign("value", text);  // not a TOML value: take it as a string
   }
@@ -310,10 +313,87 @@ bool looks_like_path(const std::string& spec) {
          (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
 }
 
+/**
+ * Refuses non-ASCII bytes outside strings and comments before toml++ sees them: toml++ 3.3.0
+ * reaches undefined behaviour on some non-ASCII code points where whitespace may stand.
+ */
+void check_ascii_outside_strings(std::string_view text, const std::string& source_name) {
+  enum class State { normal, comment, basic, literal, multi_basic, multi_literal };
+  State state = State::normal;
+  const std::string_view triple_double = "\"\"\"";
+  const std::string_view triple_single = "'''";
+  long line = 1, column = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    ++column;
+    if (c == '\n') {
+      ++line;
+      column = 0;
+      if (state == State::comment || state == State::basic || state == State::literal) state = State::normal;
+      continue;
+    }
+    auto starts = [&](std::string_view token) { return text.substr(i, token.size()) == token; };
+    switch (state) {
+      case State::normal:
+        if (static_cast<unsigned char>(c) >= 0x80) {
+          throw SceneError(fmt::format("{}:{}:{}: error: non-ASCII character outside a string or comment",
+                                       source_name, line, column));
+        }
+        if (c == '#') {
+          state = State::comment;
+        } else if (starts(triple_double)) {
+          state = State::multi_basic;
+          i += 2;
+          column += 2;
+        } else if (starts(triple_single)) {
+          state = State::multi_literal;
+          i += 2;
+          column += 2;
+        } else if (c == '"') {
+          state = State::basic;
+        } else if (c == '\'') {
+          state = State::literal;
+        }
+        break;
+      case State::comment:
+        break;
+      case State::basic:
+        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') {
+          ++i;
+          ++column;
+        } else if (c == '"') {
+          state = State::normal;
+        }
+        break;
+      case State::literal:
+        if (c == '\'') state = State::normal;
+        break;
+      case State::multi_basic:
+        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') {
+          ++i;
+          ++column;
+        } else if (starts(triple_double)) {
+          state = State::normal;
+          i += 2;
+          column += 2;
+        }
+        break;
+      case State::multi_literal:
+        if (starts(triple_single)) {
+          state = State::normal;
+          i += 2;
+          column += 2;
+        }
+        break;
+    }
+  }
+}
+
 }  // namespace
 
 Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
                   const ModelResolver& resolve, const std::vector<std::string>& model_names) {
+  check_ascii_outside_strings(text, source_name);
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -417,6 +497,17 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
     r.fail(*grid->get("N"), "grid.N", fmt::format("grid.N must be between 2 and {}, got {}", kMaxN, *N));
   }
   problem.N = static_cast<int>(*N);
+  if (!std::isfinite(problem.t0 + problem.T)) {
+    r.fail(*grid->get("T"), "grid.T",
+           fmt::format("grid.t0 + grid.T = {} + {} overflows a double", problem.t0, problem.T));
+  }
+  const double step = problem.T / problem.N;
+  if (!std::isnormal(step) || problem.t0 + step == problem.t0 ||
+      problem.t0 + problem.T - step == problem.t0 + problem.T) {
+    r.fail(*grid->get("T"), "grid.T",
+           fmt::format("the step grid.T / grid.N = {} / {} = {} is too small to separate the node times", problem.T,
+                       problem.N, step));
+  }
 
   // boundary
   const toml::table* boundary = r.table(root, "boundary", "boundary");
