@@ -30,8 +30,15 @@ COLORS = {"newton": "C0", "multigrid": "C1", "hybrid": "C2", "jacobi-newton": "C
           "ipopt": "C5"}
 
 
+REUSE = False  # --reuse: draw from the CSVs already in docs/images instead of measuring again
+
+
 def run_csv(cmd, name):
     """Runs a command whose stdout is CSV, saves it as bench_<name>.csv, returns its rows."""
+    path = os.path.join(OUT, f"bench_{name}.csv")
+    if REUSE and os.path.exists(path):
+        print("  reusing", os.path.relpath(path, ROOT), flush=True)
+        return list(csv.DictReader(open(path)))
     print("$", " ".join(cmd), flush=True)
     start = time.time()
     out = subprocess.run(cmd, check=True, stdout=subprocess.PIPE, text=True).stdout
@@ -95,8 +102,9 @@ def part_peer(suite, quick):
                 continue
             t = num(r["seconds"])
             capped = r["status"] == "time_cap"
-            if capped and num(r["extrapolated_seconds"]) == num(r["extrapolated_seconds"]):
-                t = num(r["extrapolated_seconds"])
+            extrapolated = num(r["extrapolated_seconds"])
+            if capped and np.isfinite(extrapolated) and extrapolated > 0:
+                t = extrapolated
             xs.append(j + (i - (len(methods) - 1) / 2) * width)
             ys.append(t)
             hatch.append(capped or r["status"] not in ("converged", "Solve_Succeeded"))
@@ -109,7 +117,7 @@ def part_peer(suite, quick):
     ax.set_yscale("log")
     ax.set_ylabel("wall time to DEL residual 1e-10 [s]")
     ax.set_title("fuel_nav (T = 30, trapezoid): pardel methods vs IPOPT\n"
-                 "hatched: not converged to 1e-10 (jacobi-newton: extrapolated from its rate; IPOPT: 'acceptable')",
+                 "hatched: not converged to 1e-10 (time cap: bar = extrapolated time, or the capped time; IPOPT: 'acceptable')",
                  fontsize=9)
     ax.legend(fontsize=8)
     save(fig, "peer")
@@ -124,8 +132,11 @@ def part_sweep(build, quick):
     filt = "BM_(SweepKernelsOnly|JacobiNewtonSweep)/(100|1000|10000)/" if quick else "."
     cmd = [exe, f"--benchmark_filter={filt}", f"--benchmark_out={js}", "--benchmark_out_format=json",
            "--benchmark_min_time=0.2"]
-    print("$", " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True)
+    if REUSE and os.path.exists(js):
+        print("  reusing", os.path.relpath(js, ROOT), flush=True)
+    else:
+        print("$", " ".join(cmd), flush=True)
+        subprocess.run(cmd, check=True)
     data = json.load(open(js))
     rows = []
     for b in data["benchmarks"]:
@@ -288,13 +299,17 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder with the benchmark programs")
     ap.add_argument("--only", default="peer,sweep,scaling,memory,workprec,stability", help="comma-separated parts")
     ap.add_argument("--quick", action="store_true", help="small sizes only (a smoke run, minutes)")
+    ap.add_argument("--reuse", action="store_true", help="redraw charts from existing CSVs")
     args = ap.parse_args()
+    global REUSE
+    REUSE = args.reuse
     build = os.path.abspath(args.build)
     suite = os.path.join(build, "pardel-bench-suite")
     if not os.path.exists(suite):
         sys.exit(f"run_all.py: error: {suite} not found; build the target pardel-bench-suite first")
     os.makedirs(OUT, exist_ok=True)
-    machine(build)
+    if not REUSE:
+        machine(build)
     parts = {"peer": lambda: part_peer(suite, args.quick), "sweep": lambda: part_sweep(build, args.quick),
              "scaling": lambda: part_scaling(suite, args.quick), "memory": lambda: part_memory(suite, args.quick),
              "workprec": lambda: part_workprec(suite, args.quick),
