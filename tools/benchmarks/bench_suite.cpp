@@ -425,7 +425,7 @@ int cmd_stability(const Args& a) {
     o.tol = 1e-10;
     o.threads = 1;
     o.damping = damping;
-    o.max_iterations = o.method == pardel::Method::jacobi_newton || o.method == pardel::Method::jacobi ? max_it : 500;
+    o.max_iterations = o.method == pardel::Method::newton ? 500 : max_it;  // hybrid starts with sweeps
     o.history_every = 1000;
     tr = pardel::linear_guess(p);
     return solve_capped(p, o, tr, cap).summary;

@@ -176,10 +176,13 @@ def part_sweep(build, quick):
             if pts:
                 x, y = zip(*pts)
                 axes[1].loglog(x, y, marker="o", label=f"{name}, {th} thread(s)")
-    axes[1].set_xlabel("N")
-    axes[1].set_ylabel("time to residual 1e-10 [s]")
-    axes[1].set_title("time to solution (fuel_nav)", fontsize=9)
-    axes[1].legend(fontsize=7)
+    if any(r["benchmark"] == "NewtonSolve" for r in rows):
+        axes[1].set_xlabel("N")
+        axes[1].set_ylabel("time to residual 1e-10 [s]")
+        axes[1].set_title("time to solution (fuel_nav)", fontsize=9)
+        axes[1].legend(fontsize=7)
+    else:
+        fig.delaxes(axes[1])
     save(fig, "sweep")
 
 
@@ -281,7 +284,7 @@ def part_stability(suite, quick):
                 ax.imshow(grid, origin="lower", aspect="auto", cmap=cmap, vmin=-0.5, vmax=3.5,
                           extent=[-0.5, len(xs) - 0.5, -0.5, len(ys) - 0.5], interpolation="nearest")
                 step = max(1, len(xs) // 6)
-                ax.set_xticks(range(0, len(xs), step), [f"{x:g}" for x in xs[::step]])
+                ax.set_xticks(range(0, len(xs), step), [f"{x:g}" for x in xs[::step]], fontsize=7)
                 ax.set_yticks(range(len(ys)), [str(y) for y in ys])
                 if name == "bratu":
                     ax.axvline(np.interp(3.5138, xs, range(len(xs))), color="k", lw=0.8, ls="--")
