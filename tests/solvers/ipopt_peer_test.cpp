@@ -4,7 +4,7 @@
  * oscillator (1-D and 2-D with a knot), whose DEL equations are the linear recurrence
  * q_{k+1} - 2 q_k + q_{k-1} + (omega h)^2 q_k = 0 with the closed-form solution
  * q_k = A sin(k theta) + B cos(k theta), cos(theta) = 1 - (omega h)^2 / 2; the seed's
- * fuel-optimal example when the bundled model is linked; and rejection of bad input.
+ * fuel-optimal example with the generated kernels; and rejection of bad input.
  */
 #include <gtest/gtest.h>
 
@@ -129,6 +129,25 @@ TEST(IpoptPeer, ResidualOfStraightLineIsRecomputedIndependently) {
   const pardel::Trajectory tr = pardel::peer::straight_line(problem);
   // q_k = k/4, h = 1/4, omega = 1: residual_k = -(second difference)/h - h q_k = -q_k / 4.
   EXPECT_NEAR(pardel::peer::del_residual(problem, tr), 0.75 / 4, 1e-15);
+}
+
+TEST(IpoptPeer, FuelNavigationReachesTheSeedExampleAction) {
+  // The seed's fuel-optimal example with the generated kernels: T = 30, (0,0) -> (6,5), N = 200.
+  pardel::Problem problem;
+  problem.model = pardel::find_model("fuel_nav");
+  if (!problem.model) GTEST_SKIP() << "fuel_nav is not bundled in this build";
+  problem.T = 30;
+  problem.N = 200;
+  problem.q0 = {0.0, 0.0};
+  problem.qN = {6.0, 5.0};
+  pardel::Trajectory tr = pardel::peer::straight_line(problem);
+  const pardel::peer::IpoptResult r = pardel::peer::solve_ipopt(problem, {}, tr);
+  ASSERT_TRUE(r.ran) << r.message;
+  EXPECT_EQ(r.status, "Solve_Succeeded");
+  EXPECT_TRUE(r.converged) << r.brief_report();
+  EXPECT_NEAR(r.action, 5.59683215, 5e-9);
+  // The residual is recomputed independently of IPOPT's own convergence test.
+  EXPECT_NEAR(pardel::peer::del_residual(problem, tr), r.residual, 1e-15);
 }
 
 TEST(IpoptPeer, RejectsBadInputWithMessageNamingTheKey) {
