@@ -1037,6 +1037,43 @@ class Printer {
 
 }  // namespace
 
+/**
+ * Divisions are several times slower than multiplications: where two or more divisions reachable
+ * from the roots share a denominator, the reciprocal of that denominator is computed once and the
+ * divisions become multiplications by it (a/h, b/h -> r = 1/h; a*r, b*r).
+ */
+void share_reciprocals(BDag& dag, const std::vector<int>& roots) {
+  std::vector<char> seen(dag.nodes.size(), 0);
+  std::vector<int> stack(roots.begin(), roots.end()), divisions;
+  while (!stack.empty()) {
+    const int id = stack.back();
+    stack.pop_back();
+    if (seen[static_cast<std::size_t>(id)]) continue;
+    seen[static_cast<std::size_t>(id)] = 1;
+    const BNode& n = dag.nodes[static_cast<std::size_t>(id)];
+    if (n.op == BOp::div) divisions.push_back(id);
+    for (int k : n.kids) stack.push_back(k);
+  }
+  std::sort(divisions.begin(), divisions.end());
+  std::map<int, std::vector<int>> by_denominator;
+  for (int id : divisions) {
+    const BNode& n = dag.nodes[static_cast<std::size_t>(id)];
+    if (dag.nodes[static_cast<std::size_t>(n.kids[1])].op == BOp::constant) continue;
+    by_denominator[n.kids[1]].push_back(id);
+  }
+  for (const auto& [denominator, uses] : by_denominator) {
+    if (uses.size() < 2) continue;
+    const int reciprocal = dag.op(BOp::div, {dag.constant(1.0), denominator});
+    for (int id : uses) {
+      if (id == reciprocal) continue;
+      BNode& n = dag.nodes[static_cast<std::size_t>(id)];
+      const int numerator = n.kids[0];
+      n.op = BOp::mul;
+      n.kids = {numerator, reciprocal};
+    }
+  }
+}
+
 KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const std::vector<KernelInput>& inputs,
                                 const CseOptions& options) {
   NDag ndag;
@@ -1075,6 +1112,7 @@ KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const 
     broots.push_back(lower.lower_output(roots[i]));
     targets.push_back(outputs[i].target);
   }
+  share_reciprocals(bdag, broots);
   Printer printer(bdag, options.temp_prefix);
   KernelCode code = printer.emit(targets, broots);
   code.ops_before = before;
