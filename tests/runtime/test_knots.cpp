@@ -155,6 +155,10 @@ TEST(Knots, KnotOffTheGridIsInvalidInput) {
 }
 
 #ifdef PARDEL_HAVE_BUNDLED_MODELS
+// trapezoid(alpha=1) converges at order 2; gauss2 integrates q''^2 of a cubic Hermite piece
+// exactly, and the cubic spline through the knots is such a piecewise cubic, so gauss2 reproduces
+// it up to round-off (its order 4 is measured on a non-polynomial solution in
+// test_convergence_order.cpp).
 TEST(Knots, BundledSplineConvergesAtEachDiscretizationsOrder) {
   const pardel_model* m = pardel::find_model("spline");
   if (!m) GTEST_SKIP() << "spline is not bundled";
@@ -168,19 +172,22 @@ TEST(Knots, BundledSplineConvergesAtEachDiscretizationsOrder) {
       pardel::Problem p;
       p.model = m;
       p.discretization = disc;
+      p.T = 3;
       p.N = N;
       p.q0 = {0.0, 0.0, 1.0, 0.0};  // x, y, x', y'
       p.qN = {1.0, 0.5, 0.0, -1.0};
-      p.knots = {{1.0 / 3, {0.5, -0.25}}, {2.0 / 3, {-0.5, 0.75}}};
+      p.knots = {{1.0, {0.5, -0.25}}, {2.0, {-0.5, 0.75}}};
       auto traj = pardel::linear_guess(p);
       pardel::Options opt;
       opt.method = pardel::Method::newton;
+      opt.tol = 1e-8;  // above the round-off level ~16 eps 12 |q| / h^3 of an order-2 residual
       const auto s = pardel::solve(p, opt, traj);
       ASSERT_TRUE(s.converged()) << name << " N = " << N << ": " << s.brief_report();
       double err = 0;
       for (int k = 0; k <= N; ++k)
         err = std::max({err, std::fabs(traj.node(k)[0] - sx(traj.t[k])), std::fabs(traj.node(k)[1] - sy(traj.t[k]))});
-      if (previous > 0 && err > 1e-12) EXPECT_NEAR(std::log2(previous / err), order, 0.3) << name << " N = " << N;
+      if (order == 2.0 && previous > 0) EXPECT_NEAR(std::log2(previous / err), 2.0, 0.3) << name << " N = " << N;
+      if (order == 4.0) EXPECT_LT(err, 1e-8) << name << " N = " << N;
       previous = err;
     }
   }
