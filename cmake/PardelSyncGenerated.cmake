@@ -1,5 +1,6 @@
 # Copies freshly generated kernels (FILES) into the committed folder DEST, and removes files there
 # that no bundled model produces any more. Run by the update-generated target.
+cmake_policy(VERSION 3.20)
 file(MAKE_DIRECTORY "${DEST}")
 set(_keep "")
 foreach(_f IN LISTS FILES)

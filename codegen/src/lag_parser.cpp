@@ -282,6 +282,9 @@ void Reader::read_declaration(const Line& line) {
       fail(line, name, "expected a model name (a C identifier: letters, digits, '_'), found " + name.shown());
     }
     if (name.text[0] == '_') fail(line, name, "a model name must start with a letter");
+    if (name.text == "pardel" || name.text.rfind("pardel_", 0) == 0) {
+      fail(line, name, "model names 'pardel' and 'pardel_...' are reserved for pardel's own symbols");
+    }
     if (name.text.size() > kMaxModelNameLength) {
       fail(line, name, "model name is too long (at most " + std::to_string(kMaxModelNameLength) + " characters)");
     }
