@@ -87,6 +87,26 @@ bool parse_linear_solver(std::string_view text, LinearSolver* solver) {
   return false;
 }
 
+const char* to_string(NewtonShift shift) {
+  switch (shift) {
+    case NewtonShift::identity: return "identity";
+    case NewtonShift::difference: return "difference";
+  }
+  return "unknown";
+}
+
+bool parse_newton_shift(std::string_view text, NewtonShift* shift) {
+  if (text == "identity") {
+    *shift = NewtonShift::identity;
+    return true;
+  }
+  if (text == "difference") {
+    *shift = NewtonShift::difference;
+    return true;
+  }
+  return false;
+}
+
 const char* to_string(Termination termination) {
   switch (termination) {
     case Termination::converged: return "converged";
@@ -124,6 +144,8 @@ bool Options::is_valid(std::string* error) const {
     return bad("method", std::to_string(static_cast<int>(method)), "is not a known method");
   if (linear_solver != LinearSolver::block_ldlt && linear_solver != LinearSolver::cyclic_reduction)
     return bad("linear_solver", std::to_string(static_cast<int>(linear_solver)), "is not a known linear solver");
+  if (newton_shift != NewtonShift::identity && newton_shift != NewtonShift::difference)
+    return bad("newton_shift", std::to_string(static_cast<int>(newton_shift)), "is not a known shift");
   return true;
 }
 

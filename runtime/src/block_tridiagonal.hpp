@@ -65,8 +65,12 @@ class BlockTridiagonal {
   const Mat& diag(int i) const { return diag_[static_cast<std::size_t>(i)]; }
   const Mat& off(int i) const { return off_[static_cast<std::size_t>(i)]; }
 
-  /** Fills the blocks from the full-kernel arrays of ctx with diagonal shift mu on free components. */
-  void assemble(const Context& ctx, double mu) {
+  /**
+   * Fills the blocks from the full-kernel arrays of ctx, shifted on free components by mu I, or with
+   * `difference` by mu K, K = tridiag(-1, 2, -1) per component (the metric sum_k |dq_{k+1} - dq_k|^2
+   * with the fixed ends and fixed components as zeros).
+   */
+  void assemble(const Context& ctx, double mu, bool difference = false) {
     const int d = d_;
     const std::size_t dd = static_cast<std::size_t>(d) * d;
 #pragma omp parallel for if (ctx.parallel(n_)) num_threads(ctx.threads) schedule(static)
@@ -89,6 +93,9 @@ class BlockTridiagonal {
           Dk.col(a).setZero();
           Dk(a, a) = 1;
           Ck.row(a).setZero();
+        } else if (difference) {
+          Dk(a, a) += 2 * mu;
+          if (k < ctx.N - 1 && fn[a]) Ck(a, a) -= mu;
         } else {
           Dk(a, a) += mu;
         }

@@ -21,7 +21,9 @@ namespace {
 template <int D>
 class Newton : public Method_ {
  public:
-  explicit Newton(const Options& o) : cyclic_(o.linear_solver == LinearSolver::cyclic_reduction) {}
+  explicit Newton(const Options& o)
+      : cyclic_(o.linear_solver == LinearSolver::cyclic_reduction),
+        difference_(o.newton_shift == NewtonShift::difference) {}
 
   void reset(Context& ctx) override {
     H_.resize(ctx.N, ctx.dim);
@@ -60,7 +62,7 @@ class Newton : public Method_ {
     const double mu_min = 1e-10 * scale;
     if (mu_ > 0 && mu_ < mu_min) mu_ = mu_min;
     for (int attempt = 0; attempt < 200; ++attempt) {
-      if (attempt > 0 || mu_ != 0) H_.assemble(ctx, mu_);
+      if (attempt > 0 || mu_ != 0) H_.assemble(ctx, mu_, difference_);
       bool ok;
       if (cyclic_) {
         ok = H_.solve_cyclic_reduction(rhs_.data(), dx_.data(), ctx.threads);
@@ -74,10 +76,16 @@ class Newton : public Method_ {
         continue;
       }
       // Quadratic model of the action with the unshifted Hessian: m(dx) = g.dx + dx.H.dx/2.
-      double gdx = 0, dx2 = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        gdx -= rhs_[i] * dx_[i];
-        dx2 += dx_[i] * dx_[i];
+      double gdx = 0, dx2 = 0;  // dx2 = dx.M.dx for the shift's metric M
+      for (std::size_t i = 0; i < n; ++i) gdx -= rhs_[i] * dx_[i];
+      if (difference_) {
+        for (std::size_t i = 0; i < n; ++i) {
+          const double step = dx_[i] - (i >= dz ? dx_[i - dz] : 0.0);
+          dx2 += step * step;
+        }
+        for (std::size_t i = n - dz; i < n; ++i) dx2 += dx_[i] * dx_[i];
+      } else {
+        for (std::size_t i = 0; i < n; ++i) dx2 += dx_[i] * dx_[i];
       }
       const double pred = -(gdx + 0.5 * (H_.quadratic_form(dx_.data()) - mu_ * dx2));
       // Trial point.
@@ -152,6 +160,7 @@ class Newton : public Method_ {
   }
 
   bool cyclic_;
+  bool difference_;
   BlockTridiagonal<D> H_;
   std::vector<double> rhs_, dx_;
   std::vector<double> Ld_, D1_, D2_, D11_, D12_, D22_, res_;

@@ -544,8 +544,8 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
   const toml::table* solver = r.table(root, "solver", "solver");
   if (solver) {
     r.check_keys(*solver, "solver",
-                 {"method", "tol", "max_iterations", "damping", "newton_substeps", "threads", "refine",
-                  "clock_update_every", "clock"});
+                 {"method", "tol", "max_iterations", "damping", "newton_substeps", "newton_shift", "threads",
+                  "refine", "clock_update_every", "clock"});
     if (const auto method = r.string(solver, "method", "solver.method")) {
       if (!parse_method(*method, &options.method)) {
         const std::string suggestion = nearest_name(*method, kMethodNames);
@@ -579,6 +579,12 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
                fmt::format("solver.newton_substeps must be between 1 and 1000, got {}", *m));
       }
       options.newton_substeps = static_cast<int>(*m);
+    }
+    if (const auto shift = r.string(solver, "newton_shift", "solver.newton_shift")) {
+      if (!parse_newton_shift(*shift, &options.newton_shift)) {
+        r.fail(*solver->get("newton_shift"), "solver.newton_shift",
+               fmt::format("unknown newton_shift '{}' (expected 'identity' or 'difference')", *shift));
+      }
     }
     if (const auto threads = r.integer(solver, "threads", "solver.threads")) {
       if (*threads < 0 || *threads > 4096) {

@@ -99,6 +99,17 @@ const char* to_string(LinearSolver solver);
 /** Parses "ldlt", "cyclic-reduction"; false if unknown. */
 bool parse_linear_solver(std::string_view text, LinearSolver* solver);
 
+/** The shift Newton's Levenberg-Marquardt globalization adds to the Hessian, H + mu M. */
+enum class NewtonShift {
+  identity,    ///< M = I: the classic Levenberg-Marquardt shift
+  difference,  ///< M = tridiag(-1, 2, -1) per component: the shape of the kinetic part of these
+               ///< Hessians, so every wavelength is damped alike and the iteration count does not
+               ///< grow with N (it removes the stall at large N; it may reach another local minimum)
+};
+const char* to_string(NewtonShift shift);
+/** Parses "identity", "difference"; false if unknown. */
+bool parse_newton_shift(std::string_view text, NewtonShift* shift);
+
 enum class Termination {
   converged,
   max_iterations,
@@ -131,6 +142,7 @@ struct Options {
   int clock_update_every = 100;  ///< iterations between node-time updates under a clock
   long history_every = 1;        ///< record the history every this many iterations
   LinearSolver linear_solver = LinearSolver::block_ldlt;  ///< newton and hybrid
+  NewtonShift newton_shift = NewtonShift::identity;       ///< newton and hybrid
   double refine_settle = 1e-3;   ///< a coarse level is settled when its residual fell by this factor
   double divergence_factor = 1e8;  ///< diverged when the residual exceeds this times the initial one
   /** Called after each recorded iteration; returning false interrupts the solve. */
