@@ -5,7 +5,8 @@ pkgs=(build-essential cmake ninja-build pkg-config
       libginac-dev libcln-dev libeigen3-dev libomp-dev
       python3 python3-jinja2 python3-matplotlib python3-numpy python3-sympy
       libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libfmt-dev
-      libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev)
+      libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev
+      libopenmpi-dev openmpi-bin clang-14 libclang-rt-14-dev)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

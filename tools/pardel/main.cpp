@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "outputs.hpp"
+#include "pardel/mpi_session.hpp"
 #include "pardel/pardel.hpp"
 #include "pardel_cli/config.hpp"
 #include "progress.hpp"
@@ -395,6 +396,7 @@ int run_check(const CheckArgs& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const pardel::mpi::Session mpi_session(&argc, &argv);
   CLI::App app{"pardel: solve the boundary-value problems of variational integrators"};
   app.footer(kExitCodesHelp);
   app.require_subcommand(1);
