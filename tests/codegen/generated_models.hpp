@@ -7,7 +7,8 @@
 /** A compiled model and the .lag file it was generated from. */
 struct GeneratedModel {
   const pardel_model* model;
-  const char* lag_path;
+  const char* lag_path;     ///< absolute path of the .lag
+  const char* source_name;  ///< the name the generator recorded (relative to the project root)
 };
 
 extern const GeneratedModel kGeneratedModels[];

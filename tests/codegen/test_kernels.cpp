@@ -127,7 +127,7 @@ TEST_P(GeneratedKernels, DescriptorMatchesTheLagFile) {
   const pardel_model& m = *entry_.model;
   EXPECT_EQ(m.abi_version, PARDEL_KERNEL_ABI_VERSION);
   EXPECT_EQ(std::string(m.name), lag_.name);
-  EXPECT_EQ(std::string(m.source), std::string(entry_.lag_path));
+  EXPECT_EQ(std::string(m.source), std::string(entry_.source_name));
   EXPECT_EQ(m.order, lag_.order);
   EXPECT_EQ(m.ncoords, lag_.ncoords());
   EXPECT_EQ(m.dim, lag_.order * lag_.ncoords());
