@@ -26,6 +26,7 @@
 #include "pardel_cli/config.hpp"
 #include "progress.hpp"
 #include "scene.hpp"
+#include "sweep_command.hpp"
 #include "trajectory_io.hpp"
 #ifdef PARDEL_HAVE_MODEL_LOADER
 #include "pardel/model_loader.hpp"
@@ -436,6 +437,8 @@ int main(int argc, char** argv) {
   check->add_option("--set", c.sets, "KEY=VALUE: override a scene key (repeatable)")->allow_extra_args(false);
   check->add_flag("--json", c.json, "Print JSON");
 
+  const SweepCommand sweep_cmd(app);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -448,6 +451,7 @@ int main(int argc, char** argv) {
     if (*kernels) return run_kernels(k);
     if (*solve_cmd) return run_solve(s);
     if (*check) return run_check(c);
+    if (sweep_cmd.parsed()) return sweep_cmd.run(resolve_model_spec, bundled_names());
   } catch (const UsageError& error) {
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
     return kExitUsage;

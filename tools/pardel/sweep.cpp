@@ -1,0 +1,797 @@
+// Sweep files, variants, their solves, the grouping into distinct solutions and the output files
+// of `pardel sweep` (see sweep.hpp for the contract).
+#include "sweep.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+
+#define TOML_EXCEPTIONS 1
+#include <toml++/toml.h>
+
+#include "outputs.hpp"
+#include "pardel_cli/config.hpp"
+#include "trajectory_io.hpp"
+
+namespace pardel::cli {
+
+namespace fs = std::filesystem;
+
+int Sweep::guesses_per_configuration() const {
+  const int given = static_cast<int>(listed_guesses.size()) + random.count;
+  return given > 0 ? given : 1;
+}
+
+int Sweep::variant_count() const {
+  return static_cast<int>(configurations.size()) * guesses_per_configuration();
+}
+
+namespace {
+
+const std::vector<std::string> kTopKeys = {"scene", "set", "guesses", "random_guesses", "vary", "grouping", "output"};
+constexpr long long kMaxVariants = 10000000;
+
+std::string join(const std::vector<std::string>& names, const char* separator = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) out += (i ? separator : "") + names[i];
+  return out;
+}
+
+std::string type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a floating-point number";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::table: return "a table";
+    default: return "a date or time";
+  }
+}
+
+/** Integral values print as integers (so that grid.N = 80.0 from a range stays an integer key),
+ *  others in the shortest text that reads back to the same double. */
+std::string number_text(double value) {
+  if (std::abs(value) < 1e15 && value == std::floor(value)) return fmt::format("{}", static_cast<long long>(value));
+  return fmt::format("{}", value);
+}
+
+std::string quote_toml_string(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) out += fmt::format("\\u{:04X}", static_cast<int>(c));
+        else out += c;
+    }
+  }
+  return out + "\"";
+}
+
+/** Refuses non-ASCII bytes outside strings and comments (toml++ 3.3.0 may misbehave on them). */
+void check_ascii(std::string_view text, const std::string& source_name) {
+  enum class State { normal, comment, basic, literal };
+  State state = State::normal;
+  long line = 1, column = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    ++column;
+    if (c == '\n') {
+      ++line;
+      column = 0;
+      state = State::normal;
+      continue;
+    }
+    switch (state) {
+      case State::normal:
+        if (static_cast<unsigned char>(c) >= 0x80) {
+          throw SceneError(fmt::format("{}:{}:{}: error: non-ASCII character outside a string or comment",
+                                       source_name, line, column));
+        }
+        if (c == '#') state = State::comment;
+        else if (c == '"') state = State::basic;
+        else if (c == '\'') state = State::literal;
+        break;
+      case State::comment: break;
+      case State::basic:
+        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') {
+          ++i;
+          ++column;
+        } else if (c == '"') {
+          state = State::normal;
+        }
+        break;
+      case State::literal:
+        if (c == '\'') state = State::normal;
+        break;
+    }
+  }
+}
+
+/** Reads the sweep document; every error names FILE:LINE:COL. */
+class SweepReader {
+ public:
+  explicit SweepReader(std::string file) : file_(std::move(file)) {}
+
+  std::string where(const toml::source_region& source) const {
+    if (source.begin.line > 0) return fmt::format("{}:{}:{}", file_, source.begin.line, source.begin.column);
+    return file_;
+  }
+  std::string where(const toml::node& node) const { return where(node.source()); }
+
+  [[noreturn]] void fail(const toml::source_region& source, const std::string& message) const {
+    throw SceneError(fmt::format("{}: error: {}", where(source), message));
+  }
+  [[noreturn]] void fail(const toml::node& node, const std::string& message) const { fail(node.source(), message); }
+
+  void check_keys(const toml::table& table, const std::string& prefix, const std::vector<std::string>& allowed) const {
+    for (auto&& [key, node] : table) {
+      const std::string name(key.str());
+      if (std::find(allowed.begin(), allowed.end(), name) != allowed.end()) continue;
+      const std::string dotted = prefix.empty() ? name : prefix + "." + name;
+      const std::string suggestion = nearest_name(name, allowed);
+      std::string message = fmt::format("unknown key '{}'", dotted);
+      if (!suggestion.empty()) {
+        message += fmt::format("; did you mean '{}'?", prefix.empty() ? suggestion : prefix + "." + suggestion);
+      } else {
+        message += fmt::format(" (valid keys{}: {})", prefix.empty() ? "" : " in " + prefix, join(allowed));
+      }
+      fail(key.source().begin.line > 0 ? key.source() : node.source(), message);
+    }
+  }
+
+  const toml::table* table(const toml::table& parent, const std::string& key, const std::string& dotted) const {
+    const toml::node* node = parent.get(key);
+    if (!node) return nullptr;
+    if (!node->is_table()) fail(*node, fmt::format("{} must be a table, got {}", dotted, type_name(*node)));
+    return node->as_table();
+  }
+
+  double number(const toml::node& node, const std::string& dotted) const {
+    if (node.is_integer()) return static_cast<double>(node.as_integer()->get());
+    if (node.is_floating_point()) {
+      const double v = node.as_floating_point()->get();
+      if (!std::isfinite(v)) fail(node, fmt::format("{} must be a finite number", dotted));
+      return v;
+    }
+    fail(node, fmt::format("{} must be a number, got {}", dotted, type_name(node)));
+  }
+
+  long long integer(const toml::node& node, const std::string& dotted, long long lo, long long hi) const {
+    if (!node.is_integer()) fail(node, fmt::format("{} must be an integer, got {}", dotted, type_name(node)));
+    const long long v = node.as_integer()->get();
+    if (v < lo || v > hi) fail(node, fmt::format("{} must be between {} and {}, got {}", dotted, lo, hi, v));
+    return v;
+  }
+
+  std::string string(const toml::node& node, const std::string& dotted) const {
+    if (!node.is_string()) fail(node, fmt::format("{} must be a string, got {}", dotted, type_name(node)));
+    return node.as_string()->get();
+  }
+
+  std::vector<double> point(const toml::node& node, const std::string& dotted, int ncoords,
+                            const std::string& coords) const {
+    const toml::array* array = node.as_array();
+    if (!array) fail(node, fmt::format("{} must be an array of {} numbers ({}), got {}", dotted, ncoords, coords,
+                                       type_name(node)));
+    if (static_cast<int>(array->size()) != ncoords) {
+      fail(node, fmt::format("{} has {} value{}; expected {} ({})", dotted, array->size(),
+                             array->size() == 1 ? "" : "s", ncoords, coords));
+    }
+    std::vector<double> values;
+    for (std::size_t i = 0; i < array->size(); ++i) values.push_back(number(*array->get(i), fmt::format("{}[{}]", dotted, i)));
+    return values;
+  }
+
+  /** A TOML value as text for --set (tables refused). */
+  std::string value_text(const toml::node& node, const std::string& dotted) const {
+    if (node.is_integer()) return std::to_string(node.as_integer()->get());
+    if (node.is_floating_point()) return number_text(number(node, dotted));
+    if (node.is_boolean()) return node.as_boolean()->get() ? "true" : "false";
+    if (node.is_string()) return quote_toml_string(node.as_string()->get());
+    if (const toml::array* array = node.as_array()) {
+      std::string out = "[";
+      for (std::size_t i = 0; i < array->size(); ++i) {
+        out += (i ? ", " : "") + value_text(*array->get(i), fmt::format("{}[{}]", dotted, i));
+      }
+      return out + "]";
+    }
+    fail(node, fmt::format("{} must be a number, string, boolean or array, got {}", dotted, type_name(node)));
+  }
+
+ private:
+  std::string file_;
+};
+
+std::string resolve_relative(const std::string& base_file, const std::string& path) {
+  const fs::path p(path);
+  if (p.is_absolute()) return path;
+  return (fs::path(base_file).parent_path() / p).lexically_normal().string();
+}
+
+VaryAxis read_axis(const SweepReader& r, const toml::node& node, const std::string& name) {
+  const toml::table* entry = node.as_table();
+  if (!entry) r.fail(node, fmt::format("{} must be a table with key and values (or from, to, count)", name));
+  r.check_keys(*entry, name, {"key", "values", "from", "to", "count"});
+  VaryAxis axis;
+  axis.where = r.where(node);
+  const toml::node* key = entry->get("key");
+  if (!key) r.fail(node, fmt::format("missing key '{}.key' (a scene key such as params.s or grid.N)", name));
+  axis.key = r.string(*key, name + ".key");
+  if (axis.key.empty() || axis.key.find('=') != std::string::npos) {
+    r.fail(*key, fmt::format("{}.key = \"{}\" is not a scene key path (keys joined by '.', e.g. grid.N)", name, axis.key));
+  }
+  if (axis.key.rfind("guess", 0) == 0 || axis.key.rfind("output", 0) == 0) {
+    r.fail(*key, fmt::format("{}.key = \"{}\": the guess comes from [[guesses]] and [random_guesses], and outputs "
+                             "from [output] of the sweep file",
+                             name, axis.key));
+  }
+  const toml::node* values = entry->get("values");
+  const toml::node* from = entry->get("from");
+  const toml::node* to = entry->get("to");
+  const toml::node* count = entry->get("count");
+  if (values && (from || to || count)) {
+    r.fail(*values, fmt::format("{}: give either values or from, to and count, not both", name));
+  }
+  if (values) {
+    const toml::array* array = values->as_array();
+    if (!array || array->empty()) r.fail(*values, fmt::format("{}.values must be a non-empty array", name));
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      axis.values.push_back(r.value_text(*array->get(i), fmt::format("{}.values[{}]", name, i)));
+    }
+    return axis;
+  }
+  if (!from || !to || !count) {
+    r.fail(node, fmt::format("{} needs values = [...] or all of from, to and count", name));
+  }
+  const double a = r.number(*from, name + ".from");
+  const double b = r.number(*to, name + ".to");
+  const long long n = r.integer(*count, name + ".count", 1, 1000000);
+  for (long long i = 0; i < n; ++i) {
+    const double v = n == 1 ? a : (i == n - 1 ? b : a + (b - a) * static_cast<double>(i) / static_cast<double>(n - 1));
+    axis.values.push_back(number_text(v));
+  }
+  return axis;
+}
+
+}  // namespace
+
+Sweep parse_sweep(std::string_view text, const std::string& source_name,
+                  const std::vector<std::string>& command_line_sets, const ModelResolver& resolve,
+                  const std::vector<std::string>& model_names) {
+  check_ascii(text, source_name);
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& error) {
+    throw SceneError(fmt::format("{}:{}:{}: error: {}", source_name, error.source().begin.line,
+                                 error.source().begin.column, error.description()));
+  }
+  const SweepReader r(source_name);
+  r.check_keys(root, "", kTopKeys);
+  Sweep sweep;
+  sweep.path = source_name;
+
+  const toml::node* scene_node = root.get("scene");
+  if (!scene_node) {
+    throw SceneError(fmt::format("{}: error: missing key 'scene' (the base scene, relative to the sweep file)",
+                                 source_name));
+  }
+  const std::string scene_text = r.string(*scene_node, "scene");
+  if (scene_text.empty()) r.fail(*scene_node, "scene must not be empty");
+  sweep.scene_path = resolve_relative(source_name, scene_text);
+  {
+    std::error_code ec;
+    if (!fs::is_regular_file(sweep.scene_path, ec)) {
+      r.fail(*scene_node, fmt::format("scene file '{}' not found", sweep.scene_path));
+    }
+  }
+
+  if (const toml::node* set = root.get("set")) {
+    const toml::array* array = set->as_array();
+    if (!array) r.fail(*set, fmt::format("set must be an array of \"key=value\" strings, got {}", type_name(*set)));
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const std::string item = r.string(*array->get(i), fmt::format("set[{}]", i));
+      if (item.find('=') == std::string::npos) {
+        r.fail(*array->get(i), fmt::format("set[{}] = \"{}\" is not KEY=VALUE (e.g. solver.method=newton)", i, item));
+      }
+      sweep.sets.push_back(item);
+    }
+  }
+  sweep.sets.insert(sweep.sets.end(), command_line_sets.begin(), command_line_sets.end());
+
+  std::vector<const toml::node*> axis_nodes;
+  if (const toml::node* vary = root.get("vary")) {
+    const toml::array* array = vary->as_array();
+    if (!array) r.fail(*vary, fmt::format("vary must be an array of tables ([[vary]]), got {}", type_name(*vary)));
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const std::string name = fmt::format("vary[{}]", i);
+      sweep.axes.push_back(read_axis(r, *array->get(i), name));
+      for (std::size_t j = 0; j + 1 < sweep.axes.size(); ++j) {
+        if (sweep.axes[j].key == sweep.axes.back().key) {
+          r.fail(*array->get(i), fmt::format("{}: key '{}' already varies in vary[{}]", name, sweep.axes.back().key, j));
+        }
+      }
+      axis_nodes.push_back(array->get(i));
+    }
+  }
+
+  // Configurations: the Cartesian product of the axes, last axis fastest.
+  long long configurations = 1;
+  for (const auto& axis : sweep.axes) {
+    configurations *= static_cast<long long>(axis.values.size());
+    if (configurations > kMaxVariants) {
+      throw SceneError(fmt::format("{}: error: the varied keys give more than {} configurations", source_name,
+                                   kMaxVariants));
+    }
+  }
+  for (long long c = 0; c < configurations; ++c) {
+    std::vector<std::string> overrides = sweep.sets;
+    std::vector<std::string> values(sweep.axes.size());
+    long long rest = c;
+    for (std::size_t a = sweep.axes.size(); a-- > 0;) {
+      const auto& axis = sweep.axes[a];
+      values[a] = axis.values[static_cast<std::size_t>(rest % static_cast<long long>(axis.values.size()))];
+      rest /= static_cast<long long>(axis.values.size());
+    }
+    for (std::size_t a = 0; a < sweep.axes.size(); ++a) overrides.push_back(sweep.axes[a].key + "=" + values[a]);
+    Scene scene;
+    try {
+      scene = load_scene(sweep.scene_path, overrides, resolve, model_names);
+    } catch (const SceneError& error) {
+      // A bad varied value: say which; errors of the base scene or of `set` speak for themselves.
+      const std::string what = error.what();
+      for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
+        if (what.find("--set " + sweep.axes[a].key + "=") != std::string::npos) {
+          throw SceneError(fmt::format("{}: error: vary {} = {}: {}", sweep.axes[a].where, sweep.axes[a].key,
+                                       values[a], what));
+        }
+      }
+      throw;
+    }
+    if (!sweep.configurations.empty() && scene.model->ncoords != sweep.configurations.front().model->ncoords) {
+      throw SceneError(fmt::format("{}: error: configuration {} uses model {} with {} coordinates; the guesses need "
+                                   "the {} of model {}",
+                                   source_name, c, scene.model->name, scene.model->ncoords,
+                                   sweep.configurations.front().model->ncoords,
+                                   sweep.configurations.front().model->name));
+    }
+    sweep.configurations.push_back(std::move(scene));
+    sweep.configuration_values.push_back(std::move(values));
+  }
+  const pardel_model& model = *sweep.configurations.front().model;
+  const int ncoords = model.ncoords;
+  std::string coords;
+  for (int i = 0; i < ncoords; ++i) coords += (i ? ", " : "") + std::string(model.coords[i]);
+  const std::string coords_note = fmt::format("model {} has coords {}", model.name, coords);
+
+  // [[guesses]]
+  if (const toml::node* guesses = root.get("guesses")) {
+    const toml::array* array = guesses->as_array();
+    if (!array) {
+      r.fail(*guesses, fmt::format("guesses must be an array of tables ([[guesses]] with points), got {}",
+                                   type_name(*guesses)));
+    }
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const std::string name = fmt::format("guesses[{}]", i);
+      const toml::node& node = *array->get(i);
+      const toml::table* entry = node.as_table();
+      if (!entry) r.fail(node, fmt::format("{} must be a table with points, got {}", name, type_name(node)));
+      r.check_keys(*entry, name, {"points"});
+      const toml::node* points = entry->get("points");
+      if (!points) r.fail(node, fmt::format("missing key '{}.points' (the polyline's vertices, ends included)", name));
+      const toml::array* list = points->as_array();
+      if (!list || list->size() < 2) {
+        r.fail(*points, fmt::format("{}.points must be an array of at least 2 points ({})", name, coords_note));
+      }
+      std::vector<std::vector<double>> polyline;
+      for (std::size_t j = 0; j < list->size(); ++j) {
+        polyline.push_back(r.point(*list->get(j), fmt::format("{}.points[{}]", name, j), ncoords, coords_note));
+      }
+      sweep.listed_guesses.push_back(std::move(polyline));
+    }
+  }
+
+  // [random_guesses]
+  if (const toml::table* random = r.table(root, "random_guesses", "random_guesses")) {
+    r.check_keys(*random, "random_guesses", {"count", "interior_points", "seed", "box", "spread"});
+    RandomGuessSpec& spec = sweep.random;
+    const toml::node* count = random->get("count");
+    if (!count) r.fail(random->source(), "missing key 'random_guesses.count' (how many random polylines)");
+    spec.count = static_cast<int>(r.integer(*count, "random_guesses.count", 1, 1000000));
+    if (const toml::node* n = random->get("interior_points")) {
+      spec.interior_points = static_cast<int>(r.integer(*n, "random_guesses.interior_points", 1, 1000));
+    }
+    if (const toml::node* seed = random->get("seed")) {
+      spec.seed = static_cast<std::uint64_t>(
+          r.integer(*seed, "random_guesses.seed", 0, std::numeric_limits<long long>::max()));
+    }
+    const toml::node* box = random->get("box");
+    const toml::node* spread = random->get("spread");
+    if (box && spread) r.fail(*spread, "random_guesses: give either box or spread, not both");
+    if (!box && !spread) {
+      r.fail(random->source(), "random_guesses needs box = { min = [...], max = [...] } (vertices uniform in a box) "
+                               "or spread = D (vertices within D of the straight line)");
+    }
+    if (box) {
+      const toml::table* table = box->as_table();
+      if (!table) r.fail(*box, fmt::format("random_guesses.box must be a table with min and max, got {}", type_name(*box)));
+      r.check_keys(*table, "random_guesses.box", {"min", "max"});
+      const toml::node* lo = table->get("min");
+      const toml::node* hi = table->get("max");
+      if (!lo || !hi) r.fail(*box, "random_guesses.box needs both min and max");
+      spec.in_box = true;
+      spec.box_min = r.point(*lo, "random_guesses.box.min", ncoords, coords_note);
+      spec.box_max = r.point(*hi, "random_guesses.box.max", ncoords, coords_note);
+      for (int i = 0; i < ncoords; ++i) {
+        if (!(spec.box_min[i] <= spec.box_max[i])) {
+          r.fail(*hi, fmt::format("random_guesses.box.max[{}] = {} is below min[{}] = {}", i, spec.box_max[i], i,
+                                  spec.box_min[i]));
+        }
+      }
+    } else {
+      spec.spread = r.number(*spread, "random_guesses.spread");
+      if (!(spec.spread > 0)) r.fail(*spread, fmt::format("random_guesses.spread must be > 0, got {}", spec.spread));
+    }
+    // std::mt19937_64's sequence is fixed by the C++ standard, so the guesses are the same everywhere.
+    std::mt19937_64 generator(spec.seed);
+    const std::size_t per_guess = static_cast<std::size_t>(spec.interior_points) * ncoords;
+    sweep.random_unit.assign(spec.count, std::vector<double>(per_guess));
+    for (auto& numbers : sweep.random_unit) {
+      for (double& u : numbers) u = static_cast<double>(generator() >> 11) * 0x1.0p-53;
+    }
+  }
+  if (static_cast<long long>(sweep.configurations.size()) * sweep.guesses_per_configuration() > kMaxVariants) {
+    throw SceneError(fmt::format("{}: error: the sweep has more than {} variants", source_name, kMaxVariants));
+  }
+
+  // [grouping]
+  if (const toml::table* grouping = r.table(root, "grouping", "grouping")) {
+    r.check_keys(*grouping, "grouping", {"action_tol", "distance_tol"});
+    for (const char* key : {"action_tol", "distance_tol"}) {
+      const toml::node* node = grouping->get(key);
+      if (!node) continue;
+      const std::string dotted = std::string("grouping.") + key;
+      const double v = r.number(*node, dotted);
+      if (!(v >= 0)) r.fail(*node, fmt::format("{} must be >= 0, got {}", dotted, v));
+      (std::string(key) == "action_tol" ? sweep.grouping.action_tol : sweep.grouping.distance_tol) = v;
+    }
+  }
+
+  // [output]
+  if (const toml::table* output = r.table(root, "output", "output")) {
+    r.check_keys(*output, "output", {"dir", "plot"});
+    if (const toml::node* dir = output->get("dir")) {
+      sweep.output_dir = r.string(*dir, "output.dir");
+      if (sweep.output_dir.empty()) r.fail(*dir, "output.dir must not be empty");
+    }
+    if (const toml::node* plot = output->get("plot")) {
+      if (!plot->is_boolean()) r.fail(*plot, fmt::format("output.plot must be a boolean, got {}", type_name(*plot)));
+      sweep.plot = plot->as_boolean()->get();
+    }
+  }
+  return sweep;
+}
+
+Sweep load_sweep(const std::string& path, const std::vector<std::string>& command_line_sets,
+                 const ModelResolver& resolve, const std::vector<std::string>& model_names) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(fmt::format("{}: error: cannot open sweep file", path));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_sweep(text.str(), path, command_line_sets, resolve, model_names);
+}
+
+Variant make_variant(const Sweep& sweep, int id) {
+  Variant v;
+  v.id = id;
+  const int per = sweep.guesses_per_configuration();
+  v.configuration = id / per;
+  v.guess = id % per;
+  const int listed = static_cast<int>(sweep.listed_guesses.size());
+  if (listed + sweep.random.count == 0) {
+    v.guess_label = "scene";
+    return v;
+  }
+  if (v.guess < listed) {
+    v.guess_label = fmt::format("listed {}", v.guess);
+    v.points = sweep.listed_guesses[v.guess];
+    return v;
+  }
+  const int r = v.guess - listed;
+  v.guess_label = fmt::format("random {}", r);
+  const Problem& problem = sweep.configurations[v.configuration].problem;
+  const int nc = problem.model->ncoords;
+  const RandomGuessSpec& spec = sweep.random;
+  const std::vector<double>& u = sweep.random_unit[r];
+  std::vector<double> q0(problem.q0.begin(), problem.q0.begin() + nc);
+  std::vector<double> qN(problem.qN.begin(), problem.qN.begin() + nc);
+  v.points.push_back(q0);
+  for (int i = 0; i < spec.interior_points; ++i) {
+    std::vector<double> point(nc);
+    const double f = static_cast<double>(i + 1) / (spec.interior_points + 1);
+    for (int j = 0; j < nc; ++j) {
+      const double unit = u[static_cast<std::size_t>(i) * nc + j];
+      point[j] = spec.in_box ? spec.box_min[j] + unit * (spec.box_max[j] - spec.box_min[j])
+                             : q0[j] + f * (qN[j] - q0[j]) + (2 * unit - 1) * spec.spread;
+    }
+    v.points.push_back(std::move(point));
+  }
+  v.points.push_back(qN);
+  return v;
+}
+
+VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int threads) {
+  VariantResult result;
+  result.id = variant.id;
+  result.configuration = variant.configuration;
+  try {
+    Scene scene = sweep.configurations.at(variant.configuration);
+    if (!variant.points.empty()) {
+      scene.guess.kind = GuessKind::polyline;
+      scene.guess.points = variant.points;
+    }
+    if (threads > 0) scene.options.threads = threads;
+    scene.options.on_iteration = nullptr;
+    Trajectory trajectory = make_initial_guess(scene);
+    const Summary summary = solve(scene.problem, scene.options, trajectory);
+    result.status = to_string(summary.termination);
+    result.message = summary.message;
+    result.iterations = summary.iterations;
+    result.residual = summary.residual;
+    result.action = summary.action;
+    result.seconds = summary.wall_seconds;
+    const bool have_trajectory = trajectory.N >= 2 && static_cast<int>(trajectory.t.size()) == trajectory.N + 1;
+    result.cost = have_trajectory ? physical_cost(scene, summary, trajectory).value : std::nan("");
+    if (summary.converged() && have_trajectory) {
+      Problem problem = scene.problem;
+      problem.N = trajectory.N;
+      const Certificate certificate = certify(problem, trajectory, scene.options.threads, scene.options.tol);
+      result.certificate_valid = certificate.error.empty();
+      result.hessian_positive_definite = certificate.hessian_positive_definite;
+      result.inertia_negative = certificate.inertia_negative;
+      result.inertia_zero = certificate.inertia_zero;
+      result.trajectory = std::move(trajectory);
+    } else if (summary.converged()) {
+      result.status = "error";
+      result.message = "converged without a trajectory on the grid";
+    }
+  } catch (const std::exception& error) {
+    result.status = "error";
+    result.message = error.what();
+  }
+  return result;
+}
+
+std::string certificate_verdict(const VariantResult& result) {
+  if (!result.certificate_valid) return "unknown";
+  if (result.hessian_positive_definite) return "minimum";
+  if (result.inertia_negative > 0) return fmt::format("saddle ({} negative)", result.inertia_negative);
+  return fmt::format("degenerate ({} zero)", result.inertia_zero);
+}
+
+double trajectory_distance(const Trajectory& a, const Trajectory& b) {
+  if (a.N != b.N || a.dim != b.dim || a.q.size() != b.q.size()) return std::numeric_limits<double>::infinity();
+  double largest = 0;
+  for (std::size_t i = 0; i < a.q.size(); ++i) {
+    const double d = std::abs(a.q[i] - b.q[i]);
+    if (std::isnan(d)) return std::numeric_limits<double>::infinity();  // not the same path
+    largest = std::max(largest, d);
+  }
+  return largest;
+}
+
+bool same_solution(const VariantResult& a, const VariantResult& b, const GroupingOptions& options) {
+  if (a.configuration != b.configuration) return false;
+  if (!(std::abs(a.action - b.action) <= options.action_tol * std::max(1.0, std::abs(a.action)))) return false;
+  return trajectory_distance(a.trajectory, b.trajectory) <= options.distance_tol;
+}
+
+std::vector<Solution> group_solutions(const std::vector<VariantResult>& results, const GroupingOptions& options,
+                                      std::vector<int>* solution_of) {
+  std::vector<Solution> groups;
+  std::vector<std::size_t> representative;  // index into results
+  std::vector<int> group_of(results.size(), -1);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const VariantResult& r = results[i];
+    if (!r.converged()) continue;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      if (same_solution(results[representative[g]], r, options)) {
+        group_of[i] = static_cast<int>(g);
+        groups[g].variants.push_back(r.id);
+        break;
+      }
+    }
+    if (group_of[i] >= 0) continue;
+    Solution s;
+    s.configuration = r.configuration;
+    s.first_variant = r.id;
+    s.variants.push_back(r.id);
+    s.cost = r.cost;
+    s.action = r.action;
+    s.residual = r.residual;
+    group_of[i] = static_cast<int>(groups.size());
+    groups.push_back(std::move(s));
+    representative.push_back(i);
+  }
+  std::vector<std::size_t> order(groups.size());
+  for (std::size_t g = 0; g < order.size(); ++g) order[g] = g;
+  std::stable_sort(order.begin(), order.end(), [&groups](std::size_t x, std::size_t y) {
+    const Solution& a = groups[x];
+    const Solution& b = groups[y];
+    if (a.configuration != b.configuration) return a.configuration < b.configuration;
+    if (a.cost != b.cost) return a.cost < b.cost;  // NaN costs keep their place among equals
+    return a.first_variant < b.first_variant;
+  });
+  std::vector<Solution> sorted;
+  std::vector<int> id_of_group(groups.size());
+  int rank = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    Solution s = groups[order[k]];
+    s.id = static_cast<int>(k) + 1;
+    rank = (k > 0 && sorted.back().configuration == s.configuration) ? rank + 1 : 1;
+    s.rank = rank;
+    id_of_group[order[k]] = s.id;
+    sorted.push_back(std::move(s));
+  }
+  if (solution_of) {
+    solution_of->assign(results.size(), 0);
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      if (group_of[i] >= 0) (*solution_of)[i] = id_of_group[group_of[i]];
+    }
+  }
+  return sorted;
+}
+
+namespace {
+
+/** A CSV cell: quoted when it holds a comma, a quote or a newline. */
+std::string csv_cell(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::string points_text(const std::vector<std::vector<double>>& points) {
+  std::string out;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    out += i ? ";" : "";
+    for (std::size_t j = 0; j < points[i].size(); ++j) out += (j ? " " : "") + fmt::format("{}", points[i][j]);
+  }
+  return out;
+}
+
+const VariantResult* find_result(const std::vector<VariantResult>& results, int id) {
+  if (id >= 0 && id < static_cast<int>(results.size()) && results[id].id == id) return &results[id];
+  for (const auto& r : results) {
+    if (r.id == id) return &r;
+  }
+  return nullptr;
+}
+
+std::string model_source_path(const pardel_model& model) {
+  if (!model.source || !*model.source) return "";
+  const fs::path source(model.source);
+  std::error_code ec;
+  if (source.is_absolute()) return fs::exists(source, ec) ? source.string() : "";
+  const fs::path in_project = fs::path(config::source_dir) / source;
+  if (fs::exists(in_project, ec)) return in_project.lexically_normal().string();
+  return "";
+}
+
+}  // namespace
+
+std::string solutions_csv(const std::vector<VariantResult>& results, const std::vector<Solution>& solutions) {
+  std::string out = "solution,configuration,rank,cost,action,residual,variants,first_variant,certificate\n";
+  for (const auto& s : solutions) {
+    const VariantResult* r = find_result(results, s.first_variant);
+    out += fmt::format("{},{},{},{},{},{},{},{},{}\n", s.id, s.configuration, s.rank, format_double(s.cost),
+                       format_double(s.action), format_double(s.residual), s.variants.size(), s.first_variant,
+                       csv_cell(r ? certificate_verdict(*r) : "unknown"));
+  }
+  return out;
+}
+
+void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& results,
+                         const std::vector<Solution>& solutions, const std::vector<int>& solution_of,
+                         const SweepRunInfo& info, const std::string& out_dir) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
+  const fs::path dir(out_dir);
+
+  write_file_atomic((dir / "solutions.csv").string(), solutions_csv(results, solutions));
+
+  // variants.csv
+  std::string variants = "variant,configuration";
+  for (const auto& axis : sweep.axes) variants += "," + csv_cell(axis.key);
+  variants += ",guess,guess_points,status,iterations,residual,action,cost,certificate,solution,seconds\n";
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const VariantResult& r = results[i];
+    const Variant v = make_variant(sweep, r.id);
+    variants += fmt::format("{},{}", r.id, r.configuration);
+    for (const auto& value : sweep.configuration_values[r.configuration]) variants += "," + csv_cell(value);
+    variants += fmt::format(",{},{},{},{},{},{},{},{},{},{}\n", v.guess_label, points_text(v.points), r.status,
+                            r.iterations, format_double(r.residual), format_double(r.action), format_double(r.cost),
+                            r.converged() ? csv_cell(certificate_verdict(r)) : "",
+                            i < solution_of.size() && solution_of[i] > 0 ? std::to_string(solution_of[i]) : "",
+                            format_double(r.seconds));
+  }
+  write_file_atomic((dir / "variants.csv").string(), variants);
+
+  // one trajectory per solution
+  const Scene& first = sweep.configurations.front();
+  for (const auto& s : solutions) {
+    const VariantResult* r = find_result(results, s.first_variant);
+    if (!r) continue;
+    write_file_atomic((dir / fmt::format("solution_{}.csv", s.id)).string(),
+                      trajectory_csv(*sweep.configurations[s.configuration].model, r->trajectory));
+  }
+
+  // sweep.json
+  const PhysicalCost cost_kind = physical_cost(first, Summary{}, Trajectory{});  // for its name only
+  nlohmann::ordered_json j;
+  j["sweep"] = sweep.path;
+  j["scene"] = sweep.scene_path;
+  j["model"] = first.model->name;
+  j["model_source"] = first.model_path.empty() ? model_source_path(*first.model)
+                                               : fs::absolute(first.model_path, ec).lexically_normal().string();
+  j["discretization"] = first.discretization;
+  j["cost"] = {{"name", cost_kind.name}, {"definition", cost_kind.definition}};
+  j["set"] = sweep.sets;
+  j["variants"] = results.size();
+  j["guesses_per_configuration"] = sweep.guesses_per_configuration();
+  nlohmann::ordered_json configurations = nlohmann::ordered_json::array();
+  for (std::size_t c = 0; c < sweep.configurations.size(); ++c) {
+    const Scene& scene = sweep.configurations[c];
+    nlohmann::ordered_json values = nlohmann::ordered_json::object();
+    for (std::size_t a = 0; a < sweep.axes.size(); ++a) values[sweep.axes[a].key] = sweep.configuration_values[c][a];
+    nlohmann::ordered_json params = nlohmann::ordered_json::object();
+    for (int i = 0; i < scene.model->nparams; ++i) params[scene.model->param_names[i]] = scene.problem.params[i];
+    configurations.push_back({{"id", c}, {"values", values}, {"N", scene.problem.N}, {"params", params},
+                              {"method", to_string(scene.options.method)}, {"tol", scene.options.tol}});
+  }
+  j["configurations"] = configurations;
+  j["ranks"] = info.ranks;
+  j["threads"] = info.threads;
+  j["wall_seconds"] = info.wall_seconds;
+  j["grouping"] = {{"action_tol", sweep.grouping.action_tol}, {"distance_tol", sweep.grouping.distance_tol}};
+  std::map<std::string, int> by_status;
+  int converged = 0;
+  for (const auto& r : results) {
+    if (r.converged()) ++converged;
+    else ++by_status[r.status];
+  }
+  j["converged"] = converged;
+  nlohmann::ordered_json failures = nlohmann::ordered_json::object();
+  for (const auto& [status, count] : by_status) failures[status] = count;
+  j["failures"] = failures;
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  const Solution* best = nullptr;
+  for (const auto& s : solutions) {
+    const VariantResult* r = find_result(results, s.first_variant);
+    list.push_back({{"id", s.id}, {"configuration", s.configuration}, {"rank", s.rank}, {"cost", s.cost},
+                    {"action", s.action}, {"residual", s.residual}, {"variants", s.variants.size()},
+                    {"first_variant", s.first_variant}, {"certificate", r ? certificate_verdict(*r) : "unknown"},
+                    {"trajectory", fmt::format("solution_{}.csv", s.id)}});
+    if (!best || s.cost < best->cost) best = &s;
+  }
+  j["solutions_count"] = solutions.size();
+  j["solutions"] = list;
+  j["best"] = best ? list[static_cast<std::size_t>(best->id - 1)] : nlohmann::ordered_json(nullptr);
+  write_file_atomic((dir / "sweep.json").string(), j.dump(2) + "\n");
+}
+
+}  // namespace pardel::cli
