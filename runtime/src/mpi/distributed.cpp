@@ -1,0 +1,708 @@
+/**
+ * @file distributed.cpp
+ * The domain-decomposed solve (distributed.hpp): each rank builds a solve context over its own
+ * nodes plus one halo node per neighbour (the halos are fixed in that context, so the seed's
+ * Jacobi methods run on it unchanged), and a driver that mirrors the one-process driver of
+ * solve.cpp step for step while taking every decision from values reduced over all ranks:
+ * the residual and its round-off level by max (order-independent), the action by a sum in node
+ * order, failures by the lowest failing node or rank. Newton's block-tridiagonal solves are
+ * distributed by the Schur-complement split of schur_solver.hpp.
+ */
+#include "pardel/distributed.hpp"
+
+#include <string>
+
+#include "pardel/mpi_session.hpp"
+
+#ifdef PARDEL_HAVE_MPI
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "../engine.hpp"
+#include "decomposition.hpp"
+#include "schur_solver.hpp"
+#endif
+
+namespace pardel::mpi {
+
+NodeRange owned_nodes(int N, int ranks, int rank) {
+  const long nodes = static_cast<long>(N) + 1;
+  NodeRange range;
+  range.first = static_cast<int>(nodes * rank / ranks);
+  range.last = static_cast<int>(nodes * (rank + 1) / ranks) - 1;
+  return range;
+}
+
+bool distributed_supported(const Problem& problem, const Options& options, int ranks, std::string* message) {
+  if (ranks <= 1) return true;
+  auto fail = [&](std::string text) {
+    if (message) *message = std::move(text);
+    return false;
+  };
+  const std::string over = " cannot be distributed over " + std::to_string(ranks) + " ranks";
+  if (options.method != Method::jacobi && options.method != Method::jacobi_newton && options.method != Method::newton)
+    return fail(std::string("solver.method = ") + to_string(options.method) + over +
+                " (distributed methods: jacobi, jacobi-newton, newton); run it on one rank");
+  if (options.refine_start_N > 0)
+    return fail("solver.refine (coarse-to-fine refinement)" + over + "; remove solver.refine or run on one rank");
+  if (problem.clock != ClockMode::none)
+    return fail(std::string("solver.clock = \"") +
+                (problem.clock == ClockMode::free_final_time ? "free_final_time" : "fixed_total_time") + "\"" + over +
+                " (the node times are a sequential prefix sum of the clock); run clocked scenes on one rank");
+  if (static_cast<long>(problem.N) + 1 < 3L * ranks)
+    return fail("grid.N = " + std::to_string(problem.N) + " is too small for " + std::to_string(ranks) +
+                " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks)");
+  return true;
+}
+
+#ifndef PARDEL_HAVE_MPI
+
+Summary solve_distributed(const Problem& problem, const Options& options, Trajectory& trajectory) {
+  return solve(problem, options, trajectory);
+}
+
+#else
+
+namespace {
+
+using pardel::detail::Context;
+using pardel::detail::Evaluated;
+using pardel::detail::StepOutcome;
+using detail::Layout;
+
+std::string format(const char* fmt, double a, double b = 0, double c = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+
+/** Everything a rank holds: its layout, its local context and the true constraint pattern of its
+ *  nodes (the context marks the halo nodes fixed; `global_free` says which of their components are
+ *  unknowns of the whole problem). */
+struct Local {
+  Layout layout;
+  MPI_Comm comm = MPI_COMM_WORLD;
+  Context ctx;
+  std::vector<unsigned char> global_free;  ///< (hi-lo+1)*dim
+  std::vector<double> interval_scratch;    ///< one value per owned interval
+  int u0 = 0, u1 = -1;                     ///< owned unknown nodes (global), u0 >= 1, u1 <= N-1
+
+  int owned_intervals() const { return layout.last_interval() - layout.first_interval() + 1; }
+  int owned_unknowns() const { return u1 - u0 + 1; }
+};
+
+/** Builds the local context of `local.layout` from the full initial guess; false with `message`
+ *  for a knot off the grid (the same test and text as the one-process constraints). */
+bool setup_local(const Problem& problem, int threads, const Trajectory& guess, Local& local, std::string* message) {
+  const Layout& L = local.layout;
+  Context& ctx = local.ctx;
+  const int N = problem.N, Nl = L.local_intervals();
+  pardel::detail::setup_context(problem, Nl, threads, ctx);
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  // Node times and steps of the whole grid (the same expressions as setup_context at N).
+  for (int j = 0; j <= Nl; ++j) {
+    const int g = L.lo + j;
+    ctx.t[static_cast<std::size_t>(j)] = g == N ? problem.t0 + problem.T : problem.t0 + problem.T * g / N;
+  }
+  std::fill(ctx.hk.begin(), ctx.hk.end(), problem.T / N);
+  // The guess on the local nodes, boundaries replaced by the problem's.
+  std::copy(guess.q.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(L.lo) * d),
+            guess.q.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(L.hi + 1) * d), ctx.q.begin());
+  if (L.lo == 0)
+    for (std::size_t i = 0; i < d; ++i) ctx.q[i] = problem.q0[i];
+  if (L.hi == N)
+    for (std::size_t i = 0; i < d; ++i) ctx.q[static_cast<std::size_t>(Nl) * d + i] = problem.qN[i];
+  // Constraints of the whole problem on the local nodes.
+  local.global_free.assign(static_cast<std::size_t>(Nl + 1) * d, 1);
+  auto fix = [&](int g, int from, int to) {
+    if (g < L.lo || g > L.hi) return;
+    for (int i = from; i < to; ++i) local.global_free[static_cast<std::size_t>(L.local(g)) * d + i] = 0;
+  };
+  fix(0, 0, ctx.dim);
+  fix(N, 0, ctx.dim);
+  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
+    const Knot& knot = problem.knots[a];
+    const double s = (knot.t - problem.t0) / problem.T * N;
+    const double k_near = std::floor(s);
+    const int k = static_cast<int>(std::lround(s));
+    if (std::fabs(s - k) > 1e-9 * std::max(1.0, std::fabs(s)) || k <= 0 || k >= N) {
+      char buf[320];
+      const int lo = static_cast<int>(std::max(0.0, std::min<double>(N, k_near)));
+      const int hi = std::min(N, lo + 1);
+      std::snprintf(buf, sizeof buf,
+                    "knot %zu at t = %.12g is not on an interior grid node with N = %d; nearest nodes: "
+                    "%d (t = %.12g) and %d (t = %.12g)",
+                    a, knot.t, N, lo, problem.t0 + problem.T * lo / N, hi, problem.t0 + problem.T * hi / N);
+      if (message) *message = buf;
+      return false;
+    }
+    fix(k, 0, ctx.order == 1 ? ctx.dim : ctx.ncoords);
+    if (k >= L.lo && k <= L.hi) {
+      double* qk = ctx.node(ctx.q, L.local(k));
+      for (int i = 0; i < ctx.ncoords; ++i) qk[i] = knot.q[static_cast<std::size_t>(i)];
+    }
+  }
+  // The local context: the whole pattern, with the halo nodes fixed (their values come from the neighbours).
+  ctx.is_free = local.global_free;
+  if (L.has_left()) std::fill(ctx.is_free.begin(), ctx.is_free.begin() + static_cast<std::ptrdiff_t>(d), 0);
+  if (L.has_right()) std::fill(ctx.is_free.end() - static_cast<std::ptrdiff_t>(d), ctx.is_free.end(), 0);
+  ctx.free_total = 0;
+  for (int j = 0; j <= Nl; ++j) {
+    int count = 0;
+    for (std::size_t i = 0; i < d; ++i) count += ctx.is_free[static_cast<std::size_t>(j) * d + i];
+    ctx.free_count[static_cast<std::size_t>(j)] = count;
+    ctx.free_total += count;
+  }
+  local.interval_scratch.assign(static_cast<std::size_t>(local.owned_intervals()), 0.0);
+  local.u0 = std::max(L.first, 1);
+  local.u1 = std::min(L.last, N - 1);
+  return true;
+}
+
+/** The discrete action at the local iterate through the action kernel, summed in node order over all ranks. */
+double global_action(Local& local, const std::vector<double>& q) {
+  Context& ctx = local.ctx;
+  const int d = ctx.dim, j0 = local.layout.local(local.layout.first_interval()), n = local.owned_intervals();
+  const pardel_action_kernel kern = ctx.disc->action;
+  const double* p = ctx.p();
+  double* out = local.interval_scratch.data();
+#pragma omp parallel for if (ctx.parallel(n)) num_threads(ctx.threads) schedule(static)
+  for (int i = 0; i < n; ++i) {
+    const std::size_t kk = static_cast<std::size_t>(j0 + i);
+    out[i] = kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q.data() + kk * d, q.data() + (kk + 1) * d, p);
+  }
+  return detail::ordered_sum(local.layout, out, n, local.comm);
+}
+
+/** The sum of the Ld array over the owned intervals in node order over all ranks (after a full or grad evaluation). */
+double global_sum_Ld(const Local& local) {
+  const int j0 = local.layout.local(local.layout.first_interval());
+  return detail::ordered_sum(local.layout, local.ctx.Ld.data() + j0, local.owned_intervals(), local.comm);
+}
+
+/** Residual of the whole problem after a local evaluation: the lowest global node with a
+ *  non-finite residual (or -1), with ctx.residual and ctx.residual_floor set to the global values. */
+int globalize_residual(Local& local, int local_bad) {
+  Context& ctx = local.ctx;
+  // One reduction: max residual, max round-off level (non-finite nodes are skipped by both, as
+  // in compute_residual) and the lowest non-finite node as the max of its negative.
+  const bool bad_here = local_bad >= 0;
+  double in[3] = {bad_here ? 0.0 : ctx.residual, ctx.residual_floor,
+                  bad_here ? -static_cast<double>(local.layout.lo + local_bad) : -1e300};
+  double out[3] = {0, 0, 0};
+  MPI_Allreduce(in, out, 3, MPI_DOUBLE, MPI_MAX, local.comm);
+  ctx.residual_floor = out[1];
+  if (out[2] > -1e300) {
+    ctx.residual = std::numeric_limits<double>::quiet_NaN();
+    return static_cast<int>(-out[2]);
+  }
+  ctx.residual = out[0];
+  return -1;
+}
+
+/** Newton on the whole DEL system with the Levenberg-Marquardt globalization of newton.cpp; the
+ *  linear solves by the Schur-complement split, every reduction over all ranks. */
+template <int D>
+class DistributedNewton : public pardel::detail::Method_ {
+ public:
+  using Mat = Eigen::Matrix<double, D, D>;
+  using RowMap = Eigen::Map<const Eigen::Matrix<double, D, D, (D == 1 ? Eigen::ColMajor : Eigen::RowMajor)>>;
+
+  DistributedNewton(const Options& o, Local& local)
+      : local_(local), difference_(o.newton_shift == NewtonShift::difference) {}
+
+  void reset(Context& ctx) override {
+    const Layout& L = local_.layout;
+    solver_.resize(local_.owned_unknowns(), ctx.dim, L.rank, L.ranks);
+    const std::size_t n = static_cast<std::size_t>(local_.owned_unknowns()) * ctx.dim;
+    rhs_.assign(n, 0.0);
+    dxl_.assign(ctx.q.size(), 0.0);
+    Ld_ = ctx.Ld;
+    D1_ = ctx.D1;
+    D2_ = ctx.D2;
+    D11_ = ctx.D11;
+    D12_ = ctx.D12;
+    D22_ = ctx.D22;
+    res_ = ctx.res;
+    mu_ = 0;
+  }
+
+  int evaluate(Context& ctx) override {
+    if (ctx.evaluated != Evaluated::full) pardel::detail::eval_full(ctx, ctx.q);
+    const int bad = pardel::detail::compute_residual(ctx);
+    ctx.action = global_sum_Ld(local_);
+    ctx.action_known = true;
+    return bad;
+  }
+
+  StepOutcome iterate(Context& ctx, long iteration) override {
+    const Layout& L = local_.layout;
+    const MPI_Comm comm = local_.comm;
+    const int d = ctx.dim;
+    const std::size_t dz = static_cast<std::size_t>(d);
+    const std::size_t n = rhs_.size();
+    const std::size_t off0 = static_cast<std::size_t>(L.local(local_.u0)) * dz;  // first owned unknown, local layout
+    const double F = ctx.action, r0 = ctx.residual;
+    for (std::size_t i = 0; i < n; ++i) rhs_[i] = -ctx.res[off0 + i];
+    assemble(ctx, 0.0);
+    double scale = 0;
+    for (int i = 0; i < solver_.owned(); ++i) scale = std::max(scale, solver_.diag(i).diagonal().cwiseAbs().maxCoeff());
+    scale = detail::max_all(scale, comm);
+    if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
+    const double mu_min = 1e-10 * scale;
+    if (mu_ > 0 && mu_ < mu_min) mu_ = mu_min;
+    for (int attempt = 0; attempt < 200; ++attempt) {
+      if (attempt > 0 || mu_ != 0) assemble(ctx, mu_);
+      const bool ok = solver_.solve(rhs_.data(), dxl_.data() + off0, comm);
+      if (!ok) {
+        raise(mu_min);
+        if (mu_ > 1e30 * scale) break;
+        continue;
+      }
+      detail::exchange_halos(L, dxl_.data(), d, comm);
+      // Quadratic model of the action: gdx, dx.M.dx and dx.H.dx summed over all ranks.
+      double part[3] = {0, 0, 0}, sums[3] = {0, 0, 0};
+      for (std::size_t i = 0; i < n; ++i) part[0] -= rhs_[i] * dxl_[off0 + i];
+      for (int g = local_.u0; g <= local_.u1; ++g) {
+        const double* x = dxl_.data() + static_cast<std::size_t>(L.local(g)) * dz;
+        const double* xp = x - dz;  // node g-1 (a halo or node 0, zero there when fixed)
+        for (int a = 0; a < d; ++a) {
+          if (difference_) {
+            const double step = x[a] - (g >= 2 ? xp[a] : 0.0);
+            part[1] += step * step;
+            if (g == L.N - 1) part[1] += x[a] * x[a];
+          } else {
+            part[1] += x[a] * x[a];
+          }
+        }
+        const int i = g - local_.u0;
+        const Eigen::Map<const Eigen::Matrix<double, D, 1>> xi(x, d);
+        part[2] += xi.dot(solver_.diag(i) * xi);
+        if (g < L.N - 1)
+          part[2] += 2 * xi.dot(solver_.off(i) * Eigen::Map<const Eigen::Matrix<double, D, 1>>(x + dz, d));
+      }
+      MPI_Allreduce(part, sums, 3, MPI_DOUBLE, MPI_SUM, comm);
+      const double gdx = sums[0], dx2 = sums[1];
+      const double pred = -(gdx + 0.5 * (sums[2] - mu_ * dx2));
+      // Trial point: owned unknowns moved, halos from the neighbours.
+      ctx.q_next = ctx.q;
+      for (std::size_t i = 0; i < n; ++i) ctx.q_next[off0 + i] = ctx.q[off0 + i] + dxl_[off0 + i];
+      detail::exchange_halos(L, ctx.q_next.data(), d, comm);
+      swap_arrays(ctx);
+      pardel::detail::eval_full(ctx, ctx.q_next);
+      const int bad = globalize_residual(local_, pardel::detail::compute_residual(ctx));
+      const double Fn = global_sum_Ld(local_);
+      const double ared = F - Fn;
+      const double roundoff = 1e-13 * (1 + std::fabs(F));
+      bool accept = false;
+      double rho = 0;
+      if (bad < 0 && std::isfinite(Fn)) {
+        if (pred > roundoff) {
+          rho = ared / pred;
+          accept = rho >= 1e-4;
+        } else {
+          accept = ctx.residual < r0 && ared > -roundoff;
+          rho = accept ? 1 : 0;
+        }
+      }
+      if (accept) {
+        ctx.action = Fn;
+        ctx.action_known = true;
+        const double t = 2 * std::min(rho, 1.0) - 1;
+        mu_ *= std::max(1.0 / 3.0, 1 - t * t * t);
+        if (mu_ < mu_min) mu_ = 0;
+        nu_ = 2;
+        StepOutcome done;
+        done.next_evaluated = true;
+        return done;
+      }
+      swap_arrays(ctx);
+      ctx.residual = r0;
+      raise(mu_min);
+      if (mu_ > 1e30 * scale) break;
+    }
+    StepOutcome out;
+    char buf[320];
+    out.failure = Termination::stalled;
+    std::snprintf(buf, sizeof buf,
+                  "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
+                  "the DEL residual %.3g is at the round-off level of this problem (estimate %.3g) and the "
+                  "tolerance cannot be reached in double precision",
+                  iteration, r0, ctx.residual_floor);
+    out.message = buf;
+    return out;
+  }
+
+ private:
+  /** The blocks of the owned unknowns (and the coupling from the left separator), as
+   *  BlockTridiagonal::assemble builds them for the whole problem. */
+  void assemble(const Context& ctx, double mu) {
+    const Layout& L = local_.layout;
+    const int d = ctx.dim;
+    const std::size_t dd = static_cast<std::size_t>(d) * d;
+    const int n = solver_.owned();
+#pragma omp parallel for if (ctx.parallel(n)) num_threads(ctx.threads) schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const int g = local_.u0 + i;
+      const std::size_t j = static_cast<std::size_t>(L.local(g));
+      Mat& Dk = solver_.diag(i);
+      Dk = RowMap(ctx.D22.data() + (j - 1) * dd, d, d);
+      Dk += RowMap(ctx.D11.data() + j * dd, d, d);
+      coupling(ctx, g, mu, solver_.off(i), &Dk);
+    }
+    if (L.has_left()) coupling(ctx, local_.u0 - 1, mu, solver_.left_coupling(), nullptr);
+  }
+
+  /** C_k = D12(k) between nodes k and k+1 with the constraint and shift rules of assemble; with
+   *  Dk also the shift and constraint rows of the diagonal block of node k. */
+  void coupling(const Context& ctx, int g, double mu, Mat& Ck, Mat* Dk) const {
+    const Layout& L = local_.layout;
+    const int d = ctx.dim;
+    const std::size_t dd = static_cast<std::size_t>(d) * d;
+    const std::size_t j = static_cast<std::size_t>(L.local(g));
+    if (g < L.N - 1)
+      Ck = RowMap(ctx.D12.data() + j * dd, d, d);
+    else
+      Ck.setZero();
+    const unsigned char* f = local_.global_free.data() + j * d;
+    const unsigned char* fn = local_.global_free.data() + (j + 1) * d;
+    for (int a = 0; a < d; ++a) {
+      if (!f[a]) {
+        if (Dk) {
+          Dk->row(a).setZero();
+          Dk->col(a).setZero();
+          (*Dk)(a, a) = 1;
+        }
+        Ck.row(a).setZero();
+      } else if (difference_) {
+        if (Dk) (*Dk)(a, a) += 2 * mu;
+        if (g < L.N - 1 && fn[a]) Ck(a, a) -= mu;
+      } else {
+        if (Dk) (*Dk)(a, a) += mu;
+      }
+      if (!fn[a]) Ck.col(a).setZero();
+    }
+  }
+
+  void raise(double mu_min) {
+    mu_ = mu_ == 0 ? mu_min : std::max(nu_ * mu_, mu_min);
+    nu_ = std::min(2 * nu_, 64.0);
+  }
+
+  void swap_arrays(Context& ctx) {
+    std::swap(ctx.Ld, Ld_);
+    std::swap(ctx.D1, D1_);
+    std::swap(ctx.D2, D2_);
+    std::swap(ctx.D11, D11_);
+    std::swap(ctx.D12, D12_);
+    std::swap(ctx.D22, D22_);
+    std::swap(ctx.res, res_);
+  }
+
+  Local& local_;
+  bool difference_;
+  detail::SchurBlockSolver<D> solver_;
+  std::vector<double> rhs_, dxl_;
+  std::vector<double> Ld_, D1_, D2_, D11_, D12_, D22_, res_;
+  double mu_ = 0, nu_ = 2;
+};
+
+/** The one-process driver of solve.cpp on one level without a clock, every decision taken from
+ *  values reduced over all ranks (so all ranks take the same branch). */
+class Driver {
+ public:
+  Driver(const Options& options, pardel::detail::Method_& method, Local& local, Summary& summary)
+      : options_(options), method_(method), local_(local), ctx_(local.ctx), s_(summary),
+        start_(std::chrono::steady_clock::now()) {}
+
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+  void run() {
+    const Layout& L = local_.layout;
+    const MPI_Comm comm = local_.comm;
+    for (;;) {
+      const int bad = globalize_residual(local_, method_.evaluate(ctx_));
+      if (bad >= 0) return non_finite_residual(bad);
+      const double r = ctx_.residual;
+      if (!have_initial_) {
+        r_initial_ = r;
+        have_initial_ = true;
+      }
+      last_good_residual_ = r;
+      if (should_record() && !record()) {
+        return finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
+      }
+      if (r <= options_.tol) return finish(Termination::converged, format("DEL residual %.3g <= tol %.3g", r, options_.tol));
+      if (r < 0.99 * best_residual_) {
+        best_residual_ = r;
+        best_iteration_ = iteration_;
+      }
+      if (r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200) {
+        return finish(Termination::stalled,
+                      format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has "
+                             "not improved in 200 iterations; tol %.3g cannot be reached in double precision",
+                             r, ctx_.residual_floor, options_.tol));
+      }
+      if (iteration_ >= options_.max_iterations) {
+        return finish(Termination::max_iterations,
+                      format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
+                             static_cast<double>(options_.max_iterations), r, options_.tol));
+      }
+      if (iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_) {
+        return finish(Termination::diverged, format("DEL residual %.3g grew beyond divergence_factor x initial "
+                                                    "residual %.3g at iteration %.0f",
+                                                    r, r_initial_, static_cast<double>(iteration_)));
+      }
+      StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
+      if (!agree_on_outcome(outcome)) return finish(outcome.failure, outcome.message);
+      // Non-finite or exploding values anywhere end every rank.
+      const std::size_t d = static_cast<std::size_t>(ctx_.dim);
+      int node = INT_MAX;
+      double qmax = 0;
+      for (int g = L.first; g <= L.last; ++g) {
+        const double* v = ctx_.q_next.data() + static_cast<std::size_t>(L.local(g)) * d;
+        for (std::size_t i = 0; i < d; ++i) {
+          if (!std::isfinite(v[i]) && node == INT_MAX) node = g;
+          qmax = std::max(qmax, std::fabs(v[i]));
+        }
+      }
+      double in[2] = {-static_cast<double>(node), qmax}, out[2] = {0, 0};
+      MPI_Allreduce(in, out, 2, MPI_DOUBLE, MPI_MAX, comm);
+      node = static_cast<int>(-out[0]);
+      qmax = out[1];
+      if (node != INT_MAX) {
+        return finish(Termination::non_finite, "non-finite value at node " + std::to_string(node) + " in iteration " +
+                                                   std::to_string(iteration_ + 1) +
+                                                   "; the last finite iterate is returned");
+      }
+      if (qmax > 1e150) {
+        return finish(Termination::diverged, format("iterates exploded (max |q| = %.3g) in iteration %.0f", qmax,
+                                                    static_cast<double>(iteration_ + 1)));
+      }
+      std::swap(ctx_.q, ctx_.q_next);
+      detail::exchange_halos(L, ctx_.q.data(), ctx_.dim, comm);
+      if (!outcome.next_evaluated) ctx_.evaluated = Evaluated::nothing;
+      ++iteration_;
+    }
+  }
+
+  /** Fills the summary's numbers (the same on every rank) and gathers the iterate on rank 0. */
+  void write_result(const Problem& problem, Trajectory& out) {
+    const Layout& L = local_.layout;
+    s_.N = problem.N;
+    s_.iterations = iteration_;
+    s_.residual = ctx_.residual;
+    s_.action = global_action(local_, ctx_.q);
+    s_.final_time = problem.t0 + problem.T;
+    s_.residual_floor = ctx_.residual_floor;
+    if (s_.history.empty() || s_.history.back().iteration != iteration_) {
+      IterationRecord rec;
+      rec.iteration = iteration_;
+      rec.N = problem.N;
+      rec.residual = s_.residual;
+      rec.action = s_.action;
+      rec.seconds = seconds();
+      s_.history.push_back(rec);
+    }
+    // Gather the owned nodes (and their times) on rank 0.
+    const int d = ctx_.dim;
+    std::vector<int> counts, displs;
+    if (L.rank == 0) {
+      counts.resize(static_cast<std::size_t>(L.ranks));
+      displs.resize(static_cast<std::size_t>(L.ranks));
+      for (int r = 0; r < L.ranks; ++r) {
+        const NodeRange range = owned_nodes(problem.N, L.ranks, r);
+        counts[static_cast<std::size_t>(r)] = range.last - range.first + 1;
+        displs[static_cast<std::size_t>(r)] = range.first;
+      }
+      out.t.assign(static_cast<std::size_t>(problem.N) + 1, 0.0);
+    } else {
+      out.t.clear();
+      out.t.shrink_to_fit();
+    }
+    const int owned = L.last - L.first + 1;
+    MPI_Gatherv(ctx_.t.data() + L.local(L.first), owned, MPI_DOUBLE, out.t.data(), counts.data(), displs.data(),
+                MPI_DOUBLE, 0, local_.comm);
+    MPI_Datatype node_type;
+    MPI_Type_contiguous(d, MPI_DOUBLE, &node_type);
+    MPI_Type_commit(&node_type);
+    if (L.rank == 0) out.q.assign((static_cast<std::size_t>(problem.N) + 1) * static_cast<std::size_t>(d), 0.0);
+    MPI_Gatherv(ctx_.q.data() + static_cast<std::size_t>(L.local(L.first)) * d, owned, node_type, out.q.data(),
+                counts.data(), displs.data(), node_type, 0, local_.comm);
+    MPI_Type_free(&node_type);
+    out.N = problem.N;
+    out.dim = d;
+    s_.wall_seconds = seconds();
+  }
+
+ private:
+  /** Whether no rank's iterate failed; otherwise `outcome` becomes the failure of the lowest failing rank. */
+  bool agree_on_outcome(StepOutcome& outcome) {
+    const Layout& L = local_.layout;
+    const int failing = detail::min_all(outcome.ok() ? L.ranks : L.rank, local_.comm);
+    if (failing == L.ranks) return true;
+    int code = static_cast<int>(outcome.failure);
+    MPI_Bcast(&code, 1, MPI_INT, failing, local_.comm);
+    std::string message = outcome.message;
+    if (L.rank == failing && L.has_left())
+      message += " (node numbers of rank " + std::to_string(L.rank) + ", whose local node 0 is node " +
+                 std::to_string(L.lo) + ")";
+    int length = static_cast<int>(message.size());
+    MPI_Bcast(&length, 1, MPI_INT, failing, local_.comm);
+    message.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(message.data(), length, MPI_CHAR, failing, local_.comm);
+    outcome.failure = static_cast<Termination>(code);
+    outcome.message = message;
+    return false;
+  }
+
+  void non_finite_residual(int node) {
+    std::string msg = "non-finite DEL residual at node " + std::to_string(node) + " in iteration " +
+                      std::to_string(iteration_);
+    if (iteration_ > 0) {
+      std::swap(ctx_.q, ctx_.q_next);
+      ctx_.evaluated = Evaluated::nothing;
+      ctx_.residual = last_good_residual_;
+      msg += "; the last finite iterate (iteration " + std::to_string(iteration_ - 1) + ") is returned";
+      --iteration_;
+    } else {
+      msg += " (the initial guess)";
+    }
+    finish(Termination::non_finite, msg);
+  }
+
+  bool should_record() {
+    if (iteration_ < next_record_) return false;
+    const long every = options_.history_every;
+    if (s_.history.size() < 1000) {
+      next_record_ = (iteration_ / every + 1) * every;
+    } else {
+      next_record_ = std::max(iteration_ + every, static_cast<long>(std::ceil(iteration_ * 1.01)));
+    }
+    return true;
+  }
+
+  bool record() {
+    IterationRecord rec;
+    rec.iteration = iteration_;
+    rec.N = local_.layout.N;
+    rec.residual = ctx_.residual;
+    if (!ctx_.action_known) {
+      ctx_.action = global_action(local_, ctx_.q);
+      ctx_.action_known = true;
+    }
+    rec.action = ctx_.action;
+    rec.seconds = seconds();
+    s_.history.push_back(rec);
+    const bool go_on = options_.on_iteration ? options_.on_iteration(rec) : true;
+    return detail::all_true(go_on, local_.comm);
+  }
+
+  void finish(Termination termination, std::string message) {
+    s_.termination = termination;
+    s_.message = std::move(message);
+  }
+
+  const Options& options_;
+  pardel::detail::Method_& method_;
+  Local& local_;
+  Context& ctx_;
+  Summary& s_;
+  std::chrono::steady_clock::time_point start_;
+  long iteration_ = 0, next_record_ = 0;
+  double r_initial_ = 0, last_good_residual_ = 0;
+  double best_residual_ = std::numeric_limits<double>::infinity();
+  long best_iteration_ = 0;
+  bool have_initial_ = false;
+};
+
+std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, Local& local) {
+  const int dim = local.ctx.dim;
+  switch (options.method) {
+    case Method::jacobi: return pardel::detail::make_jacobi(options, dim);
+    case Method::jacobi_newton: return pardel::detail::make_jacobi_newton(options, dim);
+    case Method::newton:
+      return pardel::detail::dispatch_dim(dim, [&](auto D) -> std::unique_ptr<pardel::detail::Method_> {
+        return std::make_unique<DistributedNewton<decltype(D)::value>>(options, local);
+      });
+    default: return nullptr;
+  }
+}
+
+Summary solve_over_ranks(const Problem& problem, const Options& options, Trajectory& trajectory, int ranks,
+                         int rank) {
+  const auto start = std::chrono::steady_clock::now();
+  Summary summary;
+  summary.method = options.method;
+  summary.N = problem.N;
+  summary.threads = pardel::detail::resolve_threads(options.threads);
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  std::string error;
+  bool valid = options.is_valid(&error) && validate(problem, trajectory, &error) &&
+               distributed_supported(problem, options, ranks, &error);
+  // Every rank was given the same input; agree anyway, so that no rank iterates alone.
+  if (!detail::all_true(valid, MPI_COMM_WORLD)) {
+    summary.termination = Termination::invalid_input;
+    summary.message = valid ? "invalid input on another rank" : error;
+    summary.wall_seconds = elapsed();
+    return summary;
+  }
+  Local local;
+  local.layout = detail::make_layout(problem.N, ranks, rank);
+  local.comm = MPI_COMM_WORLD;
+  const bool constrained = setup_local(problem, summary.threads, trajectory, local, &error);
+  if (!detail::all_true(constrained, MPI_COMM_WORLD)) {
+    summary.termination = Termination::invalid_input;
+    summary.message = error;
+    summary.wall_seconds = elapsed();
+    return summary;
+  }
+  // From here on a rank holds O(N / ranks) values.
+  trajectory.q.clear();
+  trajectory.q.shrink_to_fit();
+  trajectory.t.clear();
+  trajectory.t.shrink_to_fit();
+  std::unique_ptr<pardel::detail::Method_> method = make_method(options, local);
+  method->reset(local.ctx);
+  Driver driver(options, *method, local, summary);
+  driver.run();
+  driver.write_result(problem, trajectory);
+  return summary;
+}
+
+}  // namespace
+
+Summary solve_distributed(const Problem& problem, const Options& options, Trajectory& trajectory) {
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  int ranks = 1, rank = 0;
+  if (initialized) {
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  }
+  if (ranks <= 1) return solve(problem, options, trajectory);
+  try {
+    return solve_over_ranks(problem, options, trajectory, ranks, rank);
+  } catch (const std::exception& error) {
+    // A rank that cannot go on must not leave the others waiting in a collective.
+    std::fprintf(stderr, "pardel: rank %d: distributed solve failed: %s; aborting all ranks\n", rank, error.what());
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  return Summary{};
+}
+
+#endif  // PARDEL_HAVE_MPI
+
+}  // namespace pardel::mpi

@@ -1,0 +1,82 @@
+"""`mpirun -np 2 pardel solve` against the plain `pardel solve` of the same scene: the seed's
+Jacobi-Newton writes the same trajectory.csv byte for byte, Newton the same trajectory to 1e-7;
+rank 0 alone writes the outputs and summary.json records the ranks."""
+import argparse
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+
+def run(command):
+    result = subprocess.run(command, capture_output=True, text=True)
+    return result.returncode, result.stdout, result.stderr
+
+
+def read_rows(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], [[float(v) for v in row] for row in rows[1:]]
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--pardel", required=True)
+    parser.add_argument("--mpirun", required=True)
+    parser.add_argument("--scenes", required=True)
+    parser.add_argument("--work", required=True)
+    args = parser.parse_args()
+    shutil.rmtree(args.work, ignore_errors=True)
+    os.makedirs(args.work)
+    scene = os.path.join(args.scenes, "fuel_nav.toml")
+    failures = []
+    cases = [
+        ("jacobi-newton", ["--set", "solver.method=jacobi-newton", "--set", "solver.max_iterations=400",
+                           "--set", "grid.N=100"], 3, None),
+        ("newton", ["--set", "solver.method=newton"], 0, 1e-7),
+    ]
+    for name, sets, expected_code, tolerance in cases:
+        plain_dir = os.path.join(args.work, name + "_plain")
+        ranks_dir = os.path.join(args.work, name + "_np2")
+        common = ["solve", scene, "--quiet", "--no-plot", "--threads", "1"] + sets
+        code, out, err = run([args.pardel] + common + ["--out", plain_dir])
+        if code != expected_code:
+            failures.append(f"{name}: plain run exited {code}, expected {expected_code}\n{out}{err}")
+            continue
+        code, out, err = run([args.mpirun, "-np", "2", "--oversubscribe", args.pardel] + common +
+                             ["--out", ranks_dir])
+        if code != expected_code:
+            failures.append(f"{name}: mpirun -np 2 exited {code}, expected {expected_code}\n{out}{err}")
+            continue
+        # --quiet: nothing on stdout; a non-converged status is reported once (by rank 0), as in the plain run.
+        if out.strip() or err.count("pardel solve:") != (0 if expected_code == 0 else 1):
+            failures.append(f"{name}: the distributed run printed\n{out}{err}")
+        with open(os.path.join(ranks_dir, "summary.json")) as f:
+            summary = json.load(f)
+        if summary.get("ranks") != 2:
+            failures.append(f"{name}: summary.json records ranks = {summary.get('ranks')}, expected 2")
+        plain_csv = os.path.join(plain_dir, "trajectory.csv")
+        ranks_csv = os.path.join(ranks_dir, "trajectory.csv")
+        if tolerance is None:
+            with open(plain_csv) as a, open(ranks_csv) as b:
+                if a.read() != b.read():
+                    failures.append(f"{name}: trajectory.csv differs from the plain run's")
+        else:
+            head_a, rows_a = read_rows(plain_csv)
+            head_b, rows_b = read_rows(ranks_csv)
+            if head_a != head_b or len(rows_a) != len(rows_b):
+                failures.append(f"{name}: trajectory.csv has another shape than the plain run's")
+                continue
+            worst = max(abs(x - y) for ra, rb in zip(rows_a, rows_b) for x, y in zip(ra, rb))
+            print(f"{name}: max |difference| of trajectory.csv = {worst:.3g}")
+            if worst > tolerance:
+                failures.append(f"{name}: trajectories differ by {worst:.3g} > {tolerance}")
+    for failure in failures:
+        print("FAIL:", failure)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

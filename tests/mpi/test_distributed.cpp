@@ -1,0 +1,371 @@
+/**
+ * @file test_distributed.cpp
+ * The domain-decomposed solve against the one-process pardel::solve on the same problem in the
+ * same run (run by mpirun on 2 and 3 ranks): the seed's Jacobi methods bit for bit (a fixed number
+ * of iterations and to convergence, with damping and knots), Newton to the tolerance, the halo
+ * exchange and the rank-order sum, refusals, and a NaN on one rank ending every rank. The
+ * acceptance test (LargeGrid.*: pendulum at N = 10^6) runs separately under a ctest label.
+ */
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "mpi/decomposition.hpp"
+#include "pardel/distributed.hpp"
+#include "pardel/mpi_session.hpp"
+#include "pardel/pardel.hpp"
+
+namespace {
+
+int world_rank() {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank;
+}
+
+int world_size() {
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  return size;
+}
+
+pardel::Problem bundled_problem(const char* model, const char* disc, double T, int N, std::vector<double> q0,
+                                std::vector<double> qN) {
+  pardel::Problem p;
+  p.model = pardel::find_model(model);
+  EXPECT_NE(p.model, nullptr) << model;
+  p.discretization = pardel::find_discretization(*p.model, disc);
+  EXPECT_NE(p.discretization, nullptr) << disc;
+  p.T = T;
+  p.N = N;
+  p.q0 = std::move(q0);
+  p.qN = std::move(qN);
+  return p;
+}
+
+pardel::Problem fuel_nav(int N) { return bundled_problem("fuel_nav", "trapezoid", 30, N, {0, 0}, {6, 5}); }
+
+/** The interp_fuel scene: order 2, two knots, c = 50. */
+pardel::Problem interp_fuel(int N) {
+  pardel::Problem p = bundled_problem("interp_fuel", "trapezoid(alpha=1)", 60, N, {0, 0, 0, 0}, {3, 5, 0, 0});
+  p.params = {50};
+  p.knots = {{20, {1, 3}}, {40, {5, 2}}};
+  return p;
+}
+
+struct Both {
+  pardel::Summary one, dist;
+  pardel::Trajectory one_traj, dist_traj;
+};
+
+/** The one-process solve and the distributed solve from the same guess. */
+Both solve_both(const pardel::Problem& problem, const pardel::Options& options, const pardel::Trajectory& guess) {
+  Both b;
+  b.one_traj = guess;
+  b.one = pardel::solve(problem, options, b.one_traj);
+  b.dist_traj = guess;
+  b.dist = pardel::mpi::solve_distributed(problem, options, b.dist_traj);
+  return b;
+}
+
+/** Same termination, iterations, residuals, actions, history and (on rank 0) iterate, bit for bit. */
+void expect_bit_for_bit(const Both& b) {
+  EXPECT_EQ(b.one.termination, b.dist.termination) << b.one.message << " | " << b.dist.message;
+  EXPECT_EQ(b.one.iterations, b.dist.iterations);
+  EXPECT_EQ(b.one.residual, b.dist.residual);
+  EXPECT_EQ(b.one.residual_floor, b.dist.residual_floor);
+  EXPECT_EQ(b.one.action, b.dist.action);
+  ASSERT_EQ(b.one.history.size(), b.dist.history.size());
+  for (std::size_t i = 0; i < b.one.history.size(); ++i) {
+    EXPECT_EQ(b.one.history[i].iteration, b.dist.history[i].iteration) << "record " << i;
+    EXPECT_EQ(b.one.history[i].residual, b.dist.history[i].residual) << "record " << i;
+    EXPECT_EQ(b.one.history[i].action, b.dist.history[i].action) << "record " << i;
+  }
+  EXPECT_EQ(b.dist_traj.N, b.one_traj.N);
+  if (world_rank() == 0) {
+    ASSERT_EQ(b.one_traj.q.size(), b.dist_traj.q.size());
+    EXPECT_EQ(0, std::memcmp(b.one_traj.q.data(), b.dist_traj.q.data(), b.one_traj.q.size() * sizeof(double)))
+        << "the gathered iterate differs from the one-process iterate";
+    EXPECT_EQ(b.one_traj.t, b.dist_traj.t);
+  } else {
+    EXPECT_TRUE(b.dist_traj.q.empty());
+  }
+}
+
+double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
+  return m;
+}
+
+// ---- the decomposition itself
+
+TEST(Decomposition, OwnedRangesCoverTheNodesContiguously) {
+  for (int N : {2, 7, 10, 1000}) {
+    for (int P : {1, 2, 3, 4, 7}) {
+      int next = 0;
+      for (int r = 0; r < P; ++r) {
+        const pardel::mpi::NodeRange range = pardel::mpi::owned_nodes(N, P, r);
+        EXPECT_EQ(range.first, next) << "N " << N << " P " << P << " r " << r;
+        EXPECT_LE(range.last - range.first, (N + 1) / P + 1);
+        next = range.last + 1;
+      }
+      EXPECT_EQ(next, N + 1);
+    }
+  }
+}
+
+TEST(Decomposition, HaloExchangeBringsTheNeighboursNodes) {
+  const int N = 20, d = 3, P = world_size(), rank = world_rank();
+  const auto layout = pardel::mpi::detail::make_layout(N, P, rank);
+  std::vector<double> local(static_cast<std::size_t>(layout.hi - layout.lo + 1) * d, -1.0);
+  auto value = [](int g, int a) { return 100.0 * g + a; };
+  for (int g = layout.first; g <= layout.last; ++g)
+    for (int a = 0; a < d; ++a) local[static_cast<std::size_t>(layout.local(g)) * d + a] = value(g, a);
+  pardel::mpi::detail::exchange_halos(layout, local.data(), d, MPI_COMM_WORLD);
+  for (int g = layout.lo; g <= layout.hi; ++g)
+    for (int a = 0; a < d; ++a)
+      EXPECT_EQ(local[static_cast<std::size_t>(layout.local(g)) * d + a], value(g, a)) << "node " << g;
+  EXPECT_EQ(layout.lo, rank > 0 ? layout.first - 1 : 0);
+  EXPECT_EQ(layout.hi, rank + 1 < P ? layout.last + 1 : N);
+}
+
+TEST(Decomposition, OrderedSumRoundsLikeOneSequentialLoop) {
+  // Values whose sum depends on the order of additions.
+  const int N = 30, P = world_size(), rank = world_rank();
+  std::vector<double> all(static_cast<std::size_t>(N));
+  for (int k = 0; k < N; ++k) all[static_cast<std::size_t>(k)] = (k % 3 == 0 ? 1e16 : 1.0) * (k % 2 ? -1 : 1) + 0.1 * k;
+  double sequential = 0;
+  for (double v : all) sequential += v;
+  const auto layout = pardel::mpi::detail::make_layout(N - 1, P, rank);  // 30 nodes: one value per node
+  const double distributed = pardel::mpi::detail::ordered_sum(
+      layout, all.data() + layout.first, layout.last - layout.first + 1, MPI_COMM_WORLD);
+  EXPECT_EQ(distributed, sequential);
+}
+
+// ---- the seed's Jacobi methods: bit for bit
+
+TEST(JacobiNewton, FixedIterationsBitForBit) {
+  const auto problem = fuel_nav(100);
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.max_iterations = 300;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  EXPECT_EQ(b.one.termination, pardel::Termination::max_iterations);
+  expect_bit_for_bit(b);
+}
+
+TEST(JacobiNewton, ToConvergenceBitForBit) {
+  auto problem = bundled_problem("harmonic", "trapezoid", 2.0, 40, {0.3}, {-0.7});
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.threads = 2;
+  options.tol = 1e-12;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  EXPECT_EQ(b.one.termination, pardel::Termination::converged) << b.one.message;
+  expect_bit_for_bit(b);
+}
+
+TEST(JacobiNewton, DampedSubstepsWithKnotsBitForBit) {
+  const auto problem = interp_fuel(240);
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.damping = 0.2;
+  options.newton_substeps = 2;
+  options.max_iterations = 200;
+  options.history_every = 7;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  expect_bit_for_bit(b);
+}
+
+TEST(Jacobi, NonlinearBlocksToConvergenceBitForBit) {
+  auto problem = bundled_problem("pendulum", "midpoint", 1.0, 50, {0.0}, {1.0});
+  pardel::Options options;
+  options.method = pardel::Method::jacobi;
+  options.damping = 0.1;
+  options.tol = 1e-9;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  EXPECT_EQ(b.one.termination, pardel::Termination::converged) << b.one.message;
+  expect_bit_for_bit(b);
+}
+
+// ---- Newton: to the tolerance
+
+void expect_newton_agrees(const Both& b, double tol, double trajectory_tol) {
+  ASSERT_EQ(b.one.termination, pardel::Termination::converged) << b.one.message;
+  ASSERT_EQ(b.dist.termination, pardel::Termination::converged) << b.dist.message;
+  EXPECT_LE(b.dist.residual, tol);
+  EXPECT_NEAR(b.dist.action, b.one.action, 1e-12 * (1 + std::fabs(b.one.action)));
+  EXPECT_NEAR(static_cast<double>(b.dist.iterations), static_cast<double>(b.one.iterations), 2.0);
+  if (world_rank() == 0) {
+    ASSERT_EQ(b.one_traj.q.size(), b.dist_traj.q.size());
+    EXPECT_LE(max_abs_difference(b.one_traj.q, b.dist_traj.q), trajectory_tol);
+  }
+}
+
+TEST(Newton, FuelNavAgreesToTheTolerance) {
+  const auto problem = fuel_nav(200);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  expect_newton_agrees(b, options.tol, 1e-7);
+}
+
+TEST(Newton, DifferenceShiftWithKnotsAgreesToTheTolerance) {
+  const auto problem = interp_fuel(240);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.newton_shift = pardel::NewtonShift::difference;
+  options.tol = 1e-9;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  expect_newton_agrees(b, options.tol, 1e-6);
+}
+
+// ---- refusals and failures
+
+TEST(Refusal, UnsupportedCombinationsNameTheKey) {
+  if (world_size() < 2) GTEST_SKIP() << "refusals apply to more than one rank";
+  const auto problem = fuel_nav(100);
+  auto guess = pardel::linear_guess(problem);
+  pardel::Options hybrid;
+  hybrid.method = pardel::Method::hybrid;
+  auto s = pardel::mpi::solve_distributed(problem, hybrid, guess);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("solver.method = hybrid"), std::string::npos) << s.message;
+  pardel::Options refine;
+  refine.refine_start_N = 20;
+  guess = pardel::linear_guess(problem);
+  s = pardel::mpi::solve_distributed(problem, refine, guess);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("solver.refine"), std::string::npos) << s.message;
+  auto small = fuel_nav(4);
+  guess = pardel::linear_guess(small);
+  s = pardel::mpi::solve_distributed(small, pardel::Options{}, guess);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("grid.N = 4"), std::string::npos) << s.message;
+  auto clocked = bundled_problem("zermelo_tv", "trapezoid", 1.0, 50, {1, 6}, {6, 2});
+  clocked.clock = pardel::ClockMode::free_final_time;
+  guess = pardel::linear_guess(clocked);
+  s = pardel::mpi::solve_distributed(clocked, pardel::Options{}, guess);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("solver.clock"), std::string::npos) << s.message;
+}
+
+// A harmonic oscillator whose kernels return NaN once x exceeds 1.05 in the second half of the
+// time span (on the last rank): the iterates rise towards sin(2t)/sin(2), which peaks near 1.1.
+void nan_full(double h, double t0, double, const double* q0, const double* q1, const double* p, double* Ld,
+              double* D1, double* D2, double* D11, double* D12, double* D22) {
+  const double w2 = p[0] * p[0], dx = q1[0] - q0[0];
+  *Ld = dx * dx / (2 * h) - h * w2 * (q0[0] * q0[0] + q1[0] * q1[0]) / 4;
+  D1[0] = -dx / h - h * w2 * q0[0] / 2;
+  D2[0] = dx / h - h * w2 * q1[0] / 2;
+  D11[0] = 1 / h - h * w2 / 2;
+  D12[0] = -1 / h;
+  D22[0] = 1 / h - h * w2 / 2;
+  if (t0 > 0.5 && (q0[0] > 1.05 || q1[0] > 1.05)) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    *Ld = D1[0] = D2[0] = D11[0] = D12[0] = D22[0] = nan;
+  }
+}
+void nan_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* D1,
+               double* D2, double* D11, double* D22) {
+  double Ld, D12;
+  nan_full(h, t0, t1, q0, q1, p, &Ld, D1, D2, D11, &D12, D22);
+}
+void nan_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* Ld,
+              double* D1, double* D2) {
+  double a, b, c;
+  nan_full(h, t0, t1, q0, q1, p, Ld, D1, D2, &a, &b, &c);
+}
+double nan_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p) {
+  double Ld, D1, D2;
+  nan_grad(h, t0, t1, q0, q1, p, &Ld, &D1, &D2);
+  return Ld;
+}
+const char* const nan_coords[] = {"x"};
+const char* const nan_params[] = {"omega"};
+const double nan_defaults[] = {2.0};
+const pardel_discretization nan_discs[] = {{"trapezoid", 2, nan_full, nan_sweep, nan_grad, nan_action}};
+const pardel_model nan_model = {PARDEL_KERNEL_ABI_VERSION, "nan_harmonic", "", 1, 1, 1, nan_coords, 1, nan_params,
+                                nan_defaults, 0, nullptr, 1, nan_discs};
+
+TEST(Failure, NaNOnOneRankEndsEveryRankAsNonFinite) {
+  pardel::Problem problem;
+  problem.model = &nan_model;
+  problem.discretization = &nan_discs[0];
+  problem.T = 1;
+  problem.N = 30;
+  problem.q0 = {0};
+  problem.qN = {1};
+  for (pardel::Method method : {pardel::Method::jacobi_newton, pardel::Method::newton}) {
+    pardel::Options options;
+    options.method = method;
+    options.threads = 1;
+    const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+    if (method == pardel::Method::jacobi_newton) {
+      EXPECT_EQ(b.dist.termination, pardel::Termination::non_finite) << b.dist.message;
+      expect_bit_for_bit(b);
+      EXPECT_EQ(b.one.message, b.dist.message);
+    } else {
+      // Newton rejects the trial points with NaN and shortens its steps: it ends as one process does.
+      EXPECT_EQ(b.dist.termination, b.one.termination) << b.one.message << " | " << b.dist.message;
+    }
+  }
+}
+
+// ---- the acceptance test: N = 10^6 on the ranks of this run against one process
+
+TEST(LargeGrid, PendulumNewtonAtAMillionNodesMatchesOneProcess) {
+  const int N = 1000000;
+  auto problem = bundled_problem("pendulum", "midpoint", 1.0, N, {0.0}, {1.0});
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.tol = 1e-8;  // the residual's cancellation floor at h = 1e-6 is near 1e-10
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  expect_newton_agrees(b, options.tol, 1e-9);
+  EXPECT_LE(b.dist.iterations, 10);
+}
+
+/** Prints the failed expectations of a rank other than 0. */
+class FailurePrinter : public ::testing::EmptyTestEventListener {
+ public:
+  explicit FailurePrinter(int rank) : rank_(rank) {}
+  void OnTestPartResult(const ::testing::TestPartResult& result) override {
+    if (result.failed())
+      std::fprintf(stderr, "rank %d: %s:%d: failure\n%s\n", rank_, result.file_name() ? result.file_name() : "?",
+                   result.line_number(), result.summary());
+  }
+
+ private:
+  int rank_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const pardel::mpi::Session session(&argc, &argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  if (session.rank() != 0) {
+    // One report: the other ranks print only their failures.
+    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
+    delete listeners.Release(listeners.default_result_printer());
+    listeners.Append(new FailurePrinter(session.rank()));
+  }
+  const int local = RUN_ALL_TESTS();
+  int any = local;
+  if (session.active()) MPI_Allreduce(&local, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  return any;
+}
