@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "distributed_solve.hpp"
 #include "outputs.hpp"
 #include "pardel/mpi_session.hpp"
 #include "pardel/pardel.hpp"
@@ -302,6 +303,13 @@ int run_solve(const SolveArgs& args) {
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
+  if (pardel::mpi::world_size() > 1) {  // under mpirun: one solve decomposed over the ranks
+    const std::string source = scene.model_path.empty()
+                                   ? model_source_path(*scene.model)
+                                   : fs::absolute(scene.model_path, ec).lexically_normal().string();
+    return run_distributed_solve(scene, trajectory,
+                                 {out_dir, source, args.quiet, !args.no_plot, [](const std::string& dir) { run_plot_script(dir); }});
+  }
 
   ProgressLine progress(!args.quiet, scene.options.tol);
   scene.options.on_iteration = [&progress](const IterationRecord& record) {
