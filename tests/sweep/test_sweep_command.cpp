@@ -184,4 +184,31 @@ TEST(SweepCommand, NoConvergedVariantExitsWithEight) {
   EXPECT_TRUE(summary["best"].is_null());
 }
 
+TEST(SweepCommand, SigtermStopsTheSweepAndKeepsWhatWasDone) {
+  // Jacobi-Newton needs some 30 000 sweeps (about a second each here) on this scene: ten variants
+  // take far longer than the two seconds before the signal.
+  const TempDir dir("stop");
+  const std::string sweep = dir / "slow.toml";
+  std::ofstream(sweep) << "scene = \"" << PARDEL_SCENES_DIR << "/zermelo_1.toml\"\n"
+                       << "set = [\"solver.method=jacobi-newton\", \"solver.threads=1\"]\n"
+                       << "[random_guesses]\ncount = 10\nspread = 1\n";
+  const Result r = run("(" + pardel("sweep '" + sweep + "' --out '" + dir / "out" + "' --no-plot --quiet") +
+                       " & pid=$!; sleep 2; kill -TERM $pid; wait $pid)");
+  EXPECT_EQ(r.code, 6) << r.err;
+  EXPECT_NE(r.err.find("pardel sweep: interrupted"), std::string::npos) << r.err;
+  const auto rows = lines(slurp(dir / "out/variants.csv"));
+  ASSERT_EQ(rows.size(), 11u);
+  int interrupted = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const bool stopped = rows[i].find(",interrupted,") != std::string::npos;
+    interrupted += stopped;
+    EXPECT_TRUE(stopped || rows[i].find(",converged,") != std::string::npos) << rows[i];
+  }
+  EXPECT_GE(interrupted, 1);
+  EXPECT_NE(rows.back().find(",interrupted,"), std::string::npos) << rows.back();
+  const auto summary = nlohmann::json::parse(slurp(dir / "out/sweep.json"));
+  EXPECT_EQ(summary["failures"]["interrupted"], interrupted);
+  EXPECT_EQ(summary["converged"], 10 - interrupted);
+}
+
 }  // namespace

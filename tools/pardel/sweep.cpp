@@ -532,10 +532,16 @@ Variant make_variant(const Sweep& sweep, int id) {
   return v;
 }
 
-VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int threads) {
+VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int threads, const std::atomic<bool>* stop) {
   VariantResult result;
   result.id = variant.id;
   result.configuration = variant.configuration;
+  if (stop && stop->load()) {
+    result.status = to_string(Termination::interrupted);
+    result.message = "not started: the sweep was interrupted";
+    result.cost = std::nan("");
+    return result;
+  }
   try {
     Scene scene = sweep.configurations.at(variant.configuration);
     if (!variant.points.empty()) {
@@ -544,6 +550,7 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
     }
     if (threads > 0) scene.options.threads = threads;
     scene.options.on_iteration = nullptr;
+    if (stop) scene.options.on_iteration = [stop](const IterationRecord&) { return !stop->load(); };
     Trajectory trajectory = make_initial_guess(scene);
     const Summary summary = solve(scene.problem, scene.options, trajectory);
     result.status = to_string(summary.termination);

@@ -11,6 +11,7 @@
 #ifndef PARDEL_CLI_SWEEP_HPP
 #define PARDEL_CLI_SWEEP_HPP
 
+#include <atomic>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -114,8 +115,11 @@ struct VariantResult {
 };
 
 /** Solves one variant with `threads` OpenMP threads (0: the scene's solver.threads); never throws
- *  for a numerical failure (the status says it), and reports an exception as status "error". */
-VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int threads);
+ *  for a numerical failure (the status says it), and reports an exception as status "error".
+ *  When `stop` (may be null) becomes true the solve is interrupted (status "interrupted"); a
+ *  variant that finds it already true is not started. */
+VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int threads,
+                            const std::atomic<bool>* stop = nullptr);
 
 /** A distinct local solution: the converged variants of one configuration that reach it. */
 struct Solution {

@@ -7,8 +7,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <chrono>
+#include <csignal>
 #include <climits>
 #include <cstdio>
 #include <cstdlib>
@@ -39,7 +42,10 @@ namespace {
 const char* const kSweepExitCodesHelp =
     "Exit codes: 0 at least one variant converged (sweep.json counts the failures), 1 internal error\n"
     "(e.g. an output file cannot be written), 2 invalid input (bad sweep file, scene or option),\n"
-    "8 no variant converged.";
+    "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the variants done), 8 no variant converged.";
+
+std::atomic<bool> g_sweep_interrupted{false};
+extern "C" void on_sweep_signal(int) { g_sweep_interrupted.store(true); }
 
 // ---------------------------------------------------------------------------------------------
 // Results as bytes, to gather them over MPI.
@@ -243,14 +249,15 @@ int broadcast_code(int code) {
 }  // namespace
 
 std::vector<VariantResult> run_variants_over_ranks(const Sweep& sweep, int threads, int rank, int size,
-                                                   const std::function<void(int, int)>& on_done) {
+                                                   const std::function<void(int, int)>& on_done,
+                                                   const std::atomic<bool>* stop) {
   const int total = sweep.variant_count();
   int mine = 0;
   for (int id = rank; id < total; id += size) ++mine;
   std::vector<VariantResult> local;
   local.reserve(static_cast<std::size_t>(mine));
   for (int id = rank; id < total; id += size) {
-    local.push_back(solve_variant(sweep, make_variant(sweep, id), threads));
+    local.push_back(solve_variant(sweep, make_variant(sweep, id), threads, stop));
     if (on_done) on_done(static_cast<int>(local.size()), mine);
   }
   if (size <= 1) return local;
@@ -325,12 +332,19 @@ int SweepCommand::run(const ModelResolver& resolve, const std::vector<std::strin
   const int threads = threads_per_variant(args_, sweep, size);
   const auto start = std::chrono::steady_clock::now();
   const bool show_progress = !args_.quiet && rank == 0 && ::isatty(STDERR_FILENO);
+  g_sweep_interrupted.store(false);
+  auto previous_int = std::signal(SIGINT, on_sweep_signal);
+  auto previous_term = std::signal(SIGTERM, on_sweep_signal);
   std::vector<VariantResult> results = run_variants_over_ranks(
-      sweep, threads, rank, size, [show_progress, size](int done, int mine) {
+      sweep, threads, rank, size,
+      [show_progress, size](int done, int mine) {
         if (!show_progress) return;
         std::fprintf(stderr, "\rsweep: %d of %d variants%s", done, mine, size > 1 ? " on rank 0" : "");
         if (done == mine) std::fprintf(stderr, "\n");
-      });
+      },
+      &g_sweep_interrupted);
+  std::signal(SIGINT, previous_int);
+  std::signal(SIGTERM, previous_term);
   int code = 0;
   if (rank == 0) {
     try {
@@ -346,7 +360,13 @@ int SweepCommand::run(const ModelResolver& resolve, const std::vector<std::strin
       write_sweep_outputs(sweep, results, solutions, solution_of, info, out_dir);
       if (!args_.no_plot && sweep.plot && !solutions.empty()) run_plot_script(out_dir);
       if (!args_.quiet) print_report(sweep, results, solutions, info, out_dir);
-      if (solutions.empty()) {
+      const bool interrupted = std::any_of(results.begin(), results.end(), [](const VariantResult& r) {
+        return r.status == to_string(Termination::interrupted);
+      });
+      if (interrupted) {
+        std::fprintf(stderr, "pardel sweep: interrupted; %s holds the variants done\n", out_dir.c_str());
+        code = kSweepExitInterrupted;
+      } else if (solutions.empty()) {
         std::fprintf(stderr, "pardel sweep: no variant converged (see %s/variants.csv)\n", out_dir.c_str());
         code = kSweepExitNoSolution;
       }

@@ -31,6 +31,8 @@ struct SweepArgs {
 
 /** Exit status of `pardel sweep` when no variant converged. */
 constexpr int kSweepExitNoSolution = 8;
+/** Exit status of `pardel sweep` after Ctrl-C or SIGTERM (the outputs hold the variants done). */
+constexpr int kSweepExitInterrupted = 6;
 
 /** The `sweep` subcommand, registered on `app` by the constructor. */
 class SweepCommand {
@@ -41,7 +43,8 @@ class SweepCommand {
   /**
    * Runs the sweep on every rank; returns the exit status (the same on every rank): 0 when at
    * least one variant converged, 2 for a bad sweep file, scene or option (the message printed by
-   * rank 0), 1 when outputs cannot be written, kSweepExitNoSolution when no variant converged.
+   * rank 0), 1 when outputs cannot be written, kSweepExitInterrupted after SIGINT or SIGTERM,
+   * kSweepExitNoSolution when no variant converged.
    */
   int run(const ModelResolver& resolve, const std::vector<std::string>& model_names) const;
 
@@ -52,11 +55,12 @@ class SweepCommand {
 
 /**
  * Solves the variants of `sweep` assigned to this rank (id % size == rank) and gathers all
- * results on rank 0 in variant order (other ranks get an empty vector). `threads` as in
- * solve_variant. `on_done` (may be empty) is called on each rank after each of its variants.
+ * results on rank 0 in variant order (other ranks get an empty vector). `threads` and `stop` as
+ * in solve_variant. `on_done` (may be empty) is called on each rank after each of its variants.
  */
 std::vector<VariantResult> run_variants_over_ranks(const Sweep& sweep, int threads, int rank, int size,
-                                                   const std::function<void(int done, int mine)>& on_done = {});
+                                                   const std::function<void(int done, int mine)>& on_done = {},
+                                                   const std::atomic<bool>* stop = nullptr);
 
 }  // namespace pardel::cli
 
