@@ -8,7 +8,8 @@
  *    are Cholesky-factored, so success certifies positive definiteness (Sylvester's law);
  *  - block cyclic reduction, O(N) work in O(log N) parallel levels; its pivots are those of an
  *    odd-even permutation of H, so success certifies positive definiteness just the same.
- * All storage is allocated by resize(); factorizations and solves do not allocate.
+ * All storage is allocated by resize() and reserve_cyclic_reduction(); factorizations and solves
+ * do not allocate.
  */
 #ifndef PARDEL_RUNTIME_BLOCK_TRIDIAGONAL_HPP
 #define PARDEL_RUNTIME_BLOCK_TRIDIAGONAL_HPP
@@ -30,7 +31,8 @@ class BlockTridiagonal {
   using RowMap = Eigen::Map<const Eigen::Matrix<double, D, D, (D == 1 ? Eigen::ColMajor : Eigen::RowMajor)>>;
   using VecMap = Eigen::Map<const Vec>;
 
-  /** Allocates for n = N-1 unknown blocks of size d. */
+  /** Allocates for n = N-1 unknown blocks of size d (the cyclic-reduction levels are allocated by
+   *  reserve_cyclic_reduction(), or on the first solve_cyclic_reduction()). */
   void resize(int N, int d) {
     d_ = d;
     n_ = N - 1;
@@ -39,9 +41,20 @@ class BlockTridiagonal {
     off_.assign(n, Mat::Zero(d, d));
     W_.assign(n, Mat::Zero(d, d));
     y_.assign(n, Vec::Zero(d));
-    llt_.assign(n, Eigen::LLT<Mat>(d));
-    // Cyclic reduction levels.
+    if (D == Eigen::Dynamic) {
+      llt_.assign(n, Eigen::LLT<Mat>(d));
+      factor_.clear();
+    } else {
+      llt_.clear();
+      factor_.assign(n, Mat::Zero(d, d));
+    }
     levels_.clear();
+  }
+
+  /** Allocates the levels of block cyclic reduction for the current size. */
+  void reserve_cyclic_reduction() {
+    if (!levels_.empty() || n_ < 1) return;
+    const int d = d_;
     int m = n_;
     while (m >= 1) {
       Level L;
@@ -104,7 +117,8 @@ class BlockTridiagonal {
     }
   }
 
-  /** Block LDL^T with Cholesky pivots; false (and failed_block() = index) if a pivot is not p.d. */
+  /** Block LDL^T with Cholesky pivots; false (and failed_block() = index) if a pivot is not p.d.
+   *  Fixed block sizes use an unrolled in-place Cholesky, other sizes Eigen::LLT. */
   bool factor_ldlt() {
     failed_ = -1;
     for (int i = 0; i < n_; ++i) {
@@ -114,12 +128,23 @@ class BlockTridiagonal {
       } else {
         W_[ii].noalias() = diag_[ii] - off_[ii - 1].transpose() * W_[ii - 1];
       }
-      llt_[ii].compute(W_[ii]);
-      if (llt_[ii].info() != Eigen::Success || !finite_positive_diag(llt_[ii])) {
-        failed_ = i;
-        return false;
+      if constexpr (D == Eigen::Dynamic) {
+        llt_[ii].compute(W_[ii]);
+        if (llt_[ii].info() != Eigen::Success || !finite_positive_diag(llt_[ii])) {
+          failed_ = i;
+          return false;
+        }
+        W_[ii] = llt_[ii].solve(off_[ii]);  // S_i^{-1} C_i
+      } else {
+        Mat& L = factor_[ii];
+        L = W_[ii];
+        if (!cholesky_in_place(L)) {
+          failed_ = i;
+          return false;
+        }
+        W_[ii] = off_[ii];
+        cholesky_solve_columns(L, W_[ii]);  // S_i^{-1} C_i
       }
-      W_[ii] = llt_[ii].solve(off_[ii]);  // S_i^{-1} C_i
     }
     return true;
   }
@@ -134,7 +159,13 @@ class BlockTridiagonal {
     }
     for (int i = n_ - 1; i >= 0; --i) {
       const std::size_t ii = static_cast<std::size_t>(i);
-      Vec xi = llt_[ii].solve(y_[ii]);
+      Vec xi;
+      if constexpr (D == Eigen::Dynamic) {
+        xi = llt_[ii].solve(y_[ii]);
+      } else {
+        xi = y_[ii];
+        cholesky_solve(factor_[ii], xi.data());
+      }
       if (i < n_ - 1) xi.noalias() -= W_[ii] * Eigen::Map<const Vec>(x + (ii + 1) * d, d);
       Eigen::Map<Vec>(x + ii * d, d) = xi;
     }
@@ -144,6 +175,7 @@ class BlockTridiagonal {
   bool solve_cyclic_reduction(const double* b, double* x, int threads) {
     failed_ = -1;
     if (n_ <= 0) return true;
+    reserve_cyclic_reduction();
     const int d = d_;
     Level& L0 = levels_[0];
     for (int i = 0; i < n_; ++i) {
@@ -255,8 +287,34 @@ class BlockTridiagonal {
   }
 
   int failed_block() const { return failed_; }
-  /** Cholesky factor of pivot i after a successful factor_ldlt(). */
-  const Eigen::LLT<Mat>& pivot(int i) const { return llt_[static_cast<std::size_t>(i)]; }
+  /** Cholesky factorization of pivot i after a successful factor_ldlt(). */
+  const Eigen::LLT<Mat>& pivot(int i) const {
+    if constexpr (D == Eigen::Dynamic) {
+      return llt_[static_cast<std::size_t>(i)];
+    } else {
+      Mat L = factor_[static_cast<std::size_t>(i)].template triangularView<Eigen::Lower>();
+      for (int a = 0; a < D; ++a) L(a, a) = 1 / L(a, a);
+      pivot_scratch_.compute(L * L.transpose());
+      return pivot_scratch_;
+    }
+  }
+
+  /** The largest |diagonal entry| of the unshifted Hessian as assemble(ctx, 0) builds it (1 on fixed
+   *  components), straight from the interval arrays. */
+  static double max_abs_diagonal(const Context& ctx) {
+    const int d = ctx.dim;
+    const std::size_t dz = static_cast<std::size_t>(d), dd = dz * dz;
+    double m = 0;
+    for (int k = 1; k < ctx.N; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      const unsigned char* f = ctx.is_free.data() + kk * dz;
+      for (int a = 0; a < d; ++a) {
+        const std::size_t aa = static_cast<std::size_t>(a) * (dz + 1);
+        m = std::max(m, f[a] ? std::fabs(ctx.D22[(kk - 1) * dd + aa] + ctx.D11[kk * dd + aa]) : 1.0);
+      }
+    }
+    return m;
+  }
 
  private:
   struct Level {
@@ -266,6 +324,46 @@ class BlockTridiagonal {
     std::vector<Eigen::LLT<Mat>> llt;
     std::vector<unsigned char> ok;
   };
+
+  /** In-place Cholesky A = L L^T of a fixed-size block: the strict lower triangle of A becomes that
+   *  of L and the diagonal holds 1 / L(j, j) (the solves multiply by it); false unless every pivot
+   *  is positive and finite. */
+  static bool cholesky_in_place(Mat& A) {
+    for (int j = 0; j < D; ++j) {
+      double s = A(j, j);
+      for (int k = 0; k < j; ++k) s -= A(j, k) * A(j, k);
+      if (!(s > 0) || !std::isfinite(s)) return false;
+      const double inv = 1 / std::sqrt(s);
+      A(j, j) = inv;
+      for (int i = j + 1; i < D; ++i) {
+        double t = A(i, j);
+        for (int k = 0; k < j; ++k) t -= A(i, k) * A(j, k);
+        A(i, j) = t * inv;
+      }
+    }
+    return true;
+  }
+  /** x <- (L L^T)^{-1} x for the factor of cholesky_in_place (inverse diagonal). */
+  static void cholesky_solve(const Mat& L, double* x) {
+    for (int i = 0; i < D; ++i) {
+      double t = x[i];
+      for (int k = 0; k < i; ++k) t -= L(i, k) * x[k];
+      x[i] = t * L(i, i);
+    }
+    for (int i = D - 1; i >= 0; --i) {
+      double t = x[i];
+      for (int k = i + 1; k < D; ++k) t -= L(k, i) * x[k];
+      x[i] = t * L(i, i);
+    }
+  }
+  /** B <- (L L^T)^{-1} B, column by column. */
+  static void cholesky_solve_columns(const Mat& L, Mat& B) {
+    for (int c = 0; c < D; ++c) {
+      Vec col = B.col(c);
+      cholesky_solve(L, col.data());
+      B.col(c) = col;
+    }
+  }
 
   static bool finite_positive_diag(const Eigen::LLT<Mat>& llt) {
     const auto& L = llt.matrixLLT();
@@ -277,7 +375,9 @@ class BlockTridiagonal {
   int n_ = 0, d_ = 0, failed_ = -1;
   std::vector<Mat> diag_, off_, W_;
   std::vector<Vec> y_;
-  std::vector<Eigen::LLT<Mat>> llt_;
+  std::vector<Eigen::LLT<Mat>> llt_;  ///< pivots' factorizations (dynamic block size)
+  std::vector<Mat> factor_;           ///< pivots' Cholesky factors (fixed block sizes)
+  mutable Eigen::LLT<Mat> pivot_scratch_;
   std::vector<Level> levels_;
 };
 
