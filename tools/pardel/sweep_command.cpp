@@ -218,7 +218,8 @@ void print_report(const Sweep& sweep, const std::vector<VariantResult>& results,
   if (solutions.empty()) return;
   const bool several = sweep.configurations.size() > 1;
   std::cout << fmt::format("{:>8}{}{:>5}  {:>18}  {:>18}  {:>9}  {:>8}  {}\n", "solution",
-                           several ? fmt::format("{:>7}", "config") : "", "rank", kind.name, "action", "residual",
+                           several ? fmt::format("{:>7}", "config") : "", "rank",
+                           kind.name == "action" ? "cost (action)" : kind.name, "action", "residual",
                            "variants", "certificate");
   for (const auto& s : solutions) {
     std::string verdict = "unknown";
