@@ -111,6 +111,10 @@ class Method_ {
   /** Evaluates at ctx.q; returns the first node with a non-finite residual or -1. */
   virtual int evaluate(Context& ctx) = 0;
   virtual StepOutcome iterate(Context& ctx, long iteration) = 0;
+  /** The method's own state between two iterations (checkpoint and resume); none by default. */
+  virtual std::vector<double> save_state() const { return {}; }
+  /** Restores what save_state() returned, after reset(); false if it does not fit this method. */
+  virtual bool load_state(const std::vector<double>& state) { return state.empty(); }
 };
 
 /** The methods, each in its own file; dim selects the fixed-size block specialization. */

@@ -37,6 +37,22 @@ class Hybrid : public Method_ {
     return newton_mode_ ? newton_->iterate(ctx, iteration) : sweeps_->iterate(ctx, iteration);
   }
 
+  /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. */
+  std::vector<double> save_state() const override {
+    std::vector<double> state = {newton_mode_ ? 1.0 : 0.0, static_cast<double>(since_check_)};
+    const std::vector<double> newton = newton_->save_state();
+    state.insert(state.end(), newton.begin(), newton.end());
+    return state;
+  }
+  bool load_state(const std::vector<double>& state) override {
+    if (state.size() < 2 || (state[0] != 0 && state[0] != 1) || !(state[1] >= 0 && state[1] <= check_every))
+      return false;
+    if (!newton_->load_state(std::vector<double>(state.begin() + 2, state.end()))) return false;
+    newton_mode_ = state[0] == 1;
+    since_check_ = static_cast<int>(state[1]);
+    return true;
+  }
+
  private:
   static constexpr int check_every = 10;
   std::unique_ptr<Method_> sweeps_, newton_;

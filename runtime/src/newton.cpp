@@ -143,6 +143,15 @@ class Newton : public Method_ {
     return out;
   }
 
+  std::vector<double> save_state() const override { return {mu_, nu_}; }
+  bool load_state(const std::vector<double>& state) override {
+    if (state.size() != 2 || !(state[0] >= 0) || !(state[1] >= 2) || !std::isfinite(state[0]) || !std::isfinite(state[1]))
+      return false;
+    mu_ = state[0];
+    nu_ = state[1];
+    return true;
+  }
+
  private:
   void raise(double mu_min) {
     mu_ = mu_ == 0 ? mu_min : std::max(nu_ * mu_, mu_min);

@@ -82,11 +82,77 @@ class Driver {
     return true;
   }
 
+  /** Sets up ctx_ from an interrupted solve's state (checked by check_state) instead of
+   *  enter_level: the iterate, its node times, the method's state and every counter. */
+  bool resume_level(const SolverState& st) {
+    detail::setup_context(problem_, st.N, s_.threads, ctx_);
+    ctx_.q = st.trajectory.q;
+    std::string message;
+    if (!detail::apply_constraints(problem_, ctx_, &message)) {
+      s_.termination = Termination::invalid_input;
+      s_.message = "resume: " + message;
+      return false;
+    }
+    ctx_.t = st.trajectory.t;
+    if (problem_.clock == ClockMode::fixed_total_time)
+      for (int k = 0; k < ctx_.N; ++k) ctx_.hk[static_cast<std::size_t>(k)] = ctx_.t[k + 1] - ctx_.t[k];
+    method_.reset(ctx_);
+    if (!method_.load_state(st.method_state)) {
+      s_.termination = Termination::invalid_input;
+      s_.message = "resume: the solver state of method " + std::string(to_string(st.method)) + " has " +
+                   std::to_string(st.method_state.size()) + " values that do not fit it";
+      return false;
+    }
+    iteration_ = st.iteration;
+    next_record_ = st.next_record;
+    r_initial_ = st.initial_residual;
+    last_good_residual_ = st.last_good_residual;
+    best_residual_ = st.best_residual;
+    best_iteration_ = st.best_iteration;
+    have_initial_ = st.have_initial_residual;
+    level_ = LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
+                           st.level_checkpoint_residual};
+    resumed_level_ = true;
+    s_.history = st.history;
+    start_ -= std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(st.seconds));
+    return true;
+  }
+
+  /** Everything resume_level needs, at the current iterate (after an interruption). */
+  void capture(SolverState& st, int level) {
+    st.valid = true;
+    st.method = options_.method;
+    st.level = level;
+    st.N = ctx_.N;
+    st.iteration = iteration_;
+    st.level_iteration = level_.level_it;
+    st.since_clock_update = level_.since_clock;
+    st.next_record = next_record_;
+    st.best_iteration = best_iteration_;
+    st.have_initial_residual = have_initial_;
+    st.initial_residual = r_initial_;
+    st.last_good_residual = last_good_residual_;
+    st.best_residual = best_residual_;
+    st.level_initial_residual = level_.r_level0;
+    st.level_checkpoint_residual = level_.r_checkpoint;
+    st.seconds = seconds();
+    st.trajectory.N = ctx_.N;
+    st.trajectory.dim = ctx_.dim;
+    st.trajectory.t = ctx_.t;
+    st.trajectory.q = ctx_.q;
+    st.method_state = method_.save_state();
+    st.history = s_.history;
+  }
+
   /** Iterates at the current level. Returns true when an intermediate level has settled; on the
    *  last level (or on any failure) fills the summary's termination and returns false. */
   bool run_level(bool last) {
-    long level_it = 0, since_clock = 0;
-    double r_level0 = 0, r_checkpoint = std::numeric_limits<double>::infinity();
+    if (!resumed_level_) level_ = LevelCounters{};
+    resumed_level_ = false;
+    long& level_it = level_.level_it;
+    long& since_clock = level_.since_clock;
+    double& r_level0 = level_.r_level0;
+    double& r_checkpoint = level_.r_checkpoint;
     const bool clocked = problem_.clock != ClockMode::none;
     for (;;) {
       if (clocked && since_clock >= options_.clock_update_every) {
@@ -260,6 +326,13 @@ class Driver {
   std::chrono::steady_clock::time_point start_;
   Context ctx_;
   Trajectory resampled_;
+  /** Counters of the current level (members so that an interruption can capture them). */
+  struct LevelCounters {
+    long level_it = 0, since_clock = 0;
+    double r_level0 = 0, r_checkpoint = std::numeric_limits<double>::infinity();
+  };
+  LevelCounters level_;
+  bool resumed_level_ = false;
   long iteration_ = 0, next_record_ = 0;
   double r_initial_ = 0, last_good_residual_ = 0;
   double best_residual_ = std::numeric_limits<double>::infinity();
@@ -279,6 +352,36 @@ std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, st
   return nullptr;
 }
 
+/** Checks an interrupted solve's state against the problem, the options and the levels. */
+bool check_state(const Problem& problem, const Options& options, const SolverState& st, const std::vector<int>& levels,
+                 std::string* error) {
+  auto bad = [&](const std::string& msg) {
+    *error = "resume: " + msg;
+    return false;
+  };
+  if (!st.valid) return bad("the solver state is empty (not captured from an interrupted solve)");
+  if (st.method != options.method)
+    return bad(std::string("the state is of method ") + to_string(st.method) + ", the options ask for " +
+               to_string(options.method));
+  if (st.level < 0 || st.level >= static_cast<int>(levels.size()) || levels[static_cast<std::size_t>(st.level)] != st.N)
+    return bad("refinement level " + std::to_string(st.level) + " with N = " + std::to_string(st.N) +
+               " is not a level of this problem and options (grid.N " + std::to_string(problem.N) + ", " +
+               std::to_string(levels.size()) + " level(s) from N = " + std::to_string(levels.front()) + ")");
+  if (st.iteration < 0 || st.level_iteration < 0 || st.level_iteration > st.iteration || st.since_clock_update < 0 ||
+      st.next_record < 0 || st.best_iteration < 0 || st.best_iteration > st.iteration)
+    return bad("inconsistent iteration counters (iteration " + std::to_string(st.iteration) + ", at this level " +
+               std::to_string(st.level_iteration) + ")");
+  Problem at_level = problem;
+  at_level.N = st.N;
+  std::string why;
+  if (!validate(at_level, st.trajectory, &why)) return bad("the saved trajectory does not fit the problem: " + why);
+  for (double v : st.trajectory.q)
+    if (!std::isfinite(v)) return bad("the saved trajectory has a non-finite value");
+  for (double v : st.trajectory.t)
+    if (!std::isfinite(v)) return bad("the saved node times have a non-finite value");
+  return true;
+}
+
 }  // namespace
 
 Summary solve(const Problem& problem, const Options& options, Trajectory& trajectory) {
@@ -288,7 +391,8 @@ Summary solve(const Problem& problem, const Options& options, Trajectory& trajec
   summary.N = problem.N;
   summary.threads = detail::resolve_threads(options.threads);
   std::string error;
-  if (!options.is_valid(&error) || !validate(problem, trajectory, &error)) {
+  const SolverState* resume = options.resume_from;
+  if (!options.is_valid(&error) || (!resume && !validate(problem, trajectory, &error))) {
     summary.termination = Termination::invalid_input;
     summary.message = error;
     return summary;
@@ -300,11 +404,21 @@ Summary solve(const Problem& problem, const Options& options, Trajectory& trajec
     return summary;
   }
   const std::vector<int> levels = refinement_levels(problem, options);
+  if (resume) {
+    if (!check_state(problem, options, *resume, levels, &error)) {
+      summary.termination = Termination::invalid_input;
+      summary.message = error;
+      return summary;
+    }
+  }
   Driver driver(problem, options, *method, summary);
-  Trajectory current = trajectory;
-  for (std::size_t l = 0; l < levels.size(); ++l) {
+  Trajectory current = resume ? Trajectory{} : trajectory;
+  std::size_t l = 0;
+  for (l = resume ? static_cast<std::size_t>(resume->level) : 0; l < levels.size(); ++l) {
     const bool last = l + 1 == levels.size();
-    if (!driver.enter_level(current, levels[l])) {
+    const bool entered = resume && l == static_cast<std::size_t>(resume->level) ? driver.resume_level(*resume)
+                                                                                : driver.enter_level(current, levels[l]);
+    if (!entered) {
       summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       return summary;
     }
@@ -320,6 +434,7 @@ Summary solve(const Problem& problem, const Options& options, Trajectory& trajec
     break;
   }
   driver.write_result(trajectory);
+  if (summary.termination == Termination::interrupted) driver.capture(summary.state, static_cast<int>(l));
   if (summary.termination != Termination::converged && trajectory.N != problem.N)
     summary.message += " (stopped at the refinement level N = " + std::to_string(trajectory.N) + ")";
   return summary;

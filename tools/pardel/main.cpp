@@ -14,13 +14,18 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <new>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "distributed_solve.hpp"
+#include "checkpoint.hpp"
+#include "memory_estimate.hpp"
 #include "outputs.hpp"
 #include "pardel/mpi_session.hpp"
 #include "pardel/pardel.hpp"
@@ -290,14 +295,62 @@ struct SolveArgs {
   int threads = -1;
   bool quiet = false;
   bool no_plot = false;
+  std::string resume;  ///< output folder of an interrupted solve to continue
+  bool no_memory_check = false;
 };
 
-int run_solve(const SolveArgs& args) {
-  Scene scene = load_scene_or_throw(args.scene, args.sets);
-  if (args.threads >= 0) scene.options.threads = args.threads;
-  Trajectory trajectory = make_initial_guess(scene);
+/** FNV-1a hash of a file's bytes (how a checkpoint recognizes its scene). */
+std::string file_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return fnv1a_hex(text.str());
+}
+
+/** What a solve was doing, for the message of an out-of-memory failure. */
+std::string g_solve_context = "solving";
+
+int run_solve_unguarded(const SolveArgs& args) {
+  Checkpoint resumed;
+  const bool resume = !args.resume.empty();
+  const std::string checkpoint_path = (fs::path(args.resume) / checkpoint_file_name()).string();
+  if (resume) {
+    if (!args.scene.empty() || !args.sets.empty())
+      throw UsageError("--resume: give no scene and no --set; the solve continues with the scene and overrides "
+                       "recorded in " + checkpoint_path);
+    resumed = read_checkpoint(args.resume);
+  } else if (args.scene.empty()) {
+    throw UsageError("solve: a scene file is required (or --resume OUTPUT_DIR)");
+  }
+  const std::string scene_path = resume ? resumed.scene_path : args.scene;
+  Scene scene = load_scene_or_throw(scene_path, resume ? resumed.overrides : args.sets);
+  if (resume) {
+    const std::string hash = file_hash(scene_path);
+    if (hash != resumed.scene_hash)
+      throw CheckpointError(fmt::format("{}: error: the scene file {} changed since the checkpoint was written "
+                                        "(hash {} then, {} now); the checkpoint cannot be resumed",
+                                        checkpoint_path, scene_path, resumed.scene_hash, hash));
+    if (resumed.model != scene.model->name || resumed.dim != scene.model->dim)
+      throw CheckpointError(fmt::format("{}: error: the checkpoint is of model {} (dim {}), the scene now resolves to "
+                                        "{} (dim {})",
+                                        checkpoint_path, resumed.model, resumed.dim, scene.model->name,
+                                        scene.model->dim));
+  }
+  const int threads = args.threads >= 0 ? args.threads : resume ? resumed.threads : -1;
+  if (threads >= 0) scene.options.threads = threads;
+  const MemoryEstimate memory = estimate_solve_memory(scene);
+  g_solve_context = fmt::format("solving {} with grid.N = {} (method {}, model dim {}; estimated need {})", scene_path,
+                                scene.problem.N, to_string(scene.options.method), scene.model->dim,
+                                format_bytes(memory.peak));
+  if (!args.no_memory_check) {
+    const std::string refusal = memory_refusal(scene, memory, machine_memory());
+    if (!refusal.empty()) throw UsageError(fmt::format("{}: {} (--no-memory-check skips this check)", scene_path, refusal));
+  }
+  Trajectory trajectory = resume ? Trajectory{} : make_initial_guess(scene);
+  if (resume) scene.options.resume_from = &resumed.state;
 
   std::string out_dir = args.out;
+  if (out_dir.empty() && resume) out_dir = args.resume;
   if (out_dir.empty()) out_dir = scene.output_dir;
   if (out_dir.empty()) out_dir = (fs::path("out") / fs::path(args.scene).stem()).string();
   std::error_code ec;
@@ -324,6 +377,9 @@ int run_solve(const SolveArgs& args) {
   std::signal(SIGTERM, previous_term);
   progress.finish();
   scene.options.on_iteration = nullptr;
+  // A checkpoint that does not fit is refused before anything in the folder is overwritten.
+  if (resume && summary.termination == Termination::invalid_input)
+    throw CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
 
   // The certificate needs a trajectory on the problem's grid; skip it when the solve stopped
   // before producing one (invalid input).
@@ -342,6 +398,20 @@ int run_solve(const SolveArgs& args) {
     write_file_atomic((fs::path(out_dir) / "trajectory.csv").string(), trajectory_csv(model, trajectory));
   }
   write_file_atomic((fs::path(out_dir) / "convergence.csv").string(), convergence_csv(summary));
+  if (summary.termination == Termination::interrupted && summary.state.valid) {
+    Checkpoint checkpoint;
+    checkpoint.scene_path = resume ? scene_path : fs::absolute(scene_path, ec).lexically_normal().string();
+    checkpoint.scene_hash = file_hash(checkpoint.scene_path);
+    checkpoint.overrides = resume ? resumed.overrides : args.sets;
+    checkpoint.threads = threads;
+    checkpoint.model = model.name;
+    checkpoint.dim = model.dim;
+    checkpoint.state = summary.state;
+    write_checkpoint(out_dir, checkpoint);
+  } else {
+    // A finished solve leaves no checkpoint behind that could resume it again.
+    fs::remove(fs::path(out_dir) / checkpoint_file_name(), ec);
+  }
   if (!args.no_plot && have_trajectory) run_plot_script(out_dir);
 
   if (!args.quiet) {
@@ -358,7 +428,21 @@ int run_solve(const SolveArgs& args) {
   if (!summary.converged()) {
     std::fprintf(stderr, "pardel solve: %s: %s\n", to_string(summary.termination), summary.message.c_str());
   }
+  if (summary.termination == Termination::interrupted && summary.state.valid) {
+    std::fprintf(stderr, "pardel solve: checkpoint written; continue with: pardel solve --resume %s\n",
+                 out_dir.c_str());
+  }
   return exit_code(summary.termination);
+}
+
+/** run_solve_unguarded with running out of memory turned into a usage error naming the scene. */
+int run_solve(const SolveArgs& args) {
+  try {
+    return run_solve_unguarded(args);
+  } catch (const std::bad_alloc&) {
+    throw UsageError(fmt::format("out of memory (std::bad_alloc) while {}; lower grid.N or free memory",
+                                 g_solve_context));
+  }
 }
 
 struct CheckArgs {
@@ -429,7 +513,7 @@ int main(int argc, char** argv) {
   SolveArgs s;
   auto* solve_cmd = app.add_subcommand("solve", "Solve a scene and write trajectory, convergence, summary and plots");
   solve_cmd->footer(kExitCodesHelp);
-  solve_cmd->add_option("scene", s.scene, "Scene file (TOML)")->required();
+  solve_cmd->add_option("scene", s.scene, "Scene file (TOML); not with --resume");
   solve_cmd->add_option("--out", s.out, "Output folder (default: [output].dir, else out/<scene-stem>)");
   solve_cmd->add_option("--set", s.sets, "KEY=VALUE: override a scene key, e.g. solver.method=newton (repeatable)")
       ->allow_extra_args(false);
@@ -437,6 +521,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 4096));
   solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
   solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
+  solve_cmd->add_option("--resume", s.resume,
+                        "Continue the interrupted solve whose outputs (and checkpoint.json) are in this folder");
+  solve_cmd->add_flag("--no-memory-check", s.no_memory_check,
+                      "Solve even when the memory estimate exceeds what the machine has");
 
   CheckArgs c;
   auto* check = app.add_subcommand("check", "Print the convergence certificate at the initial guess or a trajectory");
@@ -466,6 +554,12 @@ int main(int argc, char** argv) {
   } catch (const SceneError& error) {
     std::fprintf(stderr, "%s\n", error.what());
     return kExitUsage;
+  } catch (const CheckpointError& error) {
+    std::fprintf(stderr, "%s\n", error.what());
+    return kExitUsage;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "pardel: error: out of memory (std::bad_alloc)\n");
+    return kExitInternal;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
     return kExitInternal;

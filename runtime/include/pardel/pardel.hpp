@@ -130,6 +130,37 @@ struct IterationRecord {
   double seconds = 0;   ///< wall time since the start of the solve
 };
 
+/**
+ * Where a solve stood when it was interrupted: everything needed to continue it with the same
+ * iterates (checkpoint and resume). Summary::state holds it after a solve that ended
+ * `interrupted`; Options::resume_from passes it back, with the same problem and options, to a
+ * solve that then continues as if it had never stopped (bit for bit: same iterates, same
+ * decisions, the history continued).
+ */
+struct SolverState {
+  static constexpr int kFormatVersion = 1;  ///< of this layout (checkpoint files record it)
+  bool valid = false;          ///< false: nothing captured
+  Method method = Method::jacobi_newton;
+  int level = 0;               ///< index of the coarse-to-fine level (0 without refinement)
+  int N = 0;                   ///< grid size of that level
+  long iteration = 0;          ///< iterations done in all; `trajectory` is this iterate
+  long level_iteration = 0;    ///< iterations done at this level
+  long since_clock_update = 0; ///< iterations since the node times were last updated
+  long next_record = 0;        ///< iteration of the next history record
+  long best_iteration = 0;     ///< when best_residual was reached (stall detection)
+  bool have_initial_residual = false;
+  double initial_residual = 0;          ///< of the first iterate (divergence detection)
+  double last_good_residual = 0;
+  double best_residual = 0;             ///< smallest residual so far (by 1% steps)
+  double level_initial_residual = 0;    ///< first residual at this level
+  double level_checkpoint_residual = 0; ///< residual at the last 50-iteration stagnation check
+  double seconds = 0;                   ///< wall time used before the interruption
+  Trajectory trajectory;       ///< the iterate at N with its node times
+  std::vector<double> method_state;     ///< the method's own: newton {mu, nu}; hybrid {phase, sweeps
+                                        ///< since the last check, mu, nu}; jacobi methods none
+  std::vector<IterationRecord> history; ///< the history recorded so far
+};
+
 struct Options {
   Method method = Method::jacobi_newton;
   double tol = 1e-10;            ///< on the infinity-norm of the DEL residual
@@ -147,6 +178,9 @@ struct Options {
   double divergence_factor = 1e8;  ///< diverged when the residual exceeds this times the initial one
   /** Called after each recorded iteration; returning false interrupts the solve. */
   std::function<bool(const IterationRecord&)> on_iteration;
+  /** Continue an interrupted solve from this state (Summary::state of that solve) instead of from
+   *  the trajectory passed to solve(); problem and options must be those of the interrupted solve. */
+  const SolverState* resume_from = nullptr;
   /** Checks the options; on failure writes a message naming the option and value. */
   bool is_valid(std::string* error) const;
 };
@@ -195,6 +229,7 @@ struct Summary {
   double wall_seconds = 0;
   double residual_floor = 0;  ///< round-off level of the residual at the returned iterate
   std::vector<IterationRecord> history;
+  SolverState state;  ///< filled (state.valid) when the solve ended `interrupted`
   bool converged() const { return termination == Termination::converged; }
   std::string brief_report() const;
 };

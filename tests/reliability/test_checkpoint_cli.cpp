@@ -1,0 +1,253 @@
+// Fault injection into `pardel solve`: SIGTERM while it iterates must end it with status 6 and
+// a checkpoint, `pardel solve --resume` must continue to the same result as an uninterrupted run
+// (trajectory.csv identical), and a corrupt, edited or mismatched checkpoint must be refused with
+// exit status 2 and a message naming the file and what is wrong.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <pty.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "checkpoint.hpp"
+#include "pardel/pardel.hpp"
+#include "scene.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using pardel::cli::Checkpoint;
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+struct Outcome {
+  int status = -1;  ///< exit status, or 128 + signal
+  std::string output;
+};
+
+int decode(int wstatus) { return WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : 128 + WTERMSIG(wstatus); }
+
+/** Runs pardel with the arguments, stdout and stderr to a file; returns status and output. */
+Outcome run_pardel(const std::vector<std::string>& args, const fs::path& log) {
+  std::string cmd = std::string("'") + PARDEL_CLI_PATH + "'";
+  for (const auto& a : args) cmd += " '" + a + "'";
+  cmd += " > '" + log.string() + "' 2>&1";
+  Outcome o;
+  o.status = decode(std::system(cmd.c_str()));
+  o.output = read_text(log);
+  return o;
+}
+
+/** The convergence history without its wall-time column. */
+std::string without_seconds(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string line, out;
+  while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
+  return out;
+}
+
+class CheckpointCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("pardel_checkpoint_cli_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // fuel_nav with a tolerance it cannot reach: the run ends at max_iterations, after a few
+    // seconds on a 2-core machine, with the same iterate however it was interrupted.
+    scene_ = dir_ / "long.toml";
+    write_text(scene_,
+               "model = \"fuel_nav\"\ndiscretization = \"trapezoid\"\n[grid]\nt0 = 0\nT = 30\nN = 1000\n"
+               "[boundary]\nq0 = [0, 0]\nqN = [6, 5]\n[guess]\nkind = \"linear\"\n"
+               "[solver]\nmethod = \"jacobi-newton\"\ntol = 1e-15\nmax_iterations = 10000\n");
+    reference_ = run_pardel({"solve", scene_.string(), "--out", (dir_ / "reference").string(), "--threads", "1",
+                             "--no-plot", "--quiet"},
+                            dir_ / "reference.log");
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  /** A valid checkpoint of `scene_` at iteration K written without a signal (in-process solve). */
+  static fs::path make_checkpoint(const std::string& name, long K) {
+    const pardel::cli::Scene scene = pardel::cli::load_scene(
+        scene_.string(), {}, [](const std::string& n) { return pardel::find_model(n); });
+    pardel::Options options = scene.options;
+    options.threads = 1;
+    options.on_iteration = [K](const pardel::IterationRecord& r) { return r.iteration < K; };
+    pardel::Trajectory trajectory = pardel::cli::make_initial_guess(scene);
+    const pardel::Summary summary = pardel::solve(scene.problem, options, trajectory);
+    EXPECT_EQ(summary.termination, pardel::Termination::interrupted);
+    Checkpoint c;
+    c.scene_path = scene_.string();
+    c.scene_hash = pardel::cli::fnv1a_hex(read_text(scene_));
+    c.threads = 1;
+    c.model = "fuel_nav";
+    c.dim = 2;
+    c.state = summary.state;
+    const fs::path out = dir_ / name;
+    fs::create_directories(out);
+    pardel::cli::write_checkpoint(out.string(), c);
+    return out;
+  }
+
+  void expect_refused(const fs::path& out, const std::string& expected) {
+    const Outcome o = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet"}, out / "resume.log");
+    EXPECT_EQ(o.status, 2) << o.output;
+    EXPECT_NE(o.output.find(expected), std::string::npos) << o.output;
+  }
+
+  static fs::path dir_, scene_;
+  static Outcome reference_;
+};
+
+fs::path CheckpointCli::dir_, CheckpointCli::scene_;
+Outcome CheckpointCli::reference_;
+
+TEST_F(CheckpointCli, SigtermWritesACheckpointAndResumeReachesTheSameTrajectory) {
+  ASSERT_EQ(reference_.status, 3) << reference_.output;  // max_iterations
+  const fs::path out = dir_ / "interrupted";
+  // The child's stderr is a terminal, so that `pardel solve` draws its progress line: the signal is
+  // sent once the line shows that the iteration has started (no timing involved).
+  int master = -1;
+  const pid_t pid = ::forkpty(&master, nullptr, nullptr, nullptr);
+  ASSERT_GE(pid, 0) << std::strerror(errno);
+  if (pid == 0) {
+    ::execl(PARDEL_CLI_PATH, PARDEL_CLI_PATH, "solve", scene_.c_str(), "--out", out.c_str(), "--threads", "1",
+            "--no-plot", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::string seen;
+  bool signalled = false;
+  const std::regex progress("iteration +([0-9]+) +N +1000");
+  char buf[4096];
+  for (;;) {
+    pollfd p{master, POLLIN, 0};
+    if (::poll(&p, 1, 120000) <= 0) break;  // a hang: the wait below reports it
+    const ssize_t n = ::read(master, buf, sizeof buf);
+    if (n <= 0) break;  // EIO once the child has exited
+    seen.append(buf, static_cast<std::size_t>(n));
+    if (!signalled && std::regex_search(seen, progress)) {
+      ::kill(pid, SIGTERM);
+      signalled = true;
+    }
+  }
+  int wstatus = 0;
+  ASSERT_EQ(::waitpid(pid, &wstatus, 0), pid);
+  ::close(master);
+  ASSERT_TRUE(signalled) << "no progress line seen:\n" << seen;
+  ASSERT_EQ(decode(wstatus), 6) << seen;
+  EXPECT_NE(seen.find("checkpoint written; continue with: pardel solve --resume"), std::string::npos) << seen;
+  ASSERT_TRUE(fs::exists(out / "checkpoint.json"));
+  EXPECT_TRUE(fs::exists(out / "trajectory.csv"));
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  for (const auto& entry : fs::directory_iterator(out))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
+  const Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  EXPECT_EQ(c.scene_path, fs::absolute(scene_).lexically_normal().string());
+  EXPECT_LT(c.state.iteration, 10000);
+  EXPECT_EQ(c.state.N, 1000);
+  EXPECT_EQ(c.threads, 1);
+
+  const Outcome resumed = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet"}, dir_ / "resumed.log");
+  EXPECT_EQ(resumed.status, 3) << resumed.output;
+  EXPECT_EQ(read_text(out / "trajectory.csv"), read_text(dir_ / "reference" / "trajectory.csv"));
+  EXPECT_EQ(without_seconds(read_text(out / "convergence.csv")),
+            without_seconds(read_text(dir_ / "reference" / "convergence.csv")));
+  EXPECT_FALSE(fs::exists(out / "checkpoint.json")) << "a finished solve must not leave a checkpoint";
+  // Resuming again finds nothing to resume.
+  const Outcome again = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet"}, dir_ / "again.log");
+  EXPECT_EQ(again.status, 2);
+  EXPECT_NE(again.output.find("checkpoint.json: error: cannot open checkpoint"), std::string::npos) << again.output;
+}
+
+TEST_F(CheckpointCli, CheckpointWrittenInProcessResumesToTheReference) {
+  ASSERT_EQ(reference_.status, 3) << reference_.output;
+  const fs::path out = make_checkpoint("in_process", 25);
+  const Outcome resumed = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet", "--threads", "1"},
+                                     out / "resume.log");
+  EXPECT_EQ(resumed.status, 3) << resumed.output;
+  EXPECT_EQ(read_text(out / "trajectory.csv"), read_text(dir_ / "reference" / "trajectory.csv"));
+}
+
+TEST_F(CheckpointCli, TruncatedCheckpointIsRefused) {
+  const fs::path out = make_checkpoint("truncated", 3);
+  const std::string text = read_text(out / "checkpoint.json");
+  write_text(out / "checkpoint.json", text.substr(0, text.size() / 2));
+  expect_refused(out, (out / "checkpoint.json").string() + ": error: not a valid checkpoint (JSON parse error at byte");
+}
+
+TEST_F(CheckpointCli, EditedNumberFailsTheChecksum) {
+  const fs::path out = make_checkpoint("edited", 3);
+  std::string text = read_text(out / "checkpoint.json");
+  const std::size_t at = text.find("\"q\":[");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t digit = text.find_first_of("123456789", at + 10);
+  text[digit] = text[digit] == '9' ? '8' : static_cast<char>(text[digit] + 1);
+  write_text(out / "checkpoint.json", text);
+  expect_refused(out, "checkpoint.json: error: checksum mismatch");
+}
+
+TEST_F(CheckpointCli, UnknownFormatVersionIsRefused) {
+  const fs::path out = make_checkpoint("version", 3);
+  std::string text = read_text(out / "checkpoint.json");
+  const std::size_t at = text.find("\"version\": 1");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 12, "\"version\": 99");
+  write_text(out / "checkpoint.json", text);
+  expect_refused(out, "checkpoint.json: error: checkpoint format version 99 is not supported");
+}
+
+TEST_F(CheckpointCli, NotACheckpointIsRefused) {
+  const fs::path out = dir_ / "not_a_checkpoint";
+  fs::create_directories(out);
+  write_text(out / "checkpoint.json", "{\"format\": \"something else\"}");
+  expect_refused(out, "checkpoint.json: error: not a pardel checkpoint");
+}
+
+TEST_F(CheckpointCli, ChangedSceneIsRefused) {
+  const fs::path out = make_checkpoint("changed_scene", 3);
+  Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  const fs::path copy = dir_ / "changed.toml";
+  fs::copy_file(scene_, copy, fs::copy_options::overwrite_existing);
+  c.scene_path = copy.string();
+  pardel::cli::write_checkpoint(out.string(), c);
+  write_text(copy, read_text(scene_) + "# edited\n");
+  expect_refused(out, "the scene file " + copy.string() + " changed since the checkpoint was written");
+}
+
+TEST_F(CheckpointCli, StateOfAnotherGridIsRefused) {
+  const fs::path out = make_checkpoint("other_grid", 3);
+  Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  c.overrides = {"grid.N=500"};
+  pardel::cli::write_checkpoint(out.string(), c);
+  expect_refused(out, "resume: refinement level 0 with N = 1000 is not a level of this problem");
+}
+
+TEST_F(CheckpointCli, ResumeWithASceneIsAUsageError) {
+  const fs::path out = make_checkpoint("with_scene", 3);
+  const Outcome o = run_pardel({"solve", scene_.string(), "--resume", out.string()}, out / "log");
+  EXPECT_EQ(o.status, 2);
+  EXPECT_NE(o.output.find("--resume: give no scene and no --set"), std::string::npos) << o.output;
+}
+
+}  // namespace

@@ -1,0 +1,179 @@
+// The memory estimate of `pardel solve`: compared with the peak resident set size of real solves
+// (getrusage of the child) for several N and methods, and the refusals it makes possible — a scene
+// too large for the address space (a child under setrlimit(RLIMIT_AS)) or for the machine is
+// refused with exit status 2 and a message naming grid.N, before anything is allocated or
+// written; a std::bad_alloc that happens anyway becomes a message, not a crash.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "memory_estimate.hpp"
+#include "pardel/pardel.hpp"
+#include "scene.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int status = -1;          ///< exit status, or 128 + signal
+  double peak_bytes = 0;    ///< the child's maximum resident set size
+  std::string output;       ///< stdout and stderr
+};
+
+/** Runs pardel with `args` in a child, with RLIMIT_AS = address_limit when > 0. */
+Outcome run_pardel(const std::vector<std::string>& args, const fs::path& log, double address_limit = 0) {
+  Outcome o;
+  std::fflush(stdout);  // or the child would print what this process has buffered
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (address_limit > 0) {
+      const rlimit limit{static_cast<rlim_t>(address_limit), static_cast<rlim_t>(address_limit)};
+      if (::setrlimit(RLIMIT_AS, &limit) != 0) ::_exit(126);
+    }
+    std::FILE* f = std::freopen(log.c_str(), "w", stdout);
+    if (!f || ::dup2(::fileno(stdout), STDERR_FILENO) < 0) ::_exit(126);
+    std::vector<char*> argv{const_cast<char*>(PARDEL_CLI_PATH)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(PARDEL_CLI_PATH, argv.data());
+    ::_exit(127);
+  }
+  int wstatus = 0;
+  rusage usage{};
+  if (pid < 0 || ::wait4(pid, &wstatus, 0, &usage) != pid) return o;
+  o.status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : 128 + WTERMSIG(wstatus);
+  o.peak_bytes = static_cast<double>(usage.ru_maxrss) * 1024;
+  std::ifstream in(log);
+  std::ostringstream s;
+  s << in.rdbuf();
+  o.output = s.str();
+  return o;
+}
+
+class MemoryEstimate : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("pardel_memory_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    scene_ = dir_ / "fuel.toml";
+    std::ofstream(scene_) << "model = \"fuel_nav\"\ndiscretization = \"trapezoid\"\n[grid]\nt0 = 0\nT = 30\nN = 200\n"
+                             "[boundary]\nq0 = [0, 0]\nqN = [6, 5]\n[guess]\nkind = \"linear\"\n"
+                             "[solver]\nmethod = \"jacobi-newton\"\ntol = 1e-10\n";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  pardel::cli::Scene scene(const std::vector<std::string>& sets) const {
+    return pardel::cli::load_scene(scene_.string(), sets, [](const std::string& n) { return pardel::find_model(n); });
+  }
+
+  /** Peak RSS of a two-iteration solve at N minus that of a tiny solve, against the estimate. */
+  double measured_over_estimated(const std::string& method, int N) {
+    const std::vector<std::string> sets = {"grid.N=" + std::to_string(N), "solver.method=" + method,
+                                           "solver.max_iterations=2"};
+    auto args = [&](int n) {
+      std::vector<std::string> a = {"solve", scene_.string(), "--out", (dir_ / "out").string(), "--threads", "1",
+                                    "--no-plot", "--quiet"};
+      for (const auto& s : sets) a.insert(a.end(), {"--set", s});
+      a.insert(a.end(), {"--set", "grid.N=" + std::to_string(n)});
+      return a;
+    };
+    const Outcome base = run_pardel(args(100), dir_ / "base.log");
+    const Outcome big = run_pardel(args(N), dir_ / "big.log");
+    EXPECT_EQ(base.status, 3) << base.output;
+    EXPECT_EQ(big.status, 3) << big.output;
+    const double estimate = pardel::cli::estimate_solve_memory(scene(sets)).peak;
+    const double ratio = (big.peak_bytes - base.peak_bytes) / estimate;
+    std::printf("method %s, N = %d: estimate %.1f MB, measured %.1f MB above a small solve (%.1f MB): ratio %.3f\n",
+                method.c_str(), N, estimate / 1e6, (big.peak_bytes - base.peak_bytes) / 1e6, base.peak_bytes / 1e6,
+                ratio);
+    return ratio;
+  }
+
+  fs::path dir_, scene_;
+};
+
+// The estimate must neither miss memory (ratio above 1.25) nor refuse solves that fit by a wide
+// margin (ratio below 0.75).
+TEST_F(MemoryEstimate, AgreesWithMeasuredPeakForJacobiNewton) {
+  for (int N : {50000, 150000}) {
+    const double ratio = measured_over_estimated("jacobi-newton", N);
+    EXPECT_GT(ratio, 0.75) << "N = " << N;
+    EXPECT_LT(ratio, 1.25) << "N = " << N;
+  }
+}
+
+TEST_F(MemoryEstimate, AgreesWithMeasuredPeakForNewtonAndHybrid) {
+  for (const char* method : {"newton", "hybrid"}) {
+    const double ratio = measured_over_estimated(method, 60000);
+    EXPECT_GT(ratio, 0.75) << method;
+    EXPECT_LT(ratio, 1.25) << method;
+  }
+}
+
+TEST_F(MemoryEstimate, RefusedUnderAnAddressSpaceLimit) {
+  const Outcome o = run_pardel({"solve", scene_.string(), "--out", (dir_ / "refused").string(), "--set",
+                                "grid.N=20000000", "--set", "solver.method=newton", "--no-plot", "--quiet"},
+                               dir_ / "refused.log", 1.5e9);
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("grid.N = 20000000 needs an estimated"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("RLIMIT_AS"), std::string::npos) << o.output;
+  EXPECT_EQ(o.output.find("bad_alloc"), std::string::npos) << o.output;
+  EXPECT_FALSE(fs::exists(dir_ / "refused")) << "nothing is written for a refused scene";
+  EXPECT_LT(o.peak_bytes, 200e6) << "refused before allocating";
+}
+
+TEST_F(MemoryEstimate, BadAllocWithoutTheCheckBecomesAMessage) {
+  const Outcome o = run_pardel({"solve", scene_.string(), "--out", (dir_ / "oom").string(), "--set",
+                                "grid.N=20000000", "--set", "solver.method=newton", "--no-plot", "--quiet",
+                                "--no-memory-check"},
+                               dir_ / "oom.log", 1.5e9);
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("out of memory (std::bad_alloc) while solving"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("grid.N = 20000000"), std::string::npos) << o.output;
+}
+
+TEST_F(MemoryEstimate, RefusedWhenTheMachineHasTooLittle) {
+  const auto s = scene({"grid.N=100000000", "solver.method=hybrid"});
+  const double need = pardel::cli::estimate_solve_memory(s).peak;
+  const pardel::cli::MachineMemory machine = pardel::cli::machine_memory();
+  if (machine.available < 0 || machine.available >= need) GTEST_SKIP() << "this machine has the memory";
+  const Outcome o = run_pardel({"solve", scene_.string(), "--out", (dir_ / "huge").string(), "--set",
+                                "grid.N=100000000", "--set", "solver.method=hybrid", "--no-plot", "--quiet"},
+                               dir_ / "huge.log");
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("grid.N = 100000000 needs an estimated"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("available (MemAvailable in /proc/meminfo)"), std::string::npos) << o.output;
+  EXPECT_LT(o.peak_bytes, 200e6);
+}
+
+TEST_F(MemoryEstimate, GridBeyondTheSceneLimitNamesTheKey) {
+  const Outcome o = run_pardel({"solve", scene_.string(), "--set", "grid.N=2000000000", "--no-plot", "--quiet"},
+                               dir_ / "limit.log");
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("grid.N must be between 2 and 100000000, got 2000000000"), std::string::npos) << o.output;
+}
+
+TEST_F(MemoryEstimate, MessageNamesTheMachineMemory) {
+  pardel::cli::MemoryEstimate e;
+  e.peak = 5e9;
+  e.largest = "solve";
+  pardel::cli::MachineMemory m;
+  m.available = 2e9;
+  const std::string why = pardel::cli::memory_refusal(scene({}), e, m);
+  EXPECT_NE(why.find("grid.N = 200 needs an estimated 5.00 GB (method jacobi-newton"), std::string::npos) << why;
+  EXPECT_NE(why.find("this machine has 2.00 GB available"), std::string::npos) << why;
+  m.available = 8e9;
+  EXPECT_EQ(pardel::cli::memory_refusal(scene({}), e, m), "");
+}
+
+}  // namespace

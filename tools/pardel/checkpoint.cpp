@@ -1,0 +1,262 @@
+// Checkpoint files of `pardel solve` (see checkpoint.hpp): writing, exact reading and checks.
+#include "checkpoint.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "trajectory_io.hpp"
+
+namespace pardel::cli {
+namespace {
+
+using json = nlohmann::json;
+constexpr const char* kFormat = "pardel-checkpoint";
+
+/** A double as JSON: finite values as numbers (nlohmann writes them so that they read back
+ *  exactly), the others as the strings "inf", "-inf", "nan". */
+json number(double v) {
+  if (std::isfinite(v)) return v;
+  if (std::isnan(v)) return "nan";
+  return v > 0 ? "inf" : "-inf";
+}
+
+json numbers(const std::vector<double>& values) {
+  json out = json::array();
+  for (double v : values) out.push_back(number(v));
+  return out;
+}
+
+/** Reads the fields of the checkpoint body, naming the key of anything wrong. */
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : path_(path) {}
+
+  [[noreturn]] void fail(const std::string& message) const {
+    throw CheckpointError(fmt::format("{}: error: {}", path_, message));
+  }
+
+  const json& at(const json& object, const char* key, const std::string& where) const {
+    if (!object.is_object()) fail(fmt::format("{} is not an object", where));
+    const auto it = object.find(key);
+    if (it == object.end()) fail(fmt::format("missing key {}.{}", where, key));
+    return *it;
+  }
+
+  long integer(const json& object, const char* key, const std::string& where, long lo, long hi) const {
+    const json& v = at(object, key, where);
+    if (!v.is_number_integer()) fail(fmt::format("key {}.{} must be an integer", where, key));
+    const long value = v.get<long>();
+    if (value < lo || value > hi) fail(fmt::format("key {}.{} = {} is out of range [{}, {}]", where, key, value, lo, hi));
+    return value;
+  }
+
+  double real(const json& v, const std::string& what) const {
+    if (v.is_number()) return v.get<double>();
+    if (v.is_string()) {
+      const std::string s = v.get<std::string>();
+      if (s == "inf") return std::numeric_limits<double>::infinity();
+      if (s == "-inf") return -std::numeric_limits<double>::infinity();
+      if (s == "nan") return std::numeric_limits<double>::quiet_NaN();
+    }
+    fail(fmt::format("{} must be a number (or \"inf\", \"-inf\", \"nan\")", what));
+  }
+
+  double real(const json& object, const char* key, const std::string& where) const {
+    return real(at(object, key, where), fmt::format("key {}.{}", where, key));
+  }
+
+  std::string text(const json& object, const char* key, const std::string& where) const {
+    const json& v = at(object, key, where);
+    if (!v.is_string()) fail(fmt::format("key {}.{} must be a string", where, key));
+    return v.get<std::string>();
+  }
+
+  std::vector<double> reals(const json& object, const char* key, const std::string& where) const {
+    const json& v = at(object, key, where);
+    if (!v.is_array()) fail(fmt::format("key {}.{} must be an array of numbers", where, key));
+    std::vector<double> out;
+    out.reserve(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) out.push_back(real(v[i], fmt::format("{}.{}[{}]", where, key, i)));
+    return out;
+  }
+
+ private:
+  std::string path_;
+};
+
+}  // namespace
+
+std::string fnv1a_hex(const std::string& bytes) {
+  std::uint64_t h = 14695981039346656037ULL;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  return fmt::format("{:016x}", h);
+}
+
+namespace {
+
+json body_json(const Checkpoint& c) {
+  const SolverState& s = c.state;
+  json history = json::array();
+  for (const IterationRecord& r : s.history)
+    history.push_back({r.iteration, r.N, number(r.residual), number(r.action), number(r.seconds)});
+  json state = {
+      {"version", SolverState::kFormatVersion},
+      {"method", to_string(s.method)},
+      {"level", s.level},
+      {"N", s.N},
+      {"iteration", s.iteration},
+      {"level_iteration", s.level_iteration},
+      {"since_clock_update", s.since_clock_update},
+      {"next_record", s.next_record},
+      {"best_iteration", s.best_iteration},
+      {"have_initial_residual", s.have_initial_residual},
+      {"initial_residual", number(s.initial_residual)},
+      {"last_good_residual", number(s.last_good_residual)},
+      {"best_residual", number(s.best_residual)},
+      {"level_initial_residual", number(s.level_initial_residual)},
+      {"level_checkpoint_residual", number(s.level_checkpoint_residual)},
+      {"seconds", number(s.seconds)},
+      {"method_state", numbers(s.method_state)},
+      {"dim", s.trajectory.dim},
+      {"t", numbers(s.trajectory.t)},
+      {"q", numbers(s.trajectory.q)},
+      {"history", history},
+  };
+  return {
+      {"scene", {{"path", c.scene_path}, {"hash", c.scene_hash}, {"overrides", c.overrides}, {"threads", c.threads}}},
+      {"model", {{"name", c.model}, {"dim", c.dim}}},
+      {"state", state},
+  };
+}
+
+}  // namespace
+
+std::string checkpoint_json(const Checkpoint& checkpoint) {
+  // The checksum covers the compact text of the body; nlohmann's objects keep their keys sorted,
+  // so parsing and dumping the body again gives the same text.
+  const std::string body = body_json(checkpoint).dump();
+  return fmt::format("{{\"format\": \"{}\", \"version\": {}, \"checksum\": \"{}\",\n\"body\": {}}}\n", kFormat,
+                     Checkpoint::kVersion, fnv1a_hex(body), body);
+}
+
+Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
+  const Reader rd(path);
+  json file;
+  try {
+    file = json::parse(text);
+  } catch (const json::parse_error& error) {
+    rd.fail(fmt::format("not a valid checkpoint (JSON parse error at byte {}); the file is truncated or corrupted",
+                        error.byte));
+  }
+  if (!file.is_object()) rd.fail("not a checkpoint (the top level is not a JSON object)");
+  const auto format = file.find("format");
+  if (format == file.end() || !format->is_string() || format->get<std::string>() != kFormat)
+    rd.fail(fmt::format("not a pardel checkpoint (key \"format\" is not \"{}\")", kFormat));
+  const long version = rd.integer(file, "version", "checkpoint", 0, std::numeric_limits<int>::max());
+  if (version != Checkpoint::kVersion)
+    rd.fail(fmt::format("checkpoint format version {} is not supported (this pardel reads version {})", version,
+                        Checkpoint::kVersion));
+  const std::string checksum = rd.text(file, "checksum", "checkpoint");
+  const json& body = rd.at(file, "body", "checkpoint");
+  const std::string actual = fnv1a_hex(body.dump());
+  if (actual != checksum)
+    rd.fail(fmt::format("checksum mismatch (recorded {}, computed {}): the file was modified or corrupted", checksum,
+                        actual));
+
+  Checkpoint c;
+  const json& scene = rd.at(body, "scene", "body");
+  c.scene_path = rd.text(scene, "path", "scene");
+  c.scene_hash = rd.text(scene, "hash", "scene");
+  const json& overrides = rd.at(scene, "overrides", "scene");
+  if (!overrides.is_array()) rd.fail("key scene.overrides must be an array of strings");
+  for (const json& o : overrides) {
+    if (!o.is_string()) rd.fail("key scene.overrides must be an array of strings");
+    c.overrides.push_back(o.get<std::string>());
+  }
+  c.threads = static_cast<int>(rd.integer(scene, "threads", "scene", -1, 4096));
+  const json& model = rd.at(body, "model", "body");
+  c.model = rd.text(model, "name", "model");
+  c.dim = static_cast<int>(rd.integer(model, "dim", "model", 1, 1 << 20));
+
+  const json& st = rd.at(body, "state", "body");
+  SolverState& s = c.state;
+  const long state_version = rd.integer(st, "version", "state", 0, std::numeric_limits<int>::max());
+  if (state_version != SolverState::kFormatVersion)
+    rd.fail(fmt::format("solver state version {} is not supported (this pardel reads version {})", state_version,
+                        SolverState::kFormatVersion));
+  const std::string method = rd.text(st, "method", "state");
+  if (!parse_method(method, &s.method)) rd.fail(fmt::format("key state.method: unknown method '{}'", method));
+  constexpr long kMaxLong = std::numeric_limits<long>::max();
+  s.level = static_cast<int>(rd.integer(st, "level", "state", 0, 1 << 20));
+  s.N = static_cast<int>(rd.integer(st, "N", "state", 2, std::numeric_limits<int>::max()));
+  s.iteration = rd.integer(st, "iteration", "state", 0, kMaxLong);
+  s.level_iteration = rd.integer(st, "level_iteration", "state", 0, kMaxLong);
+  s.since_clock_update = rd.integer(st, "since_clock_update", "state", 0, kMaxLong);
+  s.next_record = rd.integer(st, "next_record", "state", 0, kMaxLong);
+  s.best_iteration = rd.integer(st, "best_iteration", "state", 0, kMaxLong);
+  const json& have = rd.at(st, "have_initial_residual", "state");
+  if (!have.is_boolean()) rd.fail("key state.have_initial_residual must be true or false");
+  s.have_initial_residual = have.get<bool>();
+  s.initial_residual = rd.real(st, "initial_residual", "state");
+  s.last_good_residual = rd.real(st, "last_good_residual", "state");
+  s.best_residual = rd.real(st, "best_residual", "state");
+  s.level_initial_residual = rd.real(st, "level_initial_residual", "state");
+  s.level_checkpoint_residual = rd.real(st, "level_checkpoint_residual", "state");
+  s.seconds = rd.real(st, "seconds", "state");
+  s.method_state = rd.reals(st, "method_state", "state");
+  s.trajectory.N = s.N;
+  s.trajectory.dim = static_cast<int>(rd.integer(st, "dim", "state", 1, 1 << 20));
+  s.trajectory.t = rd.reals(st, "t", "state");
+  s.trajectory.q = rd.reals(st, "q", "state");
+  const std::size_t n1 = static_cast<std::size_t>(s.N) + 1;
+  if (s.trajectory.dim != c.dim) rd.fail(fmt::format("key state.dim = {} differs from model.dim = {}", s.trajectory.dim, c.dim));
+  if (s.trajectory.t.size() != n1)
+    rd.fail(fmt::format("key state.t has {} values; N = {} needs {}", s.trajectory.t.size(), s.N, n1));
+  if (s.trajectory.q.size() != n1 * static_cast<std::size_t>(c.dim))
+    rd.fail(fmt::format("key state.q has {} values; N = {} and dim = {} need {}", s.trajectory.q.size(), s.N, c.dim,
+                        n1 * static_cast<std::size_t>(c.dim)));
+  const json& history = rd.at(st, "history", "state");
+  if (!history.is_array()) rd.fail("key state.history must be an array");
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    const json& h = history[i];
+    const std::string where = fmt::format("state.history[{}]", i);
+    if (!h.is_array() || h.size() != 5 || !h[0].is_number_integer() || !h[1].is_number_integer())
+      rd.fail(fmt::format("{} must be [iteration, N, residual, action, seconds]", where));
+    IterationRecord r;
+    r.iteration = h[0].get<long>();
+    r.N = h[1].get<int>();
+    r.residual = rd.real(h[2], where + "[2]");
+    r.action = rd.real(h[3], where + "[3]");
+    r.seconds = rd.real(h[4], where + "[4]");
+    s.history.push_back(r);
+  }
+  s.valid = true;
+  return c;
+}
+
+Checkpoint read_checkpoint(const std::string& dir) {
+  const std::string path = (std::filesystem::path(dir) / checkpoint_file_name()).string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw CheckpointError(fmt::format("{}: error: cannot open checkpoint: {}", path, std::strerror(errno)));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_checkpoint(text.str(), path);
+}
+
+void write_checkpoint(const std::string& dir, const Checkpoint& checkpoint) {
+  write_file_atomic((std::filesystem::path(dir) / checkpoint_file_name()).string(), checkpoint_json(checkpoint));
+}
+
+}  // namespace pardel::cli

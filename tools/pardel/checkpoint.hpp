@@ -1,0 +1,63 @@
+/**
+ * @file checkpoint.hpp
+ * Checkpoints of `pardel solve`: when a solve is interrupted (SIGINT, SIGTERM) the solver state
+ * (pardel::SolverState: the iterate with its node times, every counter, the method's own state,
+ * the history) is written with the scene path, a hash of the scene text, the --set overrides and
+ * the thread count into OUTPUT_DIR/checkpoint.json; `pardel solve --resume OUTPUT_DIR` reads it
+ * back and continues the solve where it stopped.
+ *
+ * The file is JSON ("format": "pardel-checkpoint", "version"), every double written exactly
+ * (shortest round-trip decimal, or hexadecimal for scalars that may be non-finite), and carries
+ * an FNV-1a checksum of its body, so that a truncated, edited or corrupted file is refused with
+ * a message naming the file and what is wrong.
+ */
+#ifndef PARDEL_CLI_CHECKPOINT_HPP
+#define PARDEL_CLI_CHECKPOINT_HPP
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pardel/pardel.hpp"
+
+namespace pardel::cli {
+
+/** A checkpoint file that cannot be used; what() is "FILE: error: MESSAGE". */
+class CheckpointError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/** Everything `pardel solve --resume` needs besides the scene file itself. */
+struct Checkpoint {
+  static constexpr int kVersion = 1;  ///< of the file layout (the state has its own)
+  std::string scene_path;             ///< absolute path of the scene file
+  std::string scene_hash;             ///< FNV-1a 64 of the scene file's bytes (16 hex digits)
+  std::vector<std::string> overrides; ///< the --set KEY=VALUE strings, in order
+  int threads = -1;                   ///< --threads as given (-1: not given)
+  std::string model;                  ///< the model's name
+  int dim = 0;                        ///< the model's dim
+  SolverState state;
+};
+
+/** The name of the checkpoint file inside an output folder. */
+inline const char* checkpoint_file_name() { return "checkpoint.json"; }
+
+/** FNV-1a 64 of the bytes, as 16 lowercase hex digits. */
+std::string fnv1a_hex(const std::string& bytes);
+
+/** The checkpoint as the text of checkpoint.json. */
+std::string checkpoint_json(const Checkpoint& checkpoint);
+
+/** Parses checkpoint text (`path` names it in messages); throws CheckpointError. */
+Checkpoint parse_checkpoint(const std::string& text, const std::string& path);
+
+/** Reads DIR/checkpoint.json; throws CheckpointError (also for a missing file). */
+Checkpoint read_checkpoint(const std::string& dir);
+
+/** Writes DIR/checkpoint.json atomically (temporary file + rename); throws std::runtime_error. */
+void write_checkpoint(const std::string& dir, const Checkpoint& checkpoint);
+
+}  // namespace pardel::cli
+
+#endif  // PARDEL_CLI_CHECKPOINT_HPP

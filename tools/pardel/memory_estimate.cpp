@@ -1,0 +1,155 @@
+// Memory estimate of `pardel solve` and the machine's memory (see memory_estimate.hpp).
+#include "memory_estimate.hpp"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace pardel::cli {
+namespace {
+
+/** Heap bytes of one malloc(b) in glibc: an 8-byte header, rounded up to 16, at least 32. */
+double heap(double b) { return std::max(32.0, 16.0 * std::ceil((b + 8) / 16.0)); }
+
+/** The runtime specializes the block size for these dims (dispatch_dim); others use Eigen::Dynamic,
+ *  where every block is a separate heap allocation. */
+bool fixed_size(int d) { return d == 1 || d == 2 || d == 4 || d == 6; }
+
+double mat_bytes(int d) { return fixed_size(d) ? 8.0 * d * d : 24 + heap(8.0 * d * d); }
+double vec_bytes(int d) { return fixed_size(d) ? 8.0 * d : 16 + heap(8.0 * d); }
+double llt_bytes(int d) { return mat_bytes(d) + 16; }
+/** Eigen::PartialPivLU: the matrix, two index vectors, the norm and flags. */
+double lu_bytes(int d) {
+  const double indices = fixed_size(d) ? 2 * 8 * std::ceil(4.0 * d / 8) : 2 * (16 + heap(4.0 * d));
+  return 16 * std::ceil((mat_bytes(d) + indices + 10) / 16);
+}
+
+/** BlockTridiagonal<D>: diag, off, W, y and the pivots' factors for N-1 blocks (resize), and with
+ *  `cyclic` the cyclic-reduction levels (N-1, (N-1)/2, ..., 1 blocks: about 2(N-1) in all). */
+double block_tridiagonal_bytes(double N, int d, bool cyclic) {
+  const double n = std::max(N - 1, 0.0);
+  const double factors = fixed_size(d) ? mat_bytes(d) : llt_bytes(d);
+  const double levels = cyclic ? 2 * n * (3 * mat_bytes(d) + 2 * vec_bytes(d) + llt_bytes(d) + 1) : 0;
+  return n * (3 * mat_bytes(d) + vec_bytes(d) + factors) + levels;
+}
+
+/** detail::Context at N (engine.cpp setup_context). */
+double context_bytes(double N, int d) {
+  const double n1 = N + 1;
+  return n1 * 8 * 2                // t, hk
+         + n1 * d + n1 * 4         // is_free, free_count
+         + n1 * d * 8 * 3          // q, q_next, res
+         + N * 8                   // Ld
+         + N * d * 8 * 2           // D1, D2
+         + N * d * d * 8 * 3       // D11, D12, D22
+         + n1 * 8 * 2;             // node_max, node_scale
+}
+
+double trajectory_bytes(double N, int d) { return (N + 1) * (d + 1) * 8.0; }
+
+/** Newton's own arrays (newton.cpp): copies of the interval arrays, rhs and step, the Hessian. */
+double newton_bytes(double N, int d, bool cyclic) {
+  return N * 8 + N * d * 8 * 2 + N * d * d * 8 * 3 + (N + 1) * d * 8 + 2 * std::max(N - 1, 0.0) * d * 8 +
+         block_tridiagonal_bytes(N, d, cyclic);
+}
+
+double method_bytes(Method method, bool cyclic, double N, int d) {
+  switch (method) {
+    case Method::jacobi:
+    case Method::jacobi_newton: return N + 1;  // node status
+    case Method::newton: return newton_bytes(N, d, cyclic);
+    case Method::hybrid: return (N + 1) + newton_bytes(N, d, cyclic) + block_tridiagonal_bytes(N, d, false);
+    case Method::multigrid: return 2 * (N + 1) + 2 * context_bytes(N / 2, d);  // coarse levels, at most N in all
+  }
+  return 0;
+}
+
+std::string read_file(const char* path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/** The value in kB of "KEY:   123 kB" in a /proc file, in bytes; -1 if absent. */
+double proc_kb(const std::string& text, const std::string& key) {
+  const std::size_t at = text.find(key + ":");
+  if (at == std::string::npos) return -1;
+  std::istringstream in(text.substr(at + key.size() + 1));
+  double kb = -1;
+  in >> kb;
+  return kb >= 0 ? kb * 1024 : -1;
+}
+
+}  // namespace
+
+MemoryEstimate estimate_solve_memory(const Scene& scene) {
+  const double N = scene.problem.N;
+  const int d = scene.model->dim;
+  MemoryEstimate e;
+  // The initial guess, solve()'s working copy, and with refinement the resampled level.
+  const double trajectories = (scene.options.refine_start_N > 0 ? 3 : 2) * trajectory_bytes(N, d);
+  const bool cyclic = scene.options.linear_solver == LinearSolver::cyclic_reduction;
+  e.solve = context_bytes(N, d) + method_bytes(scene.options.method, cyclic, N, d) + trajectories;
+  // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
+  // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
+  // blocks in a vector that grows by doubling (up to 3n of them while it moves).
+  const double n = std::max(N - 1, 0.0);
+  e.certificate = trajectory_bytes(N, d) + context_bytes(N, d) + block_tridiagonal_bytes(N, d, false) +
+                  n * llt_bytes(d) + 3 * n * lu_bytes(d) + 4 * n * d * 8 + N * 32;
+  // trajectory.csv: about 24 characters per number, a std::string that grows by doubling.
+  const int columns = 2 + d + (scene.model->order == 1 ? scene.model->ncoords : 0);
+  e.output = trajectory_bytes(N, d) + 2 * (N + 1) * (24.0 * columns + 8);
+  e.peak = std::max({e.solve, e.certificate, e.output});
+  e.largest = e.peak == e.solve ? "solve" : e.peak == e.certificate ? "certificate" : "output";
+  return e;
+}
+
+MachineMemory machine_memory() {
+  MachineMemory m;
+  m.available = proc_kb(read_file("/proc/meminfo"), "MemAvailable");
+  m.address_used = proc_kb(read_file("/proc/self/status"), "VmSize");
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
+    m.address_limit = static_cast<double>(limit.rlim_cur);
+  return m;
+}
+
+std::string format_bytes(double bytes) {
+  if (bytes >= 1e9) return fmt::format("{:.2f} GB", bytes / 1e9);
+  if (bytes >= 1e6) return fmt::format("{:.0f} MB", bytes / 1e6);
+  return fmt::format("{:.0f} kB", bytes / 1e3);
+}
+
+std::string memory_refusal(const Scene& scene, const MemoryEstimate& estimate, const MachineMemory& machine) {
+  const std::string need =
+      fmt::format("grid.N = {} needs an estimated {} (method {}, linear solver {}, model dim {}; largest phase: {})",
+                  scene.problem.N, format_bytes(estimate.peak), to_string(scene.options.method),
+                  to_string(scene.options.linear_solver), scene.model->dim, estimate.largest);
+  if (machine.available >= 0 && estimate.peak > machine.available) {
+    return fmt::format("{}; this machine has {} available (MemAvailable in /proc/meminfo); lower grid.N", need,
+                       format_bytes(machine.available));
+  }
+  if (machine.address_limit >= 0) {
+    // Every thread reserves a stack and a malloc arena of address space (not memory).
+    const int threads = std::max(1, scene.options.threads > 0 ? scene.options.threads
+                                                              : static_cast<int>(::sysconf(_SC_NPROCESSORS_ONLN)));
+    const double reserved = threads * 72e6;
+    const double used = std::max(machine.address_used, 0.0);
+    if (used + reserved + estimate.peak > machine.address_limit) {
+      return fmt::format(
+          "{}; the address space of this process is limited to {} (RLIMIT_AS, `ulimit -v`), of which {} are in use "
+          "and about {} are reserved by {} thread(s); lower grid.N or raise the limit",
+          need, format_bytes(machine.address_limit), format_bytes(used), format_bytes(reserved), threads);
+    }
+  }
+  return "";
+}
+
+}  // namespace pardel::cli

@@ -1,0 +1,55 @@
+/**
+ * @file memory_estimate.hpp
+ * The memory `pardel solve` needs for a scene, estimated before anything of size N is
+ * allocated, and what the machine can give (MemAvailable of /proc/meminfo, RLIMIT_AS), so that a
+ * scene too large for the machine is refused with a message naming grid.N instead of ending in
+ * std::bad_alloc or the kernel's OOM killer.
+ *
+ * The estimate adds up the arrays the runtime allocates (the solve context, the method's
+ * scratch, the block-tridiagonal factors of Newton and hybrid, the certificate computed after the
+ * solve, the trajectory CSV text) phase by phase and takes the largest phase; it was checked
+ * against the peak resident set size of real solves (tests/reliability/test_memory_estimate.cpp).
+ */
+#ifndef PARDEL_CLI_MEMORY_ESTIMATE_HPP
+#define PARDEL_CLI_MEMORY_ESTIMATE_HPP
+
+#include <string>
+
+#include "scene.hpp"
+
+namespace pardel::cli {
+
+/** Bytes a solve of the scene needs at its peak, beyond the process's start-up footprint. */
+struct MemoryEstimate {
+  double solve = 0;        ///< while iterating: context, method scratch, input and working trajectories
+  double certificate = 0;  ///< while certifying the result (after the solver's memory is freed)
+  double output = 0;       ///< while writing trajectory.csv
+  double peak = 0;         ///< the largest of the three
+  std::string largest;     ///< which phase is the peak: "solve", "certificate" or "output"
+};
+
+/** Estimates the memory of `pardel solve` for the scene (its N, model dim, method, linear solver). */
+MemoryEstimate estimate_solve_memory(const Scene& scene);
+
+/** What the machine offers; a value < 0 means unknown or unlimited. */
+struct MachineMemory {
+  double available = -1;      ///< MemAvailable of /proc/meminfo, bytes
+  double address_limit = -1;  ///< RLIMIT_AS (soft), bytes
+  double address_used = -1;   ///< VmSize of this process now (/proc/self/status), bytes
+};
+
+MachineMemory machine_memory();
+
+/**
+ * "" when the estimate fits the machine, else the reason, naming grid.N, the estimate and what
+ * the machine has, e.g. "grid.N = 100000000 needs an estimated 38.4 GB (method newton, dim 4, ...);
+ * this machine has 19.9 GB available (MemAvailable)".
+ */
+std::string memory_refusal(const Scene& scene, const MemoryEstimate& estimate, const MachineMemory& machine);
+
+/** Bytes as "123 MB" / "4.56 GB" (decimal units). */
+std::string format_bytes(double bytes);
+
+}  // namespace pardel::cli
+
+#endif  // PARDEL_CLI_MEMORY_ESTIMATE_HPP
