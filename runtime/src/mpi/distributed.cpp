@@ -254,15 +254,23 @@ class DistributedNewton : public pardel::detail::Method_ {
     const std::size_t off0 = static_cast<std::size_t>(L.local(local_.u0)) * dz;  // first owned unknown, local layout
     const double F = ctx.action, r0 = ctx.residual;
     for (std::size_t i = 0; i < n; ++i) rhs_[i] = -ctx.res[off0 + i];
-    assemble(ctx, 0.0);
+    // Scale of the shift: the largest diagonal entry of the unshifted Hessian (1 on fixed components).
     double scale = 0;
-    for (int i = 0; i < solver_.owned(); ++i) scale = std::max(scale, solver_.diag(i).diagonal().cwiseAbs().maxCoeff());
+    const std::size_t dd = dz * dz;
+    for (int g = local_.u0; g <= local_.u1; ++g) {
+      const std::size_t j = static_cast<std::size_t>(L.local(g));
+      const unsigned char* f = local_.global_free.data() + j * dz;
+      for (std::size_t a = 0; a < dz; ++a) {
+        const std::size_t aa = a * (dz + 1);
+        scale = std::max(scale, f[a] ? std::fabs(ctx.D22[(j - 1) * dd + aa] + ctx.D11[j * dd + aa]) : 1.0);
+      }
+    }
     scale = detail::max_all(scale, comm);
     if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
     const double mu_min = 1e-10 * scale;
     if (mu_ > 0 && mu_ < mu_min) mu_ = mu_min;
     for (int attempt = 0; attempt < 200; ++attempt) {
-      if (attempt > 0 || mu_ != 0) assemble(ctx, mu_);
+      assemble(ctx, mu_);
       const bool ok = solver_.solve(rhs_.data(), dxl_.data() + off0, comm);
       if (!ok) {
         raise(mu_min);
