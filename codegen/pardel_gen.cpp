@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
 
   try {
     pardel_codegen::LagModel model = pardel_codegen::parse_lag_file(input);
-    pardel_codegen::ModelIR ir = pardel_codegen::build_model_ir(model, source_name);
+    pardel_codegen::ModelIR ir = pardel_codegen::build_model_ir_located(model, source_name);
     if (!output.empty()) {
       if (!write_atomically(output, pardel_codegen::ir_to_json(ir))) {
         std::cerr << "pardel-gen: error: cannot write '" << output << "': " << std::strerror(errno) << "\n";

@@ -64,19 +64,7 @@ class Reader {
   [[noreturn]] void fail(int line, int col, const std::string& message) const {
     std::string source;
     if (line >= 1 && line <= static_cast<int>(raw_lines_.size())) source = raw_lines_[line - 1];
-    std::ostringstream out;
-    out << filename_ << ':' << line << ':' << col << ": error: " << message << '\n';
-    std::string shown;
-    std::string caret;
-    for (std::size_t i = 0; i < source.size(); ++i) {
-      unsigned char c = static_cast<unsigned char>(source[i]);
-      char s = (c == '\t') ? '\t' : (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
-      shown += s;
-      if (static_cast<int>(i) + 1 < col) caret += (c == '\t') ? '\t' : ' ';
-    }
-    while (static_cast<int>(caret.size()) + 1 < col) caret += ' ';
-    out << "  " << shown << '\n' << "  " << caret << '^';
-    throw LagError(out.str(), line, col, message);
+    throw LagError(lag_diagnostic(filename_, source, line, col, message), line, col, message);
   }
   [[noreturn]] void fail(const Line& l, const Token& t, const std::string& message) const {
     fail(l.number, t.kind == Tok::end ? l.end_col : t.col, message);
@@ -138,9 +126,16 @@ class Reader {
     }
   }
 
+  /** Records a power or call node for diagnostics after parsing (LagModel::terms). */
+  GiNaC::ex term(const Line& line, int col, GiNaC::ex value) const {
+    terms_.push_back(SourceTerm{line.number, col, value});
+    return value;
+  }
+
   std::string filename_;
   std::vector<std::string> raw_lines_;
   LagModel model_;
+  mutable std::vector<SourceTerm> terms_;
 
   struct NameInfo {
     std::string kind;  ///< "coordinate", "param", "let"
@@ -584,7 +579,7 @@ GiNaC::ex Reader::parse_atom(Cursor& c, const ExprContext& ctx) const {
       const std::string& f = tok.text;
       if (f == "pow") check_power(line, tok, args[0], args[1]);
       if (f == "log" && args[0].is_zero()) fail(line, tok, "log(0) is undefined");
-      return guarded(line, tok.col, [&]() -> GiNaC::ex {
+      return term(line, tok.col, guarded(line, tok.col, [&]() -> GiNaC::ex {
         const GiNaC::ex& a = args[0];
         if (f == "sin") return GiNaC::sin(a);
         if (f == "cos") return GiNaC::cos(a);
@@ -600,7 +595,7 @@ GiNaC::ex Reader::parse_atom(Cursor& c, const ExprContext& ctx) const {
         if (f == "atan") return GiNaC::atan(a);
         if (f == "atan2") return GiNaC::atan2(a, args[1]);
         return GiNaC::pow(a, args[1]);
-      });
+      }));
     }
     if (call) {
       if (is_function_name(tok.text)) fail(line, tok, "a function name cannot carry primes (')");
@@ -638,7 +633,7 @@ GiNaC::ex Reader::parse_power(Cursor& c, const ExprContext& ctx) const {
     const Token& op = c.next();
     GiNaC::ex exponent = parse_unary(c, ctx);  // right-associative; allows x^-1
     check_power(*c.line, op, base, exponent);
-    return guarded(*c.line, op.col, [&] { return GiNaC::pow(base, exponent); });
+    return term(*c.line, op.col, guarded(*c.line, op.col, [&] { return GiNaC::pow(base, exponent); }));
   }
   return base;
 }
@@ -747,6 +742,8 @@ LagModel Reader::read() {
     ctx.derivative_limit_reason = order_reason.c_str();
     ctx.let_limit_line = after_all;
     model_.lagrangian = parse_full_expression(*lagrangian_line_, 2, ctx);
+    model_.lagrangian_line = lagrangian_line_->number;
+    model_.lagrangian_column = lagrangian_line_->tokens[2].col;
   }
   if (clock_line_) {
     ExprContext ctx;
@@ -757,6 +754,8 @@ LagModel Reader::read() {
     ctx.let_limit_line = after_all;
     model_.clock = parse_full_expression(*clock_line_, 2, ctx);
     model_.has_clock = true;
+    model_.clock_line = clock_line_->number;
+    model_.clock_column = clock_line_->tokens[2].col;
   }
   if (discretization_line_) {
     read_discretizations(*discretization_line_);
@@ -772,6 +771,9 @@ LagModel Reader::read() {
     }
     model_.discretizations.push_back(spec);
   }
+  model_.filename = filename_;
+  model_.source_lines = raw_lines_;
+  model_.terms = std::move(terms_);
   return model_;
 }
 
@@ -779,6 +781,23 @@ LagModel Reader::read() {
 
 bool LagModel::time_dependent() const {
   return lagrangian.has(time) || (has_clock && clock.has(time));
+}
+
+std::string lag_diagnostic(const std::string& filename, const std::string& source_line, int line, int col,
+                           const std::string& message) {
+  std::ostringstream out;
+  out << filename << ':' << line << ':' << col << ": error: " << message << '\n';
+  std::string shown;
+  std::string caret;
+  for (std::size_t i = 0; i < source_line.size(); ++i) {
+    unsigned char c = static_cast<unsigned char>(source_line[i]);
+    char s = (c == '\t') ? '\t' : (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
+    shown += s;
+    if (static_cast<int>(i) + 1 < col) caret += (c == '\t') ? '\t' : ' ';
+  }
+  while (static_cast<int>(caret.size()) + 1 < col) caret += ' ';
+  out << "  " << shown << '\n' << "  " << caret << '^';
+  return out.str();
 }
 
 LagModel parse_lag(const std::string& text, const std::string& filename) {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "pardel_codegen/discretize.hpp"
+#include "pardel_codegen/lag_parser.hpp"
 
 #ifndef PARDEL_GEN_VERSION
 #define PARDEL_GEN_VERSION "0.0.0"
@@ -246,6 +247,50 @@ std::string stats_json(const ModelIR& ir) {
   if (ir.clock) row("", *ir.clock);
   j << "\n]}\n";
   return j.str();
+}
+
+namespace {
+
+/** Whether the model with `lagrangian` as its Lagrangian (and no clock) fails to build. */
+bool fails_alone(LagModel& probe, const GiNaC::ex& lagrangian, const std::string& source_name,
+                 const CseOptions& options) {
+  probe.lagrangian = lagrangian;
+  try {
+    build_model_ir(probe, source_name, options);
+    return false;
+  } catch (const CodegenError&) {
+    return true;
+  }
+}
+
+[[noreturn]] void throw_at(const LagModel& model, int line, int col, const std::string& message) {
+  const std::string source =
+      line >= 1 && line <= static_cast<int>(model.source_lines.size()) ? model.source_lines[line - 1] : "";
+  throw LagError(lag_diagnostic(model.filename, source, line, col, message), line, col, message);
+}
+
+}  // namespace
+
+ModelIR build_model_ir_located(const LagModel& model, const std::string& source_name, const CseOptions& options) {
+  try {
+    return build_model_ir(model, source_name, options);
+  } catch (const CodegenError& error) {
+    if (model.lagrangian_line == 0) throw;  // not from the reader: no positions known
+    LagModel probe = model;
+    probe.source_lines.clear();
+    probe.terms.clear();
+    probe.has_clock = false;
+    // Each probe runs the whole pipeline on one term: bounded so that a model with very many
+    // terms is not probed for minutes (the expression's position is reported then).
+    constexpr std::size_t kMaxProbes = 200;
+    for (std::size_t i = 0; i < model.terms.size() && i < kMaxProbes; ++i) {
+      const SourceTerm& term = model.terms[i];
+      if (fails_alone(probe, term.value, source_name, options)) throw_at(model, term.line, term.column, error.what());
+    }
+    if (!model.has_clock || fails_alone(probe, model.lagrangian, source_name, options))
+      throw_at(model, model.lagrangian_line, model.lagrangian_column, error.what());
+    throw_at(model, model.clock_line, model.clock_column, error.what());
+  }
 }
 
 }  // namespace pardel_codegen

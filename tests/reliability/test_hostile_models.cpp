@@ -319,15 +319,26 @@ TEST_F(HostileModel, SymbolicPowerWithHugeExponentIsRefusedCleanly) {
   EXPECT_NE(g.gen_stderr.find("error: "), std::string::npos) << g.gen_stderr;
 }
 
-// Constants that are valid while reading but not as double arithmetic (x^(10^308), log(-1))
-// are refused by the code generator after parsing, as "FILE: error: ..." without the position
-// of the offending term. The project's standard asks for FILE:LINE:COL; kept disabled until
-// pardel-gen's CodegenError carries a source position.
-TEST_F(HostileModel, DISABLED_GeneratorRefusalsNameLineAndColumn) {
+// Constants that are valid while reading but not as double arithmetic (x^(10^308), whose second
+// derivative has the factor 10^616; log(-1) = i pi) are found by the code generator after
+// parsing; the refusal names the power or the call that causes it.
+TEST_F(HostileModel, GeneratorRefusalsNameLineAndColumn) {
   const std::string huge = "model m\ncoords x\nL = x'^2 + x^(10^308)\n";
   EXPECT_EQ(expect_located_rejection(generate("xpow_huge.lag", huge), huge), "3:13");
   const std::string complex = "model m\ncoords x\nL = x'^2 + log(-1)*x\n";
   EXPECT_EQ(expect_located_rejection(generate("complex.lag", complex), complex), "3:12");
+  // Inside a let: the position in the let's line.
+  const std::string in_let = "model m\ncoords x\nlet a = 2*acos(3)\nL = x'^2 + a*x\n";
+  EXPECT_EQ(expect_located_rejection(generate("in_let.lag", in_let), in_let), "3:11");
+  // In the clock.
+  const std::string in_clock = "model m\ncoords x\nL = x'^2/2\nclock = 1 + log(-1)*x\n";
+  EXPECT_EQ(expect_located_rejection(generate("in_clock.lag", in_clock), in_clock), "4:13");
+  // No single power or call is at fault (10^200 * 10^200 overflows): the expression's start.
+  const std::string product = "model m\ncoords x\nL = x'^2 + 10^200*10^200*x\n";
+  EXPECT_EQ(expect_located_rejection(generate("product.lag", product), product), "3:5");
+  // The innermost offending term: sqrt(-4) inside sin(...).
+  const std::string nested = "model m\ncoords x\nL = x'^2 + sin(x + sqrt(-4))\n";
+  EXPECT_EQ(expect_located_rejection(generate("nested.lag", nested), nested), "3:20");
 }
 
 }  // namespace

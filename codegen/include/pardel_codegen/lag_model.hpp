@@ -37,6 +37,14 @@ struct ParamDecl {
   GiNaC::symbol symbol;
 };
 
+/** Where a power or a function call of the model's text was read, and its value (so that an
+ *  error found after parsing, such as a constant that cannot be emitted, can name a position). */
+struct SourceTerm {
+  int line = 0;
+  int column = 0;
+  GiNaC::ex value;
+};
+
 /** Everything a .lag file declares. */
 struct LagModel {
   std::string name;
@@ -51,6 +59,13 @@ struct LagModel {
   GiNaC::ex clock;                                 ///< dt/ds (derivatives up to order-1 only,
                                                    ///< or q' for order-1 models)
   std::vector<DiscretizationSpec> discretizations; ///< in the order asked for
+  // Where things were read (diagnostics after parsing).
+  std::string filename;                            ///< as given to parse_lag
+  std::vector<std::string> source_lines;           ///< the text, line by line
+  std::vector<SourceTerm> terms;                   ///< powers and calls of the lets, L and the
+                                                   ///< clock, each after its operands
+  int lagrangian_line = 0, lagrangian_column = 0;  ///< start of the expression of L
+  int clock_line = 0, clock_column = 0;            ///< start of the clock's expression
   /** True when L or the clock depends on t. */
   bool time_dependent() const;
   int ncoords() const { return static_cast<int>(coords.size()); }

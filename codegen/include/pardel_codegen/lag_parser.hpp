@@ -33,6 +33,10 @@ constexpr std::size_t kMaxIdentifierLength = 64;
 /** Longest model name accepted (it prefixes every emitted C symbol). */
 constexpr std::size_t kMaxModelNameLength = 48;
 
+/** The diagnostic `FILE:LINE:COL: error: MESSAGE`, the source line and a caret under the column. */
+std::string lag_diagnostic(const std::string& filename, const std::string& source_line, int line, int col,
+                           const std::string& message);
+
 /**
  * Parses the text of a .lag file. `filename` is used only in diagnostics.
  * @throws LagError on the first error in the file.

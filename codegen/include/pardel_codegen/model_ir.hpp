@@ -46,6 +46,16 @@ struct ModelIR {
 ModelIR build_model_ir(const LagModel& model, const std::string& source_name,
                        const CseOptions& options = CseOptions());
 
+/**
+ * build_model_ir with its CodegenError (a constant that cannot be emitted as a double, such as
+ * x^(10^308) differentiated or log(-1) = i pi) turned into a LagError at the .lag position that
+ * causes it: the first power or function call (innermost first, LagModel::terms) whose value,
+ * taken alone as the Lagrangian, fails the same way; else the start of the expression being
+ * processed (L, or the clock when L alone builds). @throws LagError
+ */
+ModelIR build_model_ir_located(const LagModel& model, const std::string& source_name,
+                               const CseOptions& options = CseOptions());
+
 /** The IR as deterministic JSON text. */
 std::string ir_to_json(const ModelIR& ir);
 
