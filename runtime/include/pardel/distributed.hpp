@@ -12,7 +12,9 @@
  *    every rank solves redundantly after an Allgather) with the globalization of the one-process
  *    Newton, so it agrees with it to the tolerance (the linear algebra differs in rounding only).
  *
- * Without MPI in the build, or with one rank, solve_distributed is pardel::solve.
+ * Node times under a clock (free_final_time, fixed_total_time) are prefix sums carried from rank to
+ * rank, with the one-process order of additions. Without MPI in the build, or with one rank,
+ * solve_distributed is pardel::solve.
  */
 #ifndef PARDEL_DISTRIBUTED_HPP
 #define PARDEL_DISTRIBUTED_HPP
@@ -36,7 +38,7 @@ NodeRange owned_nodes(int N, int ranks, int rank);
 /**
  * Whether solve_distributed can run this problem with these options on `ranks` ranks (always true
  * for one rank). On false, `message` names the scene key or option that cannot be distributed
- * (the method, solver.refine, solver.clock, solver.threads..., or a grid too small for the ranks).
+ * (solver.method, solver.refine, or grid.N too small for the ranks).
  */
 bool distributed_supported(const Problem& problem, const Options& options, int ranks, std::string* message);
 

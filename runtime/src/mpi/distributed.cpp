@@ -55,10 +55,6 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
                 " (distributed methods: jacobi, jacobi-newton, newton); run it on one rank");
   if (options.refine_start_N > 0)
     return fail("solver.refine (coarse-to-fine refinement)" + over + "; remove solver.refine or run on one rank");
-  if (problem.clock != ClockMode::none)
-    return fail(std::string("solver.clock = \"") +
-                (problem.clock == ClockMode::free_final_time ? "free_final_time" : "fixed_total_time") + "\"" + over +
-                " (the node times are a sequential prefix sum of the clock); run clocked scenes on one rank");
   if (static_cast<long>(problem.N) + 1 < 3L * ranks)
     return fail("grid.N = " + std::to_string(problem.N) + " is too small for " + std::to_string(ranks) +
                 " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks)");
@@ -188,6 +184,56 @@ double global_action(Local& local, const std::vector<double>& q) {
 double global_sum_Ld(const Local& local) {
   const int j0 = local.layout.local(local.layout.first_interval());
   return detail::ordered_sum(local.layout, local.ctx.Ld.data() + j0, local.owned_intervals(), local.comm);
+}
+
+/**
+ * Node times from the model's clock (engine.cpp's update_times) over the ranks: the prefix sums
+ * run as a chain from rank to rank (each rank receives the times of its left halo and first node,
+ * continues the sums over its intervals and passes its last two times on), so every addition
+ * happens in the one-process order and the times are the same bit for bit. Under
+ * fixed_total_time the clock is first evaluated on every rank's intervals and totalled in node order.
+ */
+void update_times_distributed(Local& local) {
+  Context& ctx = local.ctx;
+  if (ctx.clock == ClockMode::none || ctx.model->clock == nullptr) return;
+  const Layout& L = local.layout;
+  const int d = ctx.dim, N = L.N, Nl = L.local_intervals();
+  const double hs = ctx.T / N;
+  const double* p = ctx.p();
+  const std::vector<double>& q = ctx.q;
+  const int jf = L.local(L.first), j_end = L.local(L.last_interval()) + 1;  // owned intervals jf..j_end-1
+  double* c = local.interval_scratch.data();
+  double total = 0;
+  if (ctx.clock == ClockMode::fixed_total_time) {
+    // Clock of each owned interval at the previous times, then their total in node order.
+    for (int j = jf; j < j_end; ++j) {
+      const std::size_t jj = static_cast<std::size_t>(j);
+      c[j - jf] = ctx.model->clock(hs, ctx.t[jj], q.data() + jj * d, q.data() + (jj + 1) * d, p);
+    }
+    total = detail::ordered_sum(L, c, j_end - jf, local.comm);
+  }
+  double carried[2] = {ctx.t0, ctx.t0};  // times of the left halo and of the first owned node
+  if (L.has_left()) MPI_Recv(carried, 2, MPI_DOUBLE, L.rank - 1, 104, local.comm, MPI_STATUS_IGNORE);
+  if (L.has_left()) ctx.t[0] = carried[0];
+  ctx.t[static_cast<std::size_t>(jf)] = carried[1];
+  for (int j = jf; j < j_end; ++j) {
+    const std::size_t jj = static_cast<std::size_t>(j);
+    if (ctx.clock == ClockMode::free_final_time) {
+      ctx.t[jj + 1] = ctx.t[jj] + ctx.model->clock(hs, ctx.t[jj], q.data() + jj * d, q.data() + (jj + 1) * d, p);
+    } else {
+      ctx.t[jj + 1] = ctx.t[jj] + ctx.T * c[j - jf] / total;
+    }
+  }
+  if (ctx.clock == ClockMode::fixed_total_time && !L.has_right()) ctx.t[static_cast<std::size_t>(Nl)] = ctx.t0 + ctx.T;
+  if (L.has_right()) {
+    const double send[2] = {ctx.t[static_cast<std::size_t>(Nl - 1)], ctx.t[static_cast<std::size_t>(Nl)]};
+    MPI_Send(send, 2, MPI_DOUBLE, L.rank + 1, 104, local.comm);
+  }
+  for (int j = 0; j < Nl; ++j) {
+    const std::size_t jj = static_cast<std::size_t>(j);
+    ctx.hk[jj] = ctx.clock == ClockMode::free_final_time ? hs : ctx.t[jj + 1] - ctx.t[jj];
+  }
+  ctx.evaluated = Evaluated::nothing;
 }
 
 /** Residual of the whole problem after a local evaluation: the lowest global node with a
@@ -440,10 +486,24 @@ class Driver {
   void run() {
     const Layout& L = local_.layout;
     const MPI_Comm comm = local_.comm;
+    const bool clocked = ctx_.clock != ClockMode::none;
+    long since_clock = 0;
     for (;;) {
-      const int bad = globalize_residual(local_, method_.evaluate(ctx_));
+      if (clocked && since_clock >= options_.clock_update_every) {
+        update_times_distributed(local_);
+        since_clock = 0;
+      }
+      int bad = globalize_residual(local_, method_.evaluate(ctx_));
       if (bad >= 0) return non_finite_residual(bad);
-      const double r = ctx_.residual;
+      double r = ctx_.residual;
+      if (clocked && r <= options_.tol && since_clock > 0) {
+        // Declare convergence only with node times consistent with this trajectory.
+        update_times_distributed(local_);
+        since_clock = 0;
+        bad = globalize_residual(local_, method_.evaluate(ctx_));
+        if (bad >= 0) return non_finite_residual(bad);
+        r = ctx_.residual;
+      }
       if (!have_initial_) {
         r_initial_ = r;
         have_initial_ = true;
@@ -503,6 +563,7 @@ class Driver {
       detail::exchange_halos(L, ctx_.q.data(), ctx_.dim, comm);
       if (!outcome.next_evaluated) ctx_.evaluated = Evaluated::nothing;
       ++iteration_;
+      ++since_clock;
     }
   }
 
@@ -513,7 +574,8 @@ class Driver {
     s_.iterations = iteration_;
     s_.residual = ctx_.residual;
     s_.action = global_action(local_, ctx_.q);
-    s_.final_time = problem.t0 + problem.T;
+    s_.final_time = ctx_.t.back();  // t_N, held by the last rank
+    MPI_Bcast(&s_.final_time, 1, MPI_DOUBLE, L.ranks - 1, local_.comm);
     s_.residual_floor = ctx_.residual_floor;
     if (s_.history.empty() || s_.history.back().iteration != iteration_) {
       IterationRecord rec;
@@ -683,6 +745,7 @@ Summary solve_over_ranks(const Problem& problem, const Options& options, Traject
   trajectory.t.clear();
   trajectory.t.shrink_to_fit();
   std::unique_ptr<pardel::detail::Method_> method = make_method(options, local);
+  if (problem.clock != ClockMode::none) update_times_distributed(local);
   method->reset(local.ctx);
   Driver driver(options, *method, local, summary);
   driver.run();
