@@ -351,6 +351,23 @@ TEST(Failure, NaNOnOneRankEndsEveryRankAsNonFinite) {
   }
 }
 
+TEST(Failure, InterruptionOnOneRankStopsEveryRank) {
+  const auto problem = fuel_nav(100);
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.threads = 1;
+  const bool last_rank = world_rank() + 1 == world_size();
+  options.on_iteration = [last_rank](const pardel::IterationRecord& record) {
+    return !(last_rank && record.iteration >= 25);  // only the last rank asks to stop
+  };
+  auto trajectory = pardel::linear_guess(problem);
+  const pardel::Summary s = pardel::mpi::solve_distributed(problem, options, trajectory);
+  if (world_size() > 1) {
+    EXPECT_EQ(s.termination, pardel::Termination::interrupted) << s.message;
+    EXPECT_EQ(s.iterations, 25);
+  }
+}
+
 // ---- the acceptance test: N = 10^6 on the ranks of this run against one process
 
 TEST(LargeGrid, PendulumNewtonAtAMillionNodesMatchesOneProcess) {
