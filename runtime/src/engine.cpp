@@ -50,13 +50,8 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   ctx.free_count.assign(n1, m.dim);
   ctx.q.assign(n1 * d, 0.0);
   ctx.q_next.assign(n1 * d, 0.0);
-  const std::size_t nd = static_cast<std::size_t>(N) * d;
-  ctx.Ld.assign(static_cast<std::size_t>(N), 0.0);
-  ctx.D1.assign(nd, 0.0);
-  ctx.D2.assign(nd, 0.0);
-  ctx.D11.assign(nd * d, 0.0);
-  ctx.D12.assign(nd * d, 0.0);
-  ctx.D22.assign(nd * d, 0.0);
+  // Interval arrays: allocated by the first evaluation that needs them (ensure_interval_arrays).
+  for (std::vector<double>* v : {&ctx.Ld, &ctx.D1, &ctx.D2, &ctx.D11, &ctx.D12, &ctx.D22}) std::vector<double>().swap(*v);
   ctx.res.assign(n1 * d, 0.0);
   ctx.node_max.assign(n1, 0.0);
   ctx.node_scale.assign(n1, 0.0);
@@ -106,7 +101,23 @@ bool apply_constraints(const Problem& problem, Context& ctx, std::string* messag
   return true;
 }
 
+void ensure_interval_arrays(Context& ctx, Evaluated kind) {
+  const std::size_t N = static_cast<std::size_t>(ctx.N), d = static_cast<std::size_t>(ctx.dim);
+  auto size = [](std::vector<double>& v, std::size_t n) {
+    if (v.size() != n) v.assign(n, 0.0);
+  };
+  size(ctx.D1, N * d);
+  size(ctx.D2, N * d);
+  if (kind != Evaluated::sweep) size(ctx.Ld, N);
+  if (kind != Evaluated::grad) {
+    size(ctx.D11, N * d * d);
+    size(ctx.D22, N * d * d);
+  }
+  if (kind == Evaluated::full) size(ctx.D12, N * d * d);
+}
+
 void eval_sweep(Context& ctx, const std::vector<double>& q) {
+  ensure_interval_arrays(ctx, Evaluated::sweep);
   const int d = ctx.dim, N = ctx.N;
   const std::size_t dd = static_cast<std::size_t>(d) * d;
   const pardel_sweep_kernel kern = ctx.disc->sweep;
@@ -121,6 +132,7 @@ void eval_sweep(Context& ctx, const std::vector<double>& q) {
 }
 
 void eval_full(Context& ctx, const std::vector<double>& q) {
+  ensure_interval_arrays(ctx, Evaluated::full);
   const int d = ctx.dim, N = ctx.N;
   const std::size_t dd = static_cast<std::size_t>(d) * d;
   const pardel_full_kernel kern = ctx.disc->full;
@@ -136,6 +148,7 @@ void eval_full(Context& ctx, const std::vector<double>& q) {
 }
 
 void eval_grad(Context& ctx, const std::vector<double>& q) {
+  ensure_interval_arrays(ctx, Evaluated::grad);
   const int d = ctx.dim, N = ctx.N;
   const pardel_grad_kernel kern = ctx.disc->grad;
   const double* p = ctx.p();

@@ -71,6 +71,10 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx);
 /** Marks knots and boundaries; `message` is set and false returned for a knot off the grid. */
 bool apply_constraints(const Problem& problem, Context& ctx, std::string* message);
 
+/** Sizes the interval arrays that a kernel of `kind` fills (sweep: D1, D2, D11, D22; grad: Ld, D1, D2;
+ *  full: all) for ctx.N; setup_context leaves them empty, so methods that never store interval
+ *  derivatives (the fused Jacobi sweeps) do not pay for them. */
+void ensure_interval_arrays(Context& ctx, Evaluated kind);
 /** Evaluates a kernel on every interval at `q` into the context's arrays (parallel over k). */
 void eval_sweep(Context& ctx, const std::vector<double>& q);
 void eval_full(Context& ctx, const std::vector<double>& q);
@@ -95,13 +99,18 @@ struct StepOutcome {
   Termination failure = Termination::converged;  ///< `converged` here means "no failure"
   std::string message;
   bool next_evaluated = false;  ///< the interval arrays already hold the evaluation at q_next
+  /** The method checked q_next itself (in the pass that wrote it): the driver takes these two
+   *  instead of scanning q_next again. */
+  bool next_checked = false;
+  int next_non_finite_node = -1;  ///< first node of q_next with a non-finite value, or -1
+  double next_max_abs = 0;        ///< max |q_next|
   bool ok() const { return failure == Termination::converged; }
 };
 
 /**
  * A solver method. The driver owns the loop: it calls evaluate() at the current iterate ctx.q
- * (which must leave ctx.residual set and the D1/D2 arrays valid), decides convergence, then
- * calls iterate(), which writes the next iterate into ctx.q_next from ctx.q.
+ * (which must leave ctx.residual and ctx.residual_floor set), decides convergence, then calls
+ * iterate(), which writes the next iterate into ctx.q_next from ctx.q.
  */
 class Method_ {
  public:

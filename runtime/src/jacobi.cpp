@@ -2,12 +2,22 @@
  * @file jacobi.cpp
  * The seed's parallel methods: nonlinear block Jacobi (eq. pDEL: each interior block solved for
  * qbar_k with its neighbours frozen, by Newton to a tolerance) and the m-step block Jacobi-Newton
- * (eq. NewtonRaphson), both with damping q <- q + (1 - eps)(qbar - q). All nodes in parallel; the
- * first Newton step of every node uses the interval arrays evaluated once per sweep.
+ * (eq. NewtonRaphson), both with damping q <- q + (1 - eps)(qbar - q).
+ *
+ * One sweep is one fused pass over the nodes: each thread walks a contiguous range of nodes,
+ * evaluates the sweep kernel of interval k once (kept in a two-interval rolling buffer, shared by
+ * nodes k and k+1), forms the residual of node k, updates the node and checks the new value, all
+ * while the node's data is in cache. No interval arrays are stored; a thread recomputes the one
+ * interval left of its range. The pass runs in evaluate() (the driver needs the residual before it
+ * decides to iterate) and writes the next iterate into a buffer of the method; iterate() hands it
+ * over. Every node's update reads only the previous iterate and the reductions are maxima and
+ * minima, so results are bit for bit the same for any thread count.
  */
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 #include "engine.hpp"
@@ -19,7 +29,14 @@
 namespace pardel::detail {
 namespace {
 
-/** Per-thread scratch for the node solves (no allocation in the sweep). */
+/** One interval's sweep-kernel outputs. */
+struct IntervalDerivatives {
+  std::vector<double> D1, D2, D11, D22;
+  explicit IntervalDerivatives(int d)
+      : D1(static_cast<std::size_t>(d)), D2(D1.size()), D11(D1.size() * d), D22(D11.size()) {}
+};
+
+/** Per-thread scratch of the fused pass (allocated by reset(), never in a sweep). */
 template <int D>
 struct NodeScratch {
   using Mat = Eigen::Matrix<double, D, D>;
@@ -27,17 +44,45 @@ struct NodeScratch {
   Mat M;
   Vec r, x, dx;
   Eigen::PartialPivLU<Mat> lu;
-  std::vector<double> d1a, d2a, d11a, d22a, d1b, d2b, d11b, d22b;
+  IntervalDerivatives left, right, ahead, a, b;  // rolling buffer; a, b: the node's own re-evaluations
+  // What the thread found in its range.
+  double residual = 0, scale = 0, qmax = 0;
+  int bad_residual = -1, singular = -1, bad_value = -1;
   explicit NodeScratch(int d)
-      : M(Mat::Zero(d, d)), r(Vec::Zero(d)), x(Vec::Zero(d)), dx(Vec::Zero(d)), lu(d) {
-    const std::size_t n = static_cast<std::size_t>(d), nn = n * n;
-    d1a.assign(n, 0); d2a.assign(n, 0); d1b.assign(n, 0); d2b.assign(n, 0);
-    d11a.assign(nn, 0); d22a.assign(nn, 0); d11b.assign(nn, 0); d22b.assign(nn, 0);
-  }
+      : M(Mat::Zero(d, d)), r(Vec::Zero(d)), x(Vec::Zero(d)), dx(Vec::Zero(d)), lu(d), left(d), right(d), ahead(d),
+        a(d), b(d) {}
 };
 
-/** Node status after a sweep. */
-enum : signed char { node_ok = 0, node_singular = 1 };
+/** Solves M dx = r for a node block and subtracts dx from x; false when M is singular (reciprocal
+ *  condition number in the 1-norm at most 1e-14) or not finite. Closed forms for 1x1 and 2x2. */
+template <int D>
+bool node_newton_step(NodeScratch<D>& s, int d) {
+  if constexpr (D == 1) {
+    const double m = s.M(0, 0);
+    if (!(std::fabs(m) > 0) || !std::isfinite(m)) return false;
+    s.x[0] -= s.r[0] / m;
+    return true;
+  } else if constexpr (D == 2) {
+    const double a = s.M(0, 0), b = s.M(0, 1), c = s.M(1, 0), e = s.M(1, 1);
+    const double det = a * e - b * c;
+    const double norm = std::max(std::fabs(a) + std::fabs(c), std::fabs(b) + std::fabs(e));
+    const double norm_adj = std::max(std::fabs(e) + std::fabs(c), std::fabs(b) + std::fabs(a));
+    // rcond = |det| / (|M|_1 |adj M|_1) > 1e-14, without a division on the way.
+    if (!(std::fabs(det) > 1e-14 * (norm * norm_adj)) || !std::isfinite(det)) return false;
+    const double inv = 1 / det;
+    s.x[0] -= (e * s.r[0] - b * s.r[1]) * inv;
+    s.x[1] -= (a * s.r[1] - c * s.r[0]) * inv;
+    return true;
+  } else {
+    (void)d;
+    s.lu.compute(s.M);
+    const double rc = s.lu.rcond();
+    if (!(rc > 1e-14)) return false;
+    s.dx.noalias() = s.lu.solve(s.r);
+    s.x -= s.dx;
+    return true;
+  }
+}
 
 template <int D>
 class JacobiSweeps : public Method_ {
@@ -53,84 +98,171 @@ class JacobiSweeps : public Method_ {
   void reset(Context& ctx) override {
     scratch_.clear();
     for (int i = 0; i < ctx.threads; ++i) scratch_.emplace_back(ctx.dim);
-    status_.assign(static_cast<std::size_t>(ctx.N) + 1, node_ok);
+    next_.assign(ctx.q.size(), 0.0);
+    have_next_ = false;
   }
 
+  /** The fused pass at ctx.q: residual, round-off floor and the next iterate (into next_). */
   int evaluate(Context& ctx) override {
-    if (ctx.evaluated == Evaluated::nothing || ctx.evaluated == Evaluated::grad) eval_sweep(ctx, ctx.q);
+    const int N = ctx.N;
+    const bool parallel = ctx.parallel(N + 1);
+#pragma omp parallel if (parallel) num_threads(ctx.threads)
+    {
+#ifdef _OPENMP
+      const int tid = omp_get_thread_num(), nt = omp_get_num_threads();
+#else
+      const int tid = 0, nt = 1;
+#endif
+      NodeScratch<D>& s = scratch_[static_cast<std::size_t>(tid)];
+      if (tid == 0) team_ = nt;
+      const long nodes = static_cast<long>(N) + 1;
+      const int first = static_cast<int>(nodes * tid / nt), last = static_cast<int>(nodes * (tid + 1) / nt);
+      pass(ctx, s, first, last);
+    }
+    double residual = 0, scale = 0;
+    int bad = -1;
+    singular_ = -1;
+    bad_value_ = -1;
+    qmax_ = 0;
+    for (int i = 0; i < team_; ++i) {
+      const NodeScratch<D>& s = scratch_[static_cast<std::size_t>(i)];
+      residual = std::max(residual, s.residual);
+      scale = std::max(scale, s.scale);
+      qmax_ = std::max(qmax_, s.qmax);
+      if (s.bad_residual >= 0 && (bad < 0 || s.bad_residual < bad)) bad = s.bad_residual;
+      if (s.singular >= 0 && (singular_ < 0 || s.singular < singular_)) singular_ = s.singular;
+      if (s.bad_value >= 0 && (bad_value_ < 0 || s.bad_value < bad_value_)) bad_value_ = s.bad_value;
+    }
+    ctx.residual_floor = 16 * std::numeric_limits<double>::epsilon() * scale;
+    ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : residual;
     ctx.action_known = false;
-    return compute_residual(ctx);
+    have_next_ = true;
+    return bad;
   }
 
   StepOutcome iterate(Context& ctx, long iteration) override {
-    const int d = ctx.dim, N = ctx.N;
-    const std::size_t dz = static_cast<std::size_t>(d), dd = dz * dz;
-    const double keep = 1.0 - damping_;
-#pragma omp parallel if (ctx.parallel(N)) num_threads(ctx.threads)
-    {
-#ifdef _OPENMP
-      NodeScratch<D>& s = scratch_[static_cast<std::size_t>(omp_get_thread_num())];
-#else
-      NodeScratch<D>& s = scratch_[0];
-#endif
-#pragma omp for schedule(static)
-      for (int k = 0; k <= N; ++k) {
-        const std::size_t kk = static_cast<std::size_t>(k);
-        const double* qk = ctx.q.data() + kk * dz;
-        double* out = ctx.q_next.data() + kk * dz;
-        status_[kk] = node_ok;
-        if (ctx.free_count[kk] == 0) {
-          for (int a = 0; a < d; ++a) out[a] = qk[a];
-          continue;
-        }
-        const unsigned char* f = ctx.is_free.data() + kk * dz;
-        // First Newton step from the shared interval arrays.
-        s.M = RowMap(ctx.D22.data() + (kk - 1) * dd, d, d);
-        s.M += RowMap(ctx.D11.data() + kk * dd, d, d);
-        s.r = Eigen::Map<const Vec>(ctx.res.data() + kk * dz, d);
-        for (int a = 0; a < d; ++a) s.x[a] = qk[a];
-        bool fine = newton_step(s, f, d);
-        const int steps = nonlinear_ ? 50 : substeps_;
-        for (int m = 1; fine && m < steps; ++m) {
-          // Re-evaluate the node's two intervals with the neighbours frozen.
-          const double* qa = ctx.q.data() + (kk - 1) * dz;
-          const double* qb = ctx.q.data() + (kk + 1) * dz;
-          ctx.disc->sweep(ctx.hk[kk - 1], ctx.t[kk - 1], ctx.t[kk], qa, s.x.data(), ctx.p(), s.d1a.data(),
-                          s.d2a.data(), s.d11a.data(), s.d22a.data());
-          ctx.disc->sweep(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], s.x.data(), qb, ctx.p(), s.d1b.data(),
-                          s.d2b.data(), s.d11b.data(), s.d22b.data());
-          double rmax = 0;
-          for (int a = 0; a < d; ++a) {
-            s.r[a] = f[a] ? s.d2a[static_cast<std::size_t>(a)] + s.d1b[static_cast<std::size_t>(a)] : 0.0;
-            rmax = std::max(rmax, std::fabs(s.r[a]));
-          }
-          if (nonlinear_ && rmax <= inner_tol_) break;
-          s.M = RowMap(s.d22a.data(), d, d);
-          s.M += RowMap(s.d11b.data(), d, d);
-          fine = newton_step(s, f, d);
-        }
-        if (!fine) status_[kk] = node_singular;
-        for (int a = 0; a < d; ++a) out[a] = qk[a] + keep * (s.x[a] - qk[a]);
-      }
-    }
     StepOutcome outcome;
-    for (int k = 1; k < N; ++k) {
-      if (status_[static_cast<std::size_t>(k)] == node_singular) {
-        char buf[200];
-        std::snprintf(buf, sizeof buf,
-                      "singular diagonal block D_%d = D22(%d) + D11(%d) at node %d in iteration %ld", k, k - 1, k,
-                      k, iteration);
-        outcome.failure = Termination::non_finite;
-        outcome.message = buf;
-        return outcome;
-      }
+    if (!have_next_) evaluate(ctx);
+    have_next_ = false;
+    if (singular_ >= 0) {
+      const int k = singular_;
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "singular diagonal block D_%d = D22(%d) + D11(%d) at node %d in iteration %ld", k, k - 1, k, k,
+                    iteration);
+      outcome.failure = Termination::non_finite;
+      outcome.message = buf;
+      return outcome;
     }
+    std::swap(ctx.q_next, next_);
+    outcome.next_checked = true;
+    outcome.next_non_finite_node = bad_value_;
+    outcome.next_max_abs = qmax_;
     return outcome;
   }
 
  private:
+  /** Nodes first..last-1: kernels, residuals and node updates in one walk. */
+  void pass(const Context& ctx, NodeScratch<D>& s, int first, int last) {
+    const int d = D > 0 ? D : ctx.dim, N = ctx.N;  // a compile-time size unrolls the node loops
+    const std::size_t dz = static_cast<std::size_t>(d);
+    const double keep = 1.0 - damping_;
+    const double* p = ctx.p();
+    const pardel_sweep_kernel kern = ctx.disc->sweep;
+    const double* q = ctx.q.data();
+    // What this range finds, in locals (the scratch is written once at the end).
+    double residual = 0, residual_scale = 0, qmax = 0;
+    int bad_residual = -1, singular = -1, bad_value = -1;
+    double probe = 0;
+    auto eval = [&](int k, IntervalDerivatives& out) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q + kk * dz, q + (kk + 1) * dz, p, out.D1.data(), out.D2.data(),
+           out.D11.data(), out.D22.data());
+    };
+    // Three interval buffers: the kernel of interval k+1 runs before node k is updated, so the
+    // update never waits on results that were just written.
+    IntervalDerivatives* left = &s.left;    // interval k-1
+    IntervalDerivatives* right = &s.right;  // interval k
+    IntervalDerivatives* ahead = &s.ahead;  // interval k+1
+    if (first > 0 && first <= N) eval(first - 1, *left);
+    if (first < N && first < last) eval(first, *right);
+    for (int k = first; k < last; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      if (k + 1 < N && k + 1 < last) eval(k + 1, *ahead);
+      const double* qk = q + kk * dz;
+      double* out = next_.data() + kk * dz;
+      const unsigned char* f = ctx.is_free.data() + kk * dz;
+      if (ctx.free_count[kk] == 0) {
+        for (int i = 0; i < d; ++i) out[i] = qk[i];
+      } else {
+        // Residual r_k = D2(k-1) + D1(k) on free components, and its round-off scale.
+        double mx = 0, scale = 0;
+        bool finite = true;
+        for (int i = 0; i < d; ++i) {
+          double v = 0;
+          if (f[i]) {
+            const double a = left->D2[static_cast<std::size_t>(i)], b = right->D1[static_cast<std::size_t>(i)];
+            v = a + b;
+            if (!std::isfinite(v)) finite = false;
+            scale = std::max(scale, std::fabs(a) + std::fabs(b));
+          }
+          s.r[i] = v;
+          mx = std::max(mx, std::fabs(v));
+        }
+        if (!finite && bad_residual < 0) bad_residual = k;
+        residual = std::max(residual, mx);
+        residual_scale = std::max(residual_scale, scale);
+        // First Newton step from the shared interval derivatives.
+        s.M = RowMap(left->D22.data(), d, d);
+        s.M += RowMap(right->D11.data(), d, d);
+        for (int i = 0; i < d; ++i) s.x[i] = qk[i];
+        bool fine = step(s, f, d);
+        const int steps = nonlinear_ ? 50 : substeps_;
+        for (int m = 1; fine && m < steps; ++m) {
+          // Re-evaluate the node's two intervals with the neighbours frozen.
+          const double* qa = q + (kk - 1) * dz;
+          const double* qb = q + (kk + 1) * dz;
+          kern(ctx.hk[kk - 1], ctx.t[kk - 1], ctx.t[kk], qa, s.x.data(), p, s.a.D1.data(), s.a.D2.data(),
+               s.a.D11.data(), s.a.D22.data());
+          kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], s.x.data(), qb, p, s.b.D1.data(), s.b.D2.data(), s.b.D11.data(),
+               s.b.D22.data());
+          double rmax = 0;
+          for (int i = 0; i < d; ++i) {
+            s.r[i] = f[i] ? s.a.D2[static_cast<std::size_t>(i)] + s.b.D1[static_cast<std::size_t>(i)] : 0.0;
+            rmax = std::max(rmax, std::fabs(s.r[i]));
+          }
+          if (nonlinear_ && rmax <= inner_tol_) break;
+          s.M = RowMap(s.a.D22.data(), d, d);
+          s.M += RowMap(s.b.D11.data(), d, d);
+          fine = step(s, f, d);
+        }
+        if (!fine && singular < 0 && finite) singular = k;
+        for (int i = 0; i < d; ++i) out[i] = qk[i] + keep * (s.x[i] - qk[i]);
+      }
+      for (int i = 0; i < d; ++i) {
+        probe += out[i] * 0.0;  // NaN once any value is not finite
+        qmax = std::max(qmax, std::fabs(out[i]));
+      }
+      IntervalDerivatives* done = left;
+      left = right;
+      right = ahead;
+      ahead = done;
+    }
+    if (!(probe == 0)) {  // rare: find the first non-finite value of the range
+      for (int k = first; k < last && bad_value < 0; ++k)
+        for (int i = 0; i < d; ++i)
+          if (!std::isfinite(next_[static_cast<std::size_t>(k) * dz + static_cast<std::size_t>(i)])) bad_value = k;
+    }
+    s.residual = residual;
+    s.scale = residual_scale;
+    s.qmax = qmax;
+    s.bad_residual = bad_residual;
+    s.singular = singular;
+    s.bad_value = bad_value;
+  }
+
   /** x <- x - M^{-1} r on free components (fixed rows/cols replaced by identity); false if singular. */
-  static bool newton_step(NodeScratch<D>& s, const unsigned char* f, int d) {
+  static bool step(NodeScratch<D>& s, const unsigned char* f, int d) {
     for (int a = 0; a < d; ++a) {
       if (!f[a]) {
         s.M.row(a).setZero();
@@ -139,12 +271,7 @@ class JacobiSweeps : public Method_ {
         s.r[a] = 0;
       }
     }
-    s.lu.compute(s.M);
-    const double rc = s.lu.rcond();
-    if (!(rc > 1e-14)) return false;
-    s.dx.noalias() = s.lu.solve(s.r);
-    s.x -= s.dx;
-    return true;
+    return node_newton_step<D>(s, d);
   }
 
   bool nonlinear_;
@@ -152,7 +279,11 @@ class JacobiSweeps : public Method_ {
   int substeps_;
   double inner_tol_;
   std::vector<NodeScratch<D>> scratch_;
-  std::vector<signed char> status_;
+  std::vector<double> next_;  ///< the next iterate, written by evaluate()
+  bool have_next_ = false;
+  int team_ = 1;  ///< threads of the last pass
+  int singular_ = -1, bad_value_ = -1;
+  double qmax_ = 0;
 };
 
 }  // namespace

@@ -27,9 +27,11 @@ class Newton : public Method_ {
 
   void reset(Context& ctx) override {
     H_.resize(ctx.N, ctx.dim);
+    if (cyclic_) H_.reserve_cyclic_reduction();
     const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
     rhs_.assign(n, 0.0);
     dx_.assign(n, 0.0);
+    ensure_interval_arrays(ctx, Evaluated::full);
     Ld_ = ctx.Ld;
     D1_ = ctx.D1;
     D2_ = ctx.D2;
@@ -55,14 +57,12 @@ class Newton : public Method_ {
     const double F = ctx.action, r0 = ctx.residual;
     for (std::size_t i = 0; i < n; ++i) rhs_[i] = -ctx.res[dz + i];
     // Scale of the shift: the largest diagonal entry of the unshifted Hessian.
-    H_.assemble(ctx, 0.0);
-    double scale = 0;
-    for (int i = 0; i < H_.blocks(); ++i) scale = std::max(scale, H_.diag(i).diagonal().cwiseAbs().maxCoeff());
+    double scale = BlockTridiagonal<D>::max_abs_diagonal(ctx);
     if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
     const double mu_min = 1e-10 * scale;
     if (mu_ > 0 && mu_ < mu_min) mu_ = mu_min;
     for (int attempt = 0; attempt < 200; ++attempt) {
-      if (attempt > 0 || mu_ != 0) H_.assemble(ctx, mu_, difference_);
+      H_.assemble(ctx, mu_, difference_);
       bool ok;
       if (cyclic_) {
         ok = H_.solve_cyclic_reduction(rhs_.data(), dx_.data(), ctx.threads);

@@ -186,7 +186,11 @@ class Driver {
         finish(Termination::converged, format("DEL residual %.3g <= tol %.3g", r, options_.tol));
         return false;
       }
-      if (!last) {
+      if (!last && options_.method == Method::newton) {
+        // Nested iteration: a coarse level is solved to tol (quadratic convergence makes the last
+        // digits cheap), so that the next level can start from the extrapolation of two levels.
+        if (r <= options_.tol) return true;
+      } else if (!last) {
         if (r <= std::max(options_.tol, options_.refine_settle * r_level0)) return true;
         if (level_it > 0 && level_it % 50 == 0) {
           if (r > 0.99 * r_checkpoint) return true;  // stagnating: less than 1% over 50 iterations
@@ -222,15 +226,17 @@ class Driver {
         finish(outcome.failure, outcome.message);
         return false;
       }
-      const int node = detail::first_non_finite_node(ctx_, ctx_.q_next);
+      const int node = outcome.next_checked ? outcome.next_non_finite_node
+                                            : detail::first_non_finite_node(ctx_, ctx_.q_next);
       if (node >= 0) {
         finish(Termination::non_finite,
                "non-finite value at node " + std::to_string(node) + " in iteration " +
                    std::to_string(iteration_ + 1) + "; the last finite iterate is returned");
         return false;
       }
-      double qmax = 0;
-      for (double v : ctx_.q_next) qmax = std::max(qmax, std::fabs(v));
+      double qmax = outcome.next_max_abs;
+      if (!outcome.next_checked)
+        for (double v : ctx_.q_next) qmax = std::max(qmax, std::fabs(v));
       if (qmax > 1e150) {
         finish(Termination::diverged, format("iterates exploded (max |q| = %.3g) in iteration %.0f", qmax,
                                              static_cast<double>(iteration_ + 1)));
@@ -340,6 +346,22 @@ class Driver {
   bool have_initial_ = false;
 };
 
+/**
+ * The start of a finer level of nested iteration: the two previous levels' solutions resampled to
+ * N and extrapolated in h = T/N under the discretization's error model q(h) = q* + C h^p, i.e.
+ * q_N = q_c + (q_c - q_cc) (h^p - h_c^p) / (h_c^p - h_cc^p). Fixed values (boundaries, knots) agree
+ * on every level and stay exact.
+ */
+Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, const Trajectory& coarser, int N) {
+  Trajectory start = resample(problem, coarse, N);
+  const Trajectory other = resample(problem, coarser, N);
+  const double p = problem.discretization->consistency_order;
+  const double hf = std::pow(1.0 / N, p), hc = std::pow(1.0 / coarse.N, p), hcc = std::pow(1.0 / coarser.N, p);
+  const double w = (hf - hc) / (hc - hcc);
+  for (std::size_t i = 0; i < start.q.size(); ++i) start.q[i] += w * (start.q[i] - other.q[i]);
+  return start;
+}
+
 std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, std::string* message) {
   switch (options.method) {
     case Method::jacobi: return detail::make_jacobi(options, dim);
@@ -379,6 +401,12 @@ bool check_state(const Problem& problem, const Options& options, const SolverSta
     if (!std::isfinite(v)) return bad("the saved trajectory has a non-finite value");
   for (double v : st.trajectory.t)
     if (!std::isfinite(v)) return bad("the saved node times have a non-finite value");
+  if (st.previous_level.N > 0) {
+    Problem previous = problem;
+    previous.N = st.previous_level.N;
+    if (!validate(previous, st.previous_level, &why))
+      return bad("the saved solution of the previous refinement level does not fit the problem: " + why);
+  }
   return true;
 }
 
@@ -412,29 +440,45 @@ Summary solve(const Problem& problem, const Options& options, Trajectory& trajec
     }
   }
   Driver driver(problem, options, *method, summary);
-  Trajectory current = resume ? Trajectory{} : trajectory;
+  // Newton's nested iteration starts a level from the extrapolation of the solutions of the two
+  // levels before it (both converged to tol); not under a clock, whose node times differ per level.
+  const bool extrapolate = options.method == Method::newton && problem.clock == ClockMode::none;
+  Trajectory previous_level, coarser_level;  // solutions of levels l-1 and l-2 (N = 0: none)
+  if (resume) previous_level = resume->previous_level;
   std::size_t l = 0;
   for (l = resume ? static_cast<std::size_t>(resume->level) : 0; l < levels.size(); ++l) {
     const bool last = l + 1 == levels.size();
-    const bool entered = resume && l == static_cast<std::size_t>(resume->level) ? driver.resume_level(*resume)
-                                                                                : driver.enter_level(current, levels[l]);
+    bool entered;
+    if (resume && l == static_cast<std::size_t>(resume->level)) {
+      entered = driver.resume_level(*resume);
+    } else if (previous_level.N == 0) {
+      entered = driver.enter_level(trajectory, levels[l]);
+    } else if (extrapolate && coarser_level.N > 0 && previous_level.N > coarser_level.N) {
+      entered = driver.enter_level(extrapolated_start(problem, previous_level, coarser_level, levels[l]), levels[l]);
+    } else {
+      entered = driver.enter_level(previous_level, levels[l]);
+    }
     if (!entered) {
       summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       return summary;
     }
     const bool settled = driver.run_level(last);
     if (settled && !last) {
-      Context& ctx = driver.context();
-      current.N = ctx.N;
-      current.dim = ctx.dim;
-      current.t = ctx.t;
-      current.q = ctx.q;
+      const Context& ctx = driver.context();
+      coarser_level = std::move(previous_level);
+      previous_level.N = ctx.N;
+      previous_level.dim = ctx.dim;
+      previous_level.t = ctx.t;
+      previous_level.q = ctx.q;
       continue;
     }
     break;
   }
   driver.write_result(trajectory);
-  if (summary.termination == Termination::interrupted) driver.capture(summary.state, static_cast<int>(l));
+  if (summary.termination == Termination::interrupted) {
+    driver.capture(summary.state, static_cast<int>(l));
+    if (extrapolate) summary.state.previous_level = previous_level;
+  }
   if (summary.termination != Termination::converged && trajectory.N != problem.N)
     summary.message += " (stopped at the refinement level N = " + std::to_string(trajectory.N) + ")";
   return summary;

@@ -2,10 +2,12 @@
  * @file test_jacobi_newton.cpp
  * The seed's block Jacobi-Newton (eq. NewtonRaphson): against the exact discrete solution of the
  * harmonic oscillator's trapezoid DEL (a three-term recurrence solved in closed form), m-step
- * variants, damping, bit-identical results for 1 and 2 threads, and failure statuses.
+ * variants, damping, bit-identical results for 1, 2 and 3 threads, one fused sweep of a 2-D model
+ * against the block Newton step formed from the kernels here, and failure statuses.
  */
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 
 #include "hand_models.hpp"
@@ -147,5 +149,60 @@ TEST(JacobiNewton, NonFiniteIterateIsCaughtWithNodeAndIteration) {
     EXPECT_NE(s.message.find("iteration"), std::string::npos) << s.message;
   }
 }
+
+#ifdef PARDEL_HAVE_BUNDLED_MODELS
+TEST(JacobiNewton, FusedSweepIsTheBlockNewtonStepOfEveryNodeForAnyThreadCount) {
+  // fuel_nav (2-D): one sweep from a wavy guess, against x_k - (D22(k-1) + D11(k))^{-1} (D2(k-1) + D1(k))
+  // with the kernels called here and a dense LU; N above the parallel threshold, so the thread
+  // ranges (and the interval each thread recomputes at its left end) are exercised.
+  pardel::Problem p;
+  p.model = pardel::find_model("fuel_nav");
+  ASSERT_NE(p.model, nullptr);
+  p.discretization = pardel::find_discretization(*p.model, "trapezoid");
+  p.T = 30;
+  p.N = 3001;
+  p.q0 = {0, 0};
+  p.qN = {6, 5};
+  pardel::Trajectory guess = pardel::linear_guess(p);
+  for (int k = 1; k < p.N; ++k) {
+    guess.node(k)[0] += 0.3 * std::sin(0.01 * k);
+    guess.node(k)[1] -= 0.2 * std::sin(0.02 * k);
+  }
+  const double h = p.T / p.N;
+  std::vector<double> expected = guess.q;
+  double D1[2], D2[2], D11[4], D22[4], prevD2[2], prevD22[4];
+  for (int k = 0; k < p.N; ++k) {
+    p.discretization->sweep(h, k * h, (k + 1) * h, guess.node(k), guess.node(k + 1), p.model->param_defaults, D1, D2,
+                            D11, D22);
+    if (k > 0) {
+      Eigen::Matrix2d M;
+      M << prevD22[0] + D11[0], prevD22[1] + D11[1], prevD22[2] + D11[2], prevD22[3] + D11[3];
+      const Eigen::Vector2d r(prevD2[0] + D1[0], prevD2[1] + D1[1]);
+      const Eigen::Vector2d dx = M.fullPivLu().solve(r);
+      expected[2 * k] -= dx[0];
+      expected[2 * k + 1] -= dx[1];
+    }
+    std::copy(D2, D2 + 2, prevD2);
+    std::copy(D22, D22 + 4, prevD22);
+  }
+  std::vector<double> one_thread;
+  for (int threads : {1, 2, 3}) {
+    pardel::Options opt;
+    opt.threads = threads;
+    opt.max_iterations = 1;
+    pardel::Trajectory tr = guess;
+    const auto s = pardel::solve(p, opt, tr);
+    ASSERT_EQ(s.termination, pardel::Termination::max_iterations) << s.brief_report();
+    ASSERT_EQ(s.iterations, 1);
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      ASSERT_NEAR(tr.q[i], expected[i], 1e-12 * (1 + std::fabs(expected[i]))) << "component " << i << ", " << threads
+                                                                               << " threads";
+    if (threads == 1)
+      one_thread = tr.q;
+    else
+      EXPECT_EQ(tr.q, one_thread) << threads << " threads";
+  }
+}
+#endif
 
 }  // namespace

@@ -159,6 +159,9 @@ struct SolverState {
   std::vector<double> method_state;     ///< the method's own: newton {mu, nu}; hybrid {phase, sweeps
                                         ///< since the last check, mu, nu}; jacobi methods none
   std::vector<IterationRecord> history; ///< the history recorded so far
+  /** newton with refinement: the solution of the level before `level` (N = 0: none), which with
+   *  this level's solution extrapolates the start of the next level. */
+  Trajectory previous_level;
 };
 
 struct Options {
