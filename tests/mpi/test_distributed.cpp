@@ -282,6 +282,13 @@ TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   s = pardel::mpi::solve_distributed(problem, refine, guess);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
   EXPECT_NE(s.message.find("solver.refine"), std::string::npos) << s.message;
+  pardel::SolverState state;
+  pardel::Options resume;
+  resume.resume_from = &state;
+  guess = pardel::linear_guess(problem);
+  s = pardel::mpi::solve_distributed(problem, resume, guess);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
   auto small = fuel_nav(4);
   guess = pardel::linear_guess(small);
   s = pardel::mpi::solve_distributed(small, pardel::Options{}, guess);

@@ -53,6 +53,9 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
   if (options.method != Method::jacobi && options.method != Method::jacobi_newton && options.method != Method::newton)
     return fail(std::string("solver.method = ") + to_string(options.method) + over +
                 " (distributed methods: jacobi, jacobi-newton, newton); run it on one rank");
+  if (options.resume_from != nullptr)
+    return fail("resuming a checkpoint (pardel solve --resume, Options::resume_from)" + over +
+                ": a checkpoint continues a one-process solve; resume it without mpirun");
   if (options.refine_start_N > 0)
     return fail("solver.refine (coarse-to-fine refinement)" + over + "; remove solver.refine or run on one rank");
   if (static_cast<long>(problem.N) + 1 < 3L * ranks)
@@ -720,8 +723,8 @@ Summary solve_over_ranks(const Problem& problem, const Options& options, Traject
   summary.threads = pardel::detail::resolve_threads(options.threads);
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   std::string error;
-  bool valid = options.is_valid(&error) && validate(problem, trajectory, &error) &&
-               distributed_supported(problem, options, ranks, &error);
+  bool valid = distributed_supported(problem, options, ranks, &error) && options.is_valid(&error) &&
+               validate(problem, trajectory, &error);
   // Every rank was given the same input; agree anyway, so that no rank iterates alone.
   if (!detail::all_true(valid, MPI_COMM_WORLD)) {
     summary.termination = Termination::invalid_input;
