@@ -158,6 +158,18 @@ TEST(JacobiNewton, FixedIterationsBitForBit) {
   expect_bit_for_bit(b);
 }
 
+TEST(JacobiNewton, ThreadedRanksBitForBit) {
+  // Large enough that every rank's loops run on 2 OpenMP threads (above kParallelMin nodes per rank).
+  const auto problem = fuel_nav(3000);
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.max_iterations = 40;
+  options.threads = 2;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  EXPECT_EQ(b.one.termination, pardel::Termination::max_iterations);
+  expect_bit_for_bit(b);
+}
+
 TEST(JacobiNewton, ToConvergenceBitForBit) {
   auto problem = bundled_problem("harmonic", "trapezoid", 2.0, 40, {0.3}, {-0.7});
   pardel::Options options;
