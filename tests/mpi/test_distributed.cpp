@@ -277,17 +277,26 @@ TEST(Newton, DifferenceShiftWithKnotsAgreesToTheTolerance) {
   expect_newton_agrees(b, options.tol, 1e-6);  // measured on 2 and 3 ranks: 4e-13, 1e-11
 }
 
+TEST(Hybrid, FuelNavAgreesToTheTolerance) {
+  const auto problem = fuel_nav(80);
+  pardel::Options options;
+  options.method = pardel::Method::hybrid;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  expect_newton_agrees(b, options.tol, 1e-7);
+}
+
 // ---- refusals and failures
 
 TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   if (world_size() < 2) GTEST_SKIP() << "refusals apply to more than one rank";
   const auto problem = fuel_nav(100);
   auto guess = pardel::linear_guess(problem);
-  pardel::Options hybrid;
-  hybrid.method = pardel::Method::hybrid;
-  auto s = pardel::mpi::solve_distributed(problem, hybrid, guess);
+  pardel::Options multigrid;
+  multigrid.method = pardel::Method::multigrid;
+  auto s = pardel::mpi::solve_distributed(problem, multigrid, guess);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
-  EXPECT_NE(s.message.find("solver.method = hybrid"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("solver.method = multigrid"), std::string::npos) << s.message;
   pardel::Options refine;
   refine.refine_start_N = 20;
   guess = pardel::linear_guess(problem);

@@ -10,7 +10,9 @@
  *  - newton solves its block-tridiagonal systems by a Schur-complement split (each rank
  *    eliminates its interior, the P-1 interface blocks form a small block-tridiagonal system that
  *    every rank solves redundantly after an Allgather) with the globalization of the one-process
- *    Newton, so it agrees with it to the tolerance (the linear algebra differs in rounding only).
+ *    Newton, so it agrees with it to the tolerance (the linear algebra differs in rounding only);
+ *  - hybrid switches from Jacobi-Newton to that Newton when the distributed factorization
+ *    certifies a positive definite Hessian.
  *
  * Node times under a clock (free_final_time, fixed_total_time) are prefix sums carried from rank to
  * rank, with the one-process order of additions. Without MPI in the build, or with one rank,

@@ -50,9 +50,9 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
     return false;
   };
   const std::string over = " cannot be distributed over " + std::to_string(ranks) + " ranks";
-  if (options.method != Method::jacobi && options.method != Method::jacobi_newton && options.method != Method::newton)
+  if (options.method == Method::multigrid)
     return fail(std::string("solver.method = ") + to_string(options.method) + over +
-                " (distributed methods: jacobi, jacobi-newton, newton); run it on one rank");
+                " (distributed methods: jacobi, jacobi-newton, newton, hybrid); run it on one rank");
   if (options.resume_from != nullptr)
     return fail("resuming a checkpoint (pardel solve --resume, Options::resume_from)" + over +
                 ": a checkpoint continues a one-process solve; resume it without mpirun");
@@ -294,6 +294,15 @@ class DistributedNewton : public pardel::detail::Method_ {
     return bad;
   }
 
+  /** Whether the unshifted Hessian at the full evaluation in ctx is positive definite (every
+   *  pivot of the distributed factorization; collective). */
+  bool hessian_positive_definite(const Context& ctx) {
+    assemble(ctx, 0.0);
+    std::fill(rhs_.begin(), rhs_.end(), 0.0);
+    const std::size_t off0 = static_cast<std::size_t>(local_.layout.local(local_.u0)) * ctx.dim;
+    return solver_.solve(rhs_.data(), dxl_.data() + off0, local_.comm);
+  }
+
   StepOutcome iterate(Context& ctx, long iteration) override {
     const Layout& L = local_.layout;
     const MPI_Comm comm = local_.comm;
@@ -472,6 +481,44 @@ class DistributedNewton : public pardel::detail::Method_ {
   std::vector<double> rhs_, dxl_;
   std::vector<double> Ld_, D1_, D2_, D11_, D12_, D22_, res_;
   double mu_ = 0, nu_ = 2;
+};
+
+/** hybrid.cpp over the ranks: Jacobi-Newton sweeps until the distributed factorization certifies
+ *  a positive definite Hessian (checked every 10 sweeps, as in one process), then Newton. */
+template <int D>
+class DistributedHybrid : public pardel::detail::Method_ {
+ public:
+  DistributedHybrid(const Options& o, Local& local)
+      : local_(local), sweeps_(pardel::detail::make_jacobi_newton(o, local.ctx.dim)), newton_(o, local) {}
+
+  void reset(Context& ctx) override {
+    sweeps_->reset(ctx);
+    newton_.reset(ctx);
+    newton_mode_ = false;
+    since_check_ = check_every;
+  }
+
+  int evaluate(Context& ctx) override { return newton_mode_ ? newton_.evaluate(ctx) : sweeps_->evaluate(ctx); }
+
+  StepOutcome iterate(Context& ctx, long iteration) override {
+    if (!newton_mode_ && ++since_check_ >= check_every) {
+      since_check_ = 0;
+      pardel::detail::eval_full(ctx, ctx.q);
+      globalize_residual(local_, pardel::detail::compute_residual(ctx));
+      ctx.action = global_sum_Ld(local_);
+      ctx.action_known = true;
+      newton_mode_ = newton_.hessian_positive_definite(ctx);
+    }
+    return newton_mode_ ? newton_.iterate(ctx, iteration) : sweeps_->iterate(ctx, iteration);
+  }
+
+ private:
+  static constexpr int check_every = 10;
+  Local& local_;
+  std::unique_ptr<pardel::detail::Method_> sweeps_;
+  DistributedNewton<D> newton_;
+  bool newton_mode_ = false;
+  int since_check_ = 0;
 };
 
 /** The one-process driver of solve.cpp on one level without a clock, every decision taken from
@@ -709,6 +756,10 @@ std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, Loc
     case Method::newton:
       return pardel::detail::dispatch_dim(dim, [&](auto D) -> std::unique_ptr<pardel::detail::Method_> {
         return std::make_unique<DistributedNewton<decltype(D)::value>>(options, local);
+      });
+    case Method::hybrid:
+      return pardel::detail::dispatch_dim(dim, [&](auto D) -> std::unique_ptr<pardel::detail::Method_> {
+        return std::make_unique<DistributedHybrid<decltype(D)::value>>(options, local);
       });
     default: return nullptr;
   }
