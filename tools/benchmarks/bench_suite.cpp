@@ -5,7 +5,8 @@
  *   peer        the seed's fuel-optimal example at several N: every pardel method and IPOPT
  *   scaling     time to solution and per iteration against N and threads
  *   memory      max RSS of one solve (run once per N, in a fresh process)
- *   workprec    time to converge against error w.r.t. a Richardson-extrapolated reference
+ *   workprec    per scene, each method x discretization x N: time to converge against the error
+ *               w.r.t. a Richardson-extrapolated reference (nested Newton at ref-N and ref-N/2)
  *   stability   where each method converges, diverges or lands on another solution
  * Wall times come from the solver's Summary (setup of the problem excluded).
  */
@@ -17,12 +18,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "pardel/pardel.hpp"
+#include "scene.hpp"
 #ifdef PARDEL_BENCH_WITH_IPOPT
 #include "ipopt_peer.hpp"
 #endif
@@ -104,26 +107,26 @@ pardel::Problem fuel_problem(int N, const std::string& disc = "trapezoid") {
   return p;
 }
 
-/** The seed's second-order interpolation example (scenes/interp_fuel.toml). */
-pardel::Problem interp_problem(int N, const std::string& disc) {
-  pardel::Problem p;
-  p.model = model_or_fail("interp_fuel");
-  p.discretization = disc_or_fail(*p.model, disc);
-  p.T = 60;
-  p.N = N;
-  p.q0 = {0, 0, 0, 0};
-  p.qN = {3, 5, 0, 0};
-  p.knots = {{20, {1, 3}}, {40, {5, 2}}};
-  return p;
-}
-
-pardel::Trajectory interp_guess(const pardel::Problem& p) {
-  return pardel::polyline_guess(p, {{0, 0}, {1, 3}, {5, 2}, {3, 5}});
-}
-
 bool parse_method_or_fail(const std::string& text, pardel::Method* m) {
   if (!pardel::parse_method(text, m)) fail("unknown method '" + text + "'");
   return true;
+}
+
+/**
+ * Sets the method of `o` from a benchmark method name: a pardel method name, or "newton-nested":
+ * newton with nested iteration from `nested_start` intervals, doubling N (plain newton when
+ * N <= nested_start).
+ */
+void configure_method(const std::string& name, int N, int nested_start, pardel::Options& o) {
+  if (name == "newton-nested") {
+    o.method = pardel::Method::newton;
+    if (N > nested_start) {
+      o.refine_start_N = nested_start;
+      o.refine_factor = 2;
+    }
+    return;
+  }
+  parse_method_or_fail(name, &o.method);
 }
 
 struct Run {
@@ -174,9 +177,10 @@ long max_rss_kib() {
 
 int cmd_peer(const Args& a) {
   const std::vector<double> Ns = a.list("N", "200,2000,20000,200000");
-  const std::vector<std::string> methods = a.words("methods", "newton,hybrid,jacobi-newton,ipopt");
+  const std::vector<std::string> methods = a.words("methods", "newton,newton-nested,hybrid,jacobi-newton,ipopt");
   const double cap = a.num("cap", 60);
   const int threads = static_cast<int>(a.num("threads", 2));
+  const int nested_start = static_cast<int>(a.num("nested-start", 200));
   const double tol = a.num("tol", 1e-10);
   std::printf("N,method,status,iterations,seconds,residual,action,extrapolated_iterations,extrapolated_seconds,"
               "message\n");
@@ -200,7 +204,7 @@ int cmd_peer(const Args& a) {
         continue;
       }
       pardel::Options o;
-      parse_method_or_fail(name, &o.method);
+      configure_method(name, N, nested_start, o);
       o.tol = tol;
       o.threads = threads;
       o.max_iterations = 100000000;
@@ -227,18 +231,19 @@ int cmd_peer(const Args& a) {
 
 int cmd_scaling(const Args& a) {
   const std::vector<double> Ns = a.list("N", "100,1000,10000,100000,1000000");
-  const std::vector<std::string> methods = a.words("methods", "newton,hybrid");
+  const std::vector<std::string> methods = a.words("methods", "newton-nested,newton");
   const std::vector<double> threads_list = a.list("threads", "1,2");
+  const int nested_start = static_cast<int>(a.num("nested-start", 200));
   const double cap = a.num("cap", 60);
   const double tol = a.num("tol", 1e-10);
-  std::printf("N,method,threads,status,iterations,seconds,seconds_per_iteration,residual,action\n");
+  std::printf("N,method,threads,status,iterations,seconds,seconds_per_iteration,residual,action,load\n");
   for (double Nd : Ns) {
     const int N = static_cast<int>(Nd);
     const pardel::Problem p = fuel_problem(N);
     for (const std::string& name : methods) {
       for (double th : threads_list) {
         pardel::Options o;
-        parse_method_or_fail(name, &o.method);
+        configure_method(name, N, nested_start, o);
         o.tol = tol;
         o.threads = static_cast<int>(th);
         o.max_iterations = 100000000;
@@ -246,9 +251,11 @@ int cmd_scaling(const Args& a) {
         pardel::Trajectory tr = pardel::linear_guess(p);
         const Run run = solve_capped(p, o, tr, cap);
         const pardel::Summary& s = run.summary;
-        std::printf("%d,%s,%d,%s,%ld,%.6f,%.6e,%.3e,%.12g\n", N, name.c_str(), o.threads,
+        double load[1] = {0};
+        getloadavg(load, 1);
+        std::printf("%d,%s,%d,%s,%ld,%.6f,%.6e,%.3e,%.12g,%.2f\n", N, name.c_str(), o.threads,
                     run.capped ? "time_cap" : pardel::to_string(s.termination), s.iterations, s.wall_seconds,
-                    s.iterations > 0 ? s.wall_seconds / s.iterations : 0.0, s.residual, s.action);
+                    s.iterations > 0 ? s.wall_seconds / s.iterations : 0.0, s.residual, s.action, load[0]);
         std::fflush(stdout);
       }
     }
@@ -285,80 +292,95 @@ double max_error_shared(const pardel::Trajectory& coarse, const pardel::Trajecto
   return e;
 }
 
-/** A seed example by model name: its problem at N intervals and its initial guess. */
-struct Example {
-  std::function<pardel::Problem(int, const std::string&)> problem;
-  std::function<pardel::Trajectory(const pardel::Problem&)> guess;
-};
+/** A scene file with `--set`-style overrides (models resolved among the bundled ones). */
+pardel::cli::Scene load_or_fail(const std::string& path, const std::vector<std::string>& sets) {
+  try {
+    return pardel::cli::load_scene(path, sets, [](const std::string& name) { return pardel::find_model(name); });
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+}
+pardel::cli::Scene scene_as_written(const std::string& path) { return load_or_fail(path, {}); }
+/** The scene at another grid size and discretization. */
+pardel::cli::Scene scene_at(const std::string& path, int N, const std::string& disc) {
+  return load_or_fail(path, {"grid.N=" + std::to_string(N), "discretization=" + disc});
+}
 
-Example example_or_fail(const std::string& model) {
-  if (model == "fuel_nav")
-    return {[](int N, const std::string& d) { return fuel_problem(N, d); },
-            [](const pardel::Problem& p) { return pardel::linear_guess(p); }};
-  if (model == "interp_fuel") return {interp_problem, interp_guess};
-  fail("--model: workprec knows the examples fuel_nav and interp_fuel, not '" + model + "'");
+/**
+ * The scene's tolerance at N: as written for N <= the scene's own N0; for order-2 models, whose
+ * attainable residual grows like N^3 (docs/solvers.md, statuses), scaled by (N / N0)^3 above it.
+ */
+double tol_at(const pardel::cli::Scene& base, int N) {
+  const double tol = base.options.tol;
+  if (base.problem.model->order < 2 || N <= base.problem.N) return tol;
+  return tol * std::pow(static_cast<double>(N) / base.problem.N, 3);
+}
+
+/** Options for a work-precision run: the scene's (clock, tolerance) with the benchmark's method. */
+pardel::Options workprec_options(const pardel::cli::Scene& base, const std::string& method, int N, int threads) {
+  pardel::Options o = base.options;
+  o.refine_start_N = 0;
+  configure_method(method, N, base.problem.N, o);
+  o.tol = tol_at(base, N);
+  o.threads = threads;
+  o.max_iterations = 100000000;
+  o.history_every = 1000;
+  return o;
 }
 
 int cmd_workprec(const Args& a) {
-  const std::string model = a.get("model", "fuel_nav");
-  const Example ex = example_or_fail(model);
-  const std::vector<std::string> methods = a.words("methods", "newton,hybrid,jacobi-newton");
-  const std::vector<double> Ns = a.list("N", "25,50,100,200,400,800,1600,3200");
-  const int threads = static_cast<int>(a.num("threads", 2));
-  const double cap = a.num("cap", 5);
-  const int ref_N = static_cast<int>(a.num("ref-N", 51200));
-  const pardel_model* m = model_or_fail(model);
-  std::printf("model,discretization,method,N,status,iterations,seconds,action,action_error,max_error\n");
+  const std::string path = a.get("scene", "scenes/fuel_nav.toml");
+  const pardel::cli::Scene base = scene_as_written(path);
+  const std::string name = std::filesystem::path(path).stem().string();
+  const std::vector<std::string> methods = a.words("methods", "newton,newton-nested,hybrid,jacobi-newton");
+  const std::vector<double> Ns = a.list("N", "50,100,200,400");
+  const int threads = static_cast<int>(a.num("threads", 1));
+  const double cap = a.num("cap", 2);
+  const int ref_N = static_cast<int>(a.num("ref-N", 3200));
+  const double ref_cap = a.num("ref-cap", 60);
+  const pardel_model* m = base.problem.model;
+  std::printf("scene,discretization,method,N,status,iterations,seconds,residual,tol,action,action_error,max_error\n");
   for (int di = 0; di < m->ndiscretizations; ++di) {
-    const pardel_discretization& disc = m->discretizations[di];
-    // Reference: Newton at ref_N and ref_N/2, Richardson-extrapolated at the nodes of ref_N/2.
-    pardel::Options ro;
-    ro.method = pardel::Method::newton;
-    ro.tol = 1e-11;
-    ro.threads = threads;
-    ro.refine_start_N = 0;
+    const std::string disc = m->discretizations[di].name;
+    // Reference: nested Newton at ref_N/2 and ref_N, Richardson-extrapolated at the nodes of ref_N/2.
     pardel::Trajectory fine, coarse;
     pardel::Summary sf, sc;
-    {
-      const pardel::Problem pc = ex.problem(ref_N / 2, disc.name);
-      coarse = ex.guess(pc);
-      sc = pardel::solve(pc, ro, coarse);
-      const pardel::Problem pf = ex.problem(ref_N, disc.name);
-      fine = pardel::resample(pf, coarse, ref_N);
-      sf = pardel::solve(pf, ro, fine);
+    for (int half = 0; half < 2; ++half) {
+      const int n = half ? ref_N / 2 : ref_N;
+      const pardel::cli::Scene sn = scene_at(path, n, disc);
+      pardel::Options ro = workprec_options(base, "newton-nested", n, threads);
+      pardel::Trajectory tr = pardel::cli::make_initial_guess(sn);
+      pardel::Summary s = solve_capped(sn.problem, ro, tr, ref_cap).summary;
+      (half ? coarse : fine) = tr;
+      (half ? sc : sf) = s;
     }
     if (!sf.converged() || !sc.converged()) {
-      std::fprintf(stderr, "reference for %s/%s did not converge: %s | %s\n", model.c_str(), disc.name,
+      std::fprintf(stderr, "reference for %s/%s did not converge: %s | %s\n", name.c_str(), disc.c_str(),
                    sf.brief_report().c_str(), sc.brief_report().c_str());
       continue;
     }
-    const double w = std::pow(2.0, disc.consistency_order);
+    const double w = std::pow(2.0, m->discretizations[di].consistency_order);
     const double action_ref = (w * sf.action - sc.action) / (w - 1);
     pardel::Trajectory ref = coarse;
     for (int k = 0; k <= coarse.N; ++k)
-      for (int i = 0; i < m->dim; ++i)
-        ref.node(k)[i] = (w * fine.node(2 * k)[i] - coarse.node(k)[i]) / (w - 1);
-    std::fprintf(stderr, "%s/%s: reference action %.15g (N = %d: %.15g, N = %d: %.15g)\n", model.c_str(), disc.name,
-                 action_ref, ref_N, sf.action, ref_N / 2, sc.action);
+      for (int i = 0; i < m->dim; ++i) ref.node(k)[i] = (w * fine.node(2 * k)[i] - coarse.node(k)[i]) / (w - 1);
+    std::fprintf(stderr, "%s/%s: reference action %.15g (N = %d: %.15g in %.2f s, N = %d: %.15g in %.2f s)\n",
+                 name.c_str(), disc.c_str(), action_ref, ref_N, sf.action, sf.wall_seconds, ref_N / 2, sc.action,
+                 sc.wall_seconds);
     for (double Nd : Ns) {
       const int N = static_cast<int>(Nd);
       if ((ref_N / 2) % N != 0) fail("--N: " + std::to_string(N) + " does not divide ref-N/2");
-      const pardel::Problem p = ex.problem(N, disc.name);
-      for (const std::string& name : methods) {
-        pardel::Options o;
-        parse_method_or_fail(name, &o.method);
-        o.tol = 1e-10;
-        o.threads = threads;
-        o.max_iterations = 100000000;
-        o.history_every = 1000;
-        pardel::Trajectory tr = ex.guess(p);
-        const Run run = solve_capped(p, o, tr, cap);
+      const pardel::cli::Scene sn = scene_at(path, N, disc);
+      for (const std::string& method : methods) {
+        const pardel::Options o = workprec_options(base, method, N, threads);
+        pardel::Trajectory tr = pardel::cli::make_initial_guess(sn);
+        const Run run = solve_capped(sn.problem, o, tr, cap);
         const pardel::Summary& s = run.summary;
-        const bool ok = s.converged();
-        std::printf("%s,%s,%s,%d,%s,%ld,%.6e,%.15g,%.3e,%.3e\n", model.c_str(), disc.name, name.c_str(), N,
+        const bool finite = std::isfinite(s.action) && tr.N == N;
+        std::printf("%s,%s,%s,%d,%s,%ld,%.6e,%.3e,%.3e,%.15g,%.3e,%.3e\n", name.c_str(), disc.c_str(), method.c_str(), N,
                     run.capped ? "time_cap" : pardel::to_string(s.termination), s.iterations, s.wall_seconds,
-                    s.action, ok ? std::fabs(s.action - action_ref) : NAN,
-                    ok ? max_error_shared(tr, ref, m->ncoords) : NAN);
+                    s.residual, o.tol, s.action, finite ? std::fabs(s.action - action_ref) : NAN,
+                    finite ? max_error_shared(tr, ref, m->ncoords) : NAN);
         std::fflush(stdout);
       }
     }
@@ -523,7 +545,7 @@ int main(int argc, char** argv) {
         "  peer       [--N 200,2000,...] [--methods newton,...,ipopt] [--cap 60] [--threads 2] [--tol 1e-10]\n"
         "  scaling    [--N ...] [--methods ...] [--threads 1,2] [--cap 60]\n"
         "  memory     [--N 1e7] [--method jacobi-newton] [--iterations 5] [--threads 2]\n"
-        "  workprec   [--model fuel_nav|interp_fuel] [--N ...] [--ref-N 51200] [--methods ...] [--cap 5]\n"
+        "  workprec   [--scene scenes/X.toml] [--N ...] [--ref-N 3200] [--methods ...] [--cap 2] [--ref-cap 60] [--threads 1]\n"
         "  stability  [--map harmonic|bratu|fuel] [--methods ...] [--max-iterations 20000] [--cap 2]\n");
     return argc < 2 ? 2 : 0;
   }

@@ -27,7 +27,7 @@ import numpy as np  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 OUT = os.path.join(ROOT, "docs", "images")
 COLORS = {"newton": "C0", "multigrid": "C1", "hybrid": "C2", "jacobi-newton": "C3", "jacobi": "C4",
-          "ipopt": "C5"}
+          "ipopt": "C5", "newton-nested": "C6"}
 
 
 REUSE = False  # --reuse: draw from the CSVs already in docs/images instead of measuring again
@@ -41,12 +41,25 @@ def run_csv(cmd, name):
         return list(csv.DictReader(open(path)))
     print("$", " ".join(cmd), flush=True)
     start = time.time()
+    load_before = os.getloadavg()[0]
     out = subprocess.run(cmd, check=True, stdout=subprocess.PIPE, text=True).stdout
     print(f"  ({time.time() - start:.1f} s)", flush=True)
+    note_load(name, start, load_before)
     path = os.path.join(OUT, f"bench_{name}.csv")
     with open(path, "w") as f:
         f.write(out)
     return list(csv.DictReader(out.splitlines()))
+
+
+def note_load(name, start, load_before):
+    """Appends the machine's load around one measurement to bench_load.csv (the machine is shared)."""
+    path = os.path.join(OUT, "bench_load.csv")
+    new = not os.path.exists(path)
+    with open(path, "a") as f:
+        if new:
+            f.write("part,start_utc,seconds,load1_before,load1_after\n")
+        f.write(f"{name},{time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(start))},{time.time() - start:.1f},"
+                f"{load_before:.2f},{os.getloadavg()[0]:.2f}\n")
 
 
 def num(x):
@@ -88,10 +101,11 @@ def machine(build):
 
 def part_peer(suite, quick):
     Ns = "200,2000" if quick else "200,2000,20000,200000"
-    cap = "5" if quick else "60"
-    rows = run_csv([suite, "peer", "--N", Ns, "--cap", cap], "peer")
+    cap = "5" if quick else "20"
+    rows = run_csv([suite, "peer", "--N", Ns, "--cap", cap, "--threads", "1"], "peer")
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    methods = [m for m in ["newton", "multigrid", "hybrid", "jacobi-newton", "ipopt"] if any(r["method"] == m for r in rows)]
+    methods = [m for m in ["newton", "newton-nested", "multigrid", "hybrid", "jacobi-newton", "ipopt"]
+               if any(r["method"] == m for r in rows)]
     Nvals = sorted({int(r["N"]) for r in rows})
     width = 0.8 / max(1, len(methods))
     for i, m in enumerate(methods):
@@ -188,10 +202,10 @@ def part_sweep(build, quick):
 
 def part_scaling(suite, quick):
     Ns = "100,1000,10000" if quick else "100,1000,10000,100000,1000000,10000000"
-    rows = run_csv([suite, "scaling", "--N", Ns, "--methods", "newton,hybrid", "--threads", "1,2",
+    rows = run_csv([suite, "scaling", "--N", Ns, "--methods", "newton-nested", "--threads", "1,2",
                     "--cap", "60"], "scaling")
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    for m in ("newton", "multigrid", "hybrid"):
+    for m in ("newton-nested", "newton", "multigrid", "hybrid"):
         for th in (1, 2):
             pts = sorted((int(r["N"]), num(r["seconds"])) for r in rows
                          if r["method"] == m and int(r["threads"]) == th and r["status"] == "converged")
@@ -222,33 +236,50 @@ def part_memory(suite, quick):
         w.writerows(rows)
 
 
+# The seed examples of the work-precision charts: scene, grid sizes, reference N (Richardson of the
+# nested-Newton solutions at ref and ref/2; every N divides ref/2).
+WORKPREC = [("scenes/fuel_nav.toml", "100,200,400,800,1600", "12800"),
+            ("scenes/zermelo_1.toml", "20,40,80,160,320", "5120"),
+            ("scenes/interp_fuel.toml", "60,120,240,480", "3840"),
+            ("scenes/zermelo_tv.toml", "25,50,100,200", "1600"),
+            ("scenes/spacecraft_fixed.toml", "25,50,100,200", "1600")]
+
+
 def part_workprec(suite, quick):
-    examples = [("fuel_nav", "25,50,100,200,400,800,1600,3200", "51200"),
-                ("interp_fuel", "30,60,120,240,480,960,1920", "61440")]
-    if quick:
-        examples = [("fuel_nav", "25,50,100,200", "3200")]
-    for model, Ns, ref in examples:
-        rows = run_csv([suite, "workprec", "--model", model, "--N", Ns, "--ref-N", ref, "--cap", "5"],
-                       f"workprec_{model}")
+    examples = WORKPREC[:1] if quick else WORKPREC
+    for scene, Ns, ref in examples:
+        name = os.path.splitext(os.path.basename(scene))[0]
+        rows = run_csv([suite, "workprec", "--scene", os.path.join(ROOT, scene), "--N", Ns, "--ref-N", ref,
+                        "--cap", "2", "--threads", "1"], f"workprec_{name}")
         discs = sorted({r["discretization"] for r in rows})
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+        fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
         markers = ["o", "s", "^", "D"]
-        for m in ("newton", "multigrid", "hybrid", "jacobi-newton"):
-            for di, d in enumerate(discs):
-                pts = sorted((num(r["seconds"]), num(r["action_error"]), num(r["max_error"])) for r in rows
-                             if r["method"] == m and r["discretization"] == d and r["status"] == "converged")
-                if not pts:
-                    continue
-                t, ea, et = zip(*pts)
-                axes[0].loglog(t, np.maximum(ea, 1e-16), marker=markers[di % 4], color=COLORS[m], label=f"{m}, {d}")
-                axes[1].loglog(t, np.maximum(et, 1e-16), marker=markers[di % 4], color=COLORS[m], label=f"{m}, {d}")
-        axes[0].set_ylabel("|action - reference|")
-        axes[1].set_ylabel("max trajectory error at shared nodes")
-        for ax in axes:
-            ax.set_xlabel("wall time to residual 1e-10 [s]")
-        axes[0].set_title(f"{model}: work-precision (reference: Richardson at N = {ref})", fontsize=9)
-        axes[1].legend(fontsize=7)
-        save(fig, f"workprec_{model}")
+        for col, (ax, key, what) in enumerate(zip(axes, ("action_error", "max_error"),
+                                                  ("|action - reference action|",
+                                                   "max error of the coordinates at the nodes"))):
+            for m in ("newton", "newton-nested", "hybrid", "jacobi-newton"):
+                for di, d in enumerate(discs):
+                    sel = sorted((num(r["seconds"]), num(r[key]), r["status"]) for r in rows
+                                 if r["method"] == m and r["discretization"] == d)
+                    ok = [(t, e) for t, e, st in sel if st == "converged" and np.isfinite(e)]
+                    bad = [(t, e) for t, e, st in sel if st != "converged" and np.isfinite(e)]
+                    style = "-" if di == 0 else "--"
+                    if ok:
+                        t, e = zip(*ok)
+                        ax.loglog(t, np.maximum(e, 1e-16), style, marker=markers[di % 4], color=COLORS[m],
+                                  label=f"{m}, {d}")
+                    if bad:
+                        t, e = zip(*bad)
+                        ax.loglog(t, np.maximum(e, 1e-16), linestyle="none", marker=markers[di % 4], mfc="none",
+                                  color=COLORS[m], label=f"{m}, {d}: not converged")
+            ax.set_xlabel("wall time [s] (1 thread)")
+            ax.set_ylabel(what)
+        axes[0].set_title(f"{name}: work-precision, N = {Ns}; reference: Richardson extrapolation of N = {ref} "
+                          f"and {int(ref) // 2}", fontsize=8)
+        axes[1].set_title("hollow: not converged (2 s cap, or stalled)", fontsize=8)
+        if any(a.get_legend_handles_labels()[0] for a in axes):
+            axes[1].legend(fontsize=6, ncol=2)
+        save(fig, f"workprec_{name}")
 
 
 def part_stability(suite, quick):
