@@ -2,8 +2,9 @@
  * @file test_distributed.cpp
  * The domain-decomposed solve against the one-process pardel::solve on the same problem in the
  * same run (run by mpirun on 2 and 3 ranks): the seed's Jacobi methods bit for bit (a fixed number
- * of iterations and to convergence, with damping and knots), Newton to the tolerance, the halo
- * exchange and the rank-order sum, refusals, and a NaN on one rank ending every rank. The
+ * of iterations and to convergence, with damping, knots, clocks and threads inside the ranks),
+ * Newton and hybrid to the tolerance, the halo exchange and the rank-order sum, refusals, and a
+ * NaN or an interruption on one rank ending every rank. The
  * acceptance test (LargeGrid.*: pendulum at N = 10^6) runs separately under a ctest label.
  */
 #include <gtest/gtest.h>

@@ -5,14 +5,13 @@
  * Jacobi methods run on it unchanged), and a driver that mirrors the one-process driver of
  * solve.cpp step for step while taking every decision from values reduced over all ranks:
  * the residual and its round-off level by max (order-independent), the action by a sum in node
- * order, failures by the lowest failing node or rank. Newton's block-tridiagonal solves are
+ * order, failures by the lowest failing node or rank. Node times under a clock are prefix sums
+ * carried from rank to rank; Newton's block-tridiagonal solves (also those of hybrid) are
  * distributed by the Schur-complement split of schur_solver.hpp.
  */
 #include "pardel/distributed.hpp"
 
 #include <string>
-
-#include "pardel/mpi_session.hpp"
 
 #ifdef PARDEL_HAVE_MPI
 #include <mpi.h>
