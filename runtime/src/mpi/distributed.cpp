@@ -275,6 +275,7 @@ class DistributedNewton : public pardel::detail::Method_ {
     const std::size_t n = static_cast<std::size_t>(local_.owned_unknowns()) * ctx.dim;
     rhs_.assign(n, 0.0);
     dxl_.assign(ctx.q.size(), 0.0);
+    pardel::detail::ensure_interval_arrays(ctx, Evaluated::full);  // both sets sized before the first step
     Ld_ = ctx.Ld;
     D1_ = ctx.D1;
     D2_ = ctx.D2;
