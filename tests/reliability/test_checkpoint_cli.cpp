@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -87,10 +88,10 @@ class CheckpointCli : public ::testing::Test {
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
-  /** A valid checkpoint of `scene_` at iteration K written without a signal (in-process solve). */
-  static fs::path make_checkpoint(const std::string& name, long K) {
+  /** A valid checkpoint of `scene_path` at iteration K written without a signal (in-process solve). */
+  static fs::path make_checkpoint(const std::string& name, long K, const fs::path& scene_path = scene_) {
     const pardel::cli::Scene scene = pardel::cli::load_scene(
-        scene_.string(), {}, [](const std::string& n) { return pardel::find_model(n); });
+        scene_path.string(), {}, [](const std::string& n) { return pardel::find_model(n); });
     pardel::Options options = scene.options;
     options.threads = 1;
     options.on_iteration = [K](const pardel::IterationRecord& r) { return r.iteration < K; };
@@ -98,8 +99,8 @@ class CheckpointCli : public ::testing::Test {
     const pardel::Summary summary = pardel::solve(scene.problem, options, trajectory);
     EXPECT_EQ(summary.termination, pardel::Termination::interrupted);
     Checkpoint c;
-    c.scene_path = scene_.string();
-    c.scene_hash = pardel::cli::fnv1a_hex(read_text(scene_));
+    c.scene_path = scene_path.string();
+    c.scene_hash = pardel::cli::fnv1a_hex(read_text(scene_path));
     c.threads = 1;
     c.model = "fuel_nav";
     c.dim = 2;
@@ -187,6 +188,41 @@ TEST_F(CheckpointCli, CheckpointWrittenInProcessResumesToTheReference) {
                                      out / "resume.log");
   EXPECT_EQ(resumed.status, 3) << resumed.output;
   EXPECT_EQ(read_text(out / "trajectory.csv"), read_text(dir_ / "reference" / "trajectory.csv"));
+}
+
+TEST_F(CheckpointCli, NestedNewtonResumedOnAnIntermediateLevel) {
+  // Newton with coarse-to-fine refinement starts each level from an extrapolation of the two
+  // previous levels' solutions; the checkpoint carries the earlier one.
+  const fs::path scene = dir_ / "nested.toml";
+  write_text(scene,
+             "model = \"fuel_nav\"\ndiscretization = \"trapezoid\"\n[grid]\nt0 = 0\nT = 30\nN = 400\n"
+             "[boundary]\nq0 = [0, 0]\nqN = [6, 5]\n[guess]\nkind = \"linear\"\n"
+             "[solver]\nmethod = \"newton\"\ntol = 1e-10\n[solver.refine]\nstart_N = 25\nfactor = 2\n");
+  const Outcome reference = run_pardel({"solve", scene.string(), "--out", (dir_ / "nested_reference").string(),
+                                        "--threads", "1", "--no-plot", "--quiet"},
+                                       dir_ / "nested_reference.log");
+  ASSERT_EQ(reference.status, 0) << reference.output;
+  // The first iteration on the third level (N = 100), where two solved levels exist.
+  std::istringstream history(read_text(dir_ / "nested_reference" / "convergence.csv"));
+  std::string line;
+  long K = -1;
+  std::getline(history, line);
+  while (std::getline(history, line)) {
+    long iteration = 0;
+    int N = 0;
+    if (std::sscanf(line.c_str(), "%ld,%d", &iteration, &N) == 2 && N == 100) {
+      K = iteration + 1;
+      break;
+    }
+  }
+  ASSERT_GT(K, 0) << "no level N = 100 in the history";
+  const fs::path out = make_checkpoint("nested", K, scene);
+  const Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  EXPECT_EQ(c.state.N, 100);
+  EXPECT_EQ(c.state.previous_level.N, 50);
+  const Outcome resumed = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet"}, out / "resume.log");
+  EXPECT_EQ(resumed.status, 0) << resumed.output;
+  EXPECT_EQ(read_text(out / "trajectory.csv"), read_text(dir_ / "nested_reference" / "trajectory.csv"));
 }
 
 TEST_F(CheckpointCli, TruncatedCheckpointIsRefused) {

@@ -133,6 +133,9 @@ json body_json(const Checkpoint& c) {
       {"t", numbers(s.trajectory.t)},
       {"q", numbers(s.trajectory.q)},
       {"history", history},
+      {"previous_level", {{"N", s.previous_level.N},
+                          {"t", numbers(s.previous_level.t)},
+                          {"q", numbers(s.previous_level.q)}}},
   };
   return {
       {"scene", {{"path", c.scene_path}, {"hash", c.scene_hash}, {"overrides", c.overrides}, {"threads", c.threads}}},
@@ -241,6 +244,21 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
     r.action = rd.real(h[3], where + "[3]");
     r.seconds = rd.real(h[4], where + "[4]");
     s.history.push_back(r);
+  }
+  // Newton's nested iteration: the previous level's solution (N = 0: none).
+  const json& previous = rd.at(st, "previous_level", "state");
+  s.previous_level.N = static_cast<int>(rd.integer(previous, "N", "state.previous_level", 0, s.N));
+  s.previous_level.t = rd.reals(previous, "t", "state.previous_level");
+  s.previous_level.q = rd.reals(previous, "q", "state.previous_level");
+  if (s.previous_level.N > 0) {
+    s.previous_level.dim = c.dim;
+    const std::size_t p1 = static_cast<std::size_t>(s.previous_level.N) + 1;
+    if (s.previous_level.N < 2 || s.previous_level.t.size() != p1 ||
+        s.previous_level.q.size() != p1 * static_cast<std::size_t>(c.dim))
+      rd.fail(fmt::format("key state.previous_level: N = {} does not fit {} node times and {} values",
+                          s.previous_level.N, s.previous_level.t.size(), s.previous_level.q.size()));
+  } else if (!s.previous_level.t.empty() || !s.previous_level.q.empty()) {
+    rd.fail("key state.previous_level: values given for N = 0");
   }
   s.valid = true;
   return c;
