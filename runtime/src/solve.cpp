@@ -393,6 +393,7 @@ bool check_state(const Problem& problem, const Options& options, const SolverSta
       st.next_record < 0 || st.best_iteration < 0 || st.best_iteration > st.iteration)
     return bad("inconsistent iteration counters (iteration " + std::to_string(st.iteration) + ", at this level " +
                std::to_string(st.level_iteration) + ")");
+  if (!(st.seconds >= 0 && st.seconds < 1e12)) return bad("the recorded wall time is not a duration in seconds");
   Problem at_level = problem;
   at_level.N = st.N;
   std::string why;

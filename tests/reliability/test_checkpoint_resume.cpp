@@ -273,6 +273,14 @@ TEST_F(MisfitState, EmptyState) {
   expect_refused(fuel_nav(30), options_, pardel::SolverState{}, "resume: the solver state is empty");
 }
 
+TEST_F(MisfitState, WallTimeThatIsNotADuration) {
+  pardel::SolverState s = state_;
+  s.seconds = std::nan("");
+  expect_refused(fuel_nav(30), options_, s, "resume: the recorded wall time is not a duration in seconds");
+  s.seconds = -1;
+  expect_refused(fuel_nav(30), options_, s, "resume: the recorded wall time is not a duration in seconds");
+}
+
 TEST_F(MisfitState, InconsistentCounters) {
   pardel::SolverState s = state_;
   s.level_iteration = s.iteration + 1;
