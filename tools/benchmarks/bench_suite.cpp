@@ -8,9 +8,11 @@
  *   workprec    per scene, each method x discretization x N: time to converge against the error
  *               w.r.t. a Richardson-extrapolated reference (nested Newton at ref-N and ref-N/2)
  *   stability   where each method converges, diverges or lands on another solution
+ *   sweep-cpu   one Jacobi-Newton sweep against its kernels alone, in CPU time on one thread
  * Wall times come from the solver's Summary (setup of the problem excluded).
  */
 #include <sys/resource.h>
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -282,6 +284,59 @@ int cmd_memory(const Args& a) {
   return 0;
 }
 
+/** CPU seconds of this process (a one-thread measurement that other processes on the machine
+ *  disturb far less than wall time). */
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/** One Jacobi-Newton sweep against the sweep kernel alone on every interval, in CPU time on one
+ *  thread: the minimum over repetitions of (solve with 2 + n sweeps - solve with 2 sweeps) / n. */
+int cmd_sweep_cpu(const Args& a) {
+  const std::vector<double> Ns = a.list("N", "1000,100000,1000000");
+  const int repeat = static_cast<int>(a.num("repeat", 7));
+  std::printf("N,sweeps,kernels_seconds,sweep_seconds,sweep_over_kernels,node_updates_per_s\n");
+  for (double Nd : Ns) {
+    const int N = static_cast<int>(Nd);
+    const long n = std::max(2L, static_cast<long>(4e6 / N));
+    const pardel::Problem p = fuel_problem(N);
+    const pardel::Trajectory guess = pardel::linear_guess(p);
+    const int d = p.model->dim;
+    const std::size_t dd = static_cast<std::size_t>(d) * d;
+    std::vector<double> D1(static_cast<std::size_t>(N) * d), D2(D1.size()), D11(N * dd), D22(N * dd);
+    const double h = p.T / N;
+    auto sweeps = [&](long count) {
+      pardel::Options o;
+      o.method = pardel::Method::jacobi_newton;
+      o.threads = 1;
+      o.max_iterations = count;
+      o.history_every = 1L << 40;
+      pardel::Trajectory tr = guess;
+      const double c0 = cpu_seconds();
+      pardel::solve(p, o, tr);
+      return cpu_seconds() - c0;
+    };
+    double kernels = INFINITY, sweep = INFINITY;
+    for (int r = 0; r < repeat; ++r) {
+      const double c0 = cpu_seconds();
+      for (long it = 0; it < n; ++it)
+        for (int k = 0; k < N; ++k) {
+          const std::size_t kk = static_cast<std::size_t>(k);
+          p.discretization->sweep(h, k * h, (k + 1) * h, guess.node(k), guess.node(k + 1), nullptr, &D1[kk * d],
+                                  &D2[kk * d], &D11[kk * dd], &D22[kk * dd]);
+        }
+      kernels = std::min(kernels, (cpu_seconds() - c0) / n);
+      const double few = sweeps(2), many = sweeps(2 + n);
+      sweep = std::min(sweep, (many - few) / n);
+    }
+    std::printf("%d,%ld,%.6e,%.6e,%.3f,%.4e\n", N, n, kernels, sweep, sweep / kernels, (N - 1) / sweep);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 /** Max |a(t) - b(t)| over the coordinates at the nodes of the coarser trajectory (a), which are nodes of b. */
 double max_error_shared(const pardel::Trajectory& coarse, const pardel::Trajectory& fine, int ncoords) {
   const int ratio = fine.N / coarse.N;
@@ -546,7 +601,8 @@ int main(int argc, char** argv) {
         "  scaling    [--N ...] [--methods ...] [--threads 1,2] [--cap 60]\n"
         "  memory     [--N 1e7] [--method jacobi-newton] [--iterations 5] [--threads 2]\n"
         "  workprec   [--scene scenes/X.toml] [--N ...] [--ref-N 3200] [--methods ...] [--cap 2] [--ref-cap 60] [--threads 1]\n"
-        "  stability  [--map harmonic|bratu|fuel] [--methods ...] [--max-iterations 20000] [--cap 2]\n");
+        "  stability  [--map harmonic|bratu|fuel] [--methods ...] [--max-iterations 20000] [--cap 2]\n"
+        "  sweep-cpu  [--N 1000,100000,1000000] [--repeat 7]   (one thread, CPU time)\n");
     return argc < 2 ? 2 : 0;
   }
   Args args;
@@ -560,6 +616,7 @@ int main(int argc, char** argv) {
   if (cmd == "scaling") return cmd_scaling(args);
   if (cmd == "memory") return cmd_memory(args);
   if (cmd == "workprec") return cmd_workprec(args);
+  if (cmd == "sweep-cpu") return cmd_sweep_cpu(args);
   if (cmd == "stability") return cmd_stability(args);
   fail("unknown command '" + cmd + "'");
 }

@@ -200,9 +200,9 @@ def part_sweep(build, quick):
     save(fig, "sweep")
 
 
-def part_scaling(suite, quick):
+def part_scaling(suite, quick, threads):
     Ns = "100,1000,10000" if quick else "100,1000,10000,100000,1000000,10000000"
-    rows = run_csv([suite, "scaling", "--N", Ns, "--methods", "newton-nested", "--threads", "1,2",
+    rows = run_csv([suite, "scaling", "--N", Ns, "--methods", "newton-nested", "--threads", threads,
                     "--cap", "60"], "scaling")
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     for m in ("newton-nested", "newton", "multigrid", "hybrid"):
@@ -242,7 +242,7 @@ WORKPREC = [("scenes/fuel_nav.toml", "100,200,400,800,1600", "12800"),
             ("scenes/zermelo_1.toml", "20,40,80,160,320", "5120"),
             ("scenes/interp_fuel.toml", "60,120,240,480", "3840"),
             ("scenes/zermelo_tv.toml", "25,50,100,200", "1600"),
-            ("scenes/spacecraft_fixed.toml", "25,50,100,200", "1600")]
+            ("scenes/spacecraft_fixed.toml", "25,50,100", "400")]
 
 
 def part_workprec(suite, quick):
@@ -334,6 +334,7 @@ def main():
     ap.add_argument("--only", default="peer,sweep,scaling,memory,workprec,stability", help="comma-separated parts")
     ap.add_argument("--quick", action="store_true", help="small sizes only (a smoke run, minutes)")
     ap.add_argument("--reuse", action="store_true", help="redraw charts from existing CSVs")
+    ap.add_argument("--scaling-threads", default="1,2", help="thread counts of the scaling part")
     args = ap.parse_args()
     global REUSE
     REUSE = args.reuse
@@ -345,7 +346,7 @@ def main():
     if not REUSE:
         machine(build)
     parts = {"peer": lambda: part_peer(suite, args.quick), "sweep": lambda: part_sweep(build, args.quick),
-             "scaling": lambda: part_scaling(suite, args.quick), "memory": lambda: part_memory(suite, args.quick),
+             "scaling": lambda: part_scaling(suite, args.quick, args.scaling_threads), "memory": lambda: part_memory(suite, args.quick),
              "workprec": lambda: part_workprec(suite, args.quick),
              "stability": lambda: part_stability(suite, args.quick)}
     for p in args.only.split(","):
