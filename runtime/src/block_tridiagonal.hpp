@@ -42,7 +42,7 @@ class BlockTridiagonal {
     W_.assign(n, Mat::Zero(d, d));
     y_.assign(n, Vec::Zero(d));
     if (D == Eigen::Dynamic) {
-      llt_.assign(n, Eigen::LLT<Mat>(d));
+      emplace_factorizations(llt_, n, d);
       factor_.clear();
     } else {
       llt_.clear();
@@ -64,7 +64,7 @@ class BlockTridiagonal {
       L.Up.assign(static_cast<std::size_t>(m), Mat::Zero(d, d));
       L.b.assign(static_cast<std::size_t>(m), Vec::Zero(d));
       L.x.assign(static_cast<std::size_t>(m), Vec::Zero(d));
-      L.llt.assign(static_cast<std::size_t>(m), Eigen::LLT<Mat>(d));
+      emplace_factorizations(L.llt, static_cast<std::size_t>(m), d);
       L.ok.assign(static_cast<std::size_t>(m), 1);
       levels_.push_back(std::move(L));
       if (m == 1) break;
@@ -324,6 +324,14 @@ class BlockTridiagonal {
     std::vector<Eigen::LLT<Mat>> llt;
     std::vector<unsigned char> ok;
   };
+
+  /** n factorizations of size d, each constructed in place: a copy of an Eigen::LLT built with
+   *  LLT(Index) would read its uninitialized status (undefined behaviour, reported by UBSan). */
+  static void emplace_factorizations(std::vector<Eigen::LLT<Mat>>& v, std::size_t n, int d) {
+    v.clear();
+    v.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) v.emplace_back(d);
+  }
 
   /** In-place Cholesky A = L L^T of a fixed-size block: the strict lower triangle of A becomes that
    *  of L and the diagonal holds 1 / L(j, j) (the solves multiply by it); false unless every pivot
