@@ -97,6 +97,7 @@ class JacobiSweeps : public Method_ {
 
   void reset(Context& ctx) override {
     scratch_.clear();
+    scratch_.reserve(static_cast<std::size_t>(ctx.threads));  // built in place, never copied
     for (int i = 0; i < ctx.threads; ++i) scratch_.emplace_back(ctx.dim);
     next_.assign(ctx.q.size(), 0.0);
     have_next_ = false;
