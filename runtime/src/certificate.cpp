@@ -86,7 +86,10 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
 
   // Spectral radius of J = -D^{-1} C. With every D_k p.d., J is similar to the symmetric
   // M = L^{-1} C L^{-T}; Lanczos on M. Otherwise the power method on J (an estimate).
-  std::vector<Eigen::LLT<Mat>> chol(static_cast<std::size_t>(n), Eigen::LLT<Mat>(d));
+  // Constructed in place: a copy of an Eigen::LLT built with a size reads its uninitialized status.
+  std::vector<Eigen::LLT<Mat>> chol;
+  chol.reserve(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) chol.emplace_back(d);
   bool all_pd = true;
   for (int i = 0; i < n; ++i) {
     chol[static_cast<std::size_t>(i)].compute(H.diag(i));
