@@ -23,8 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "distributed_solve.hpp"
 #include "checkpoint.hpp"
+#include "distributed_solve.hpp"
 #include "memory_estimate.hpp"
 #include "outputs.hpp"
 #include "pardel/mpi_session.hpp"
