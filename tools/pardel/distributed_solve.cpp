@@ -6,14 +6,12 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
-#include <filesystem>
-#include <iostream>
 
 #include "outputs.hpp"
 #include "pardel/distributed.hpp"
 #include "pardel/mpi_session.hpp"
+#include "pardel_cli/config.hpp"
 #include "progress.hpp"
-#include "trajectory_io.hpp"
 
 namespace pardel::cli {
 namespace {
@@ -24,7 +22,6 @@ extern "C" void on_distributed_signal(int) { g_distributed_interrupted.store(tru
 }  // namespace
 
 int run_distributed_solve(Scene& scene, Trajectory& trajectory, const DistributedSolveOutput& output) {
-  namespace fs = std::filesystem;
   const int rank = mpi::world_rank(), ranks = mpi::world_size();
   const bool root = rank == 0;
   ProgressLine progress(root && !output.quiet, scene.options.tol);
@@ -42,32 +39,12 @@ int run_distributed_solve(Scene& scene, Trajectory& trajectory, const Distribute
   scene.options.on_iteration = nullptr;
   if (!root) return exit_code(summary.termination);
 
-  Certificate certificate;
-  Problem final_problem = scene.problem;
-  final_problem.N = trajectory.N;
-  const bool have_trajectory = trajectory.N >= 2 && static_cast<int>(trajectory.t.size()) == trajectory.N + 1;
-  if (have_trajectory) certificate = certify(final_problem, trajectory, scene.options.threads);
-  nlohmann::ordered_json summary_doc = summary_json(scene, summary, trajectory, certificate, output.model_source);
-  summary_doc["ranks"] = ranks;
-  write_file_atomic((fs::path(output.out_dir) / "summary.json").string(), summary_doc.dump(2) + "\n");
-  if (have_trajectory) {
-    write_file_atomic((fs::path(output.out_dir) / "trajectory.csv").string(), trajectory_csv(*scene.model, trajectory));
-  }
-  write_file_atomic((fs::path(output.out_dir) / "convergence.csv").string(), convergence_csv(summary));
-  if (output.plot && have_trajectory && output.draw_plots) output.draw_plots(output.out_dir);
-
+  const SolveOutputs outputs = write_solve_outputs(scene, summary, trajectory, output.out_dir, {{"ranks", ranks}});
+  if (output.plot && outputs.have_trajectory) run_plot_script(config::plot_script, output.out_dir, "plots");
   if (!output.quiet) {
-    const PhysicalCost cost = physical_cost(scene, summary, trajectory);
-    std::cout << summary.brief_report() << "\n";
-    std::cout << fmt::format("ranks: {} (nodes split into contiguous ranges, halos exchanged every iteration)\n",
-                             ranks);
-    std::cout << fmt::format("{} = {} ({})\n", cost.name, format_double(cost.value), cost.definition);
-    std::cout << fmt::format("certificate: theorem {}, Hessian {} (inertia +{} -{} 0:{}), Jacobi spectral radius {}\n",
-                             certificate.theorem_holds ? "holds" : "does not hold",
-                             certificate.hessian_positive_definite ? "positive definite" : "not positive definite",
-                             certificate.inertia_positive, certificate.inertia_negative, certificate.inertia_zero,
-                             format_double(certificate.jacobi_spectral_radius));
-    std::cout << "output: " << output.out_dir << "\n";
+    print_solve_report(scene, summary, trajectory, outputs.certificate, output.out_dir,
+                       fmt::format("ranks: {} (nodes split into contiguous ranges, halos exchanged every iteration)",
+                                   ranks));
   }
   if (!summary.converged()) {
     std::fprintf(stderr, "pardel solve: %s: %s\n", to_string(summary.termination), summary.message.c_str());

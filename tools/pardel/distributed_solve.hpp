@@ -6,7 +6,6 @@
 #ifndef PARDEL_CLI_DISTRIBUTED_SOLVE_HPP
 #define PARDEL_CLI_DISTRIBUTED_SOLVE_HPP
 
-#include <functional>
 #include <string>
 
 #include "pardel/pardel.hpp"
@@ -15,11 +14,9 @@
 namespace pardel::cli {
 
 struct DistributedSolveOutput {
-  std::string out_dir;       ///< the output folder (already created)
-  std::string model_source;  ///< the model's .lag path for summary.json
-  bool quiet = false;        ///< no progress line and no report
-  bool plot = true;          ///< run `draw_plots` on the output folder
-  std::function<void(const std::string& out_dir)> draw_plots;
+  std::string out_dir;  ///< the output folder (already created)
+  bool quiet = false;   ///< no progress line and no report
+  bool plot = true;     ///< draw trajectory.png and convergence.png
 };
 
 /**

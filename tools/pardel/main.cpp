@@ -1,9 +1,6 @@
 // The pardel command line: list models, evaluate kernels, solve scenes and check certificates.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -37,8 +34,6 @@
 #ifdef PARDEL_HAVE_MODEL_LOADER
 #include "pardel/model_loader.hpp"
 #endif
-
-extern char** environ;
 
 namespace {
 
@@ -79,18 +74,6 @@ const pardel_model* resolve_model_spec(const std::string& spec) {
 #else
   throw std::runtime_error("this build cannot load .lag files (no model loader); use a bundled model");
 #endif
-}
-
-/** The absolute path of a model's .lag source, or "" when it cannot be found. */
-std::string model_source_path(const pardel_model& model) {
-  if (!model.source || !*model.source) return "";
-  const fs::path source(model.source);
-  std::error_code ec;
-  if (source.is_absolute()) return fs::exists(source, ec) ? source.string() : "";
-  const fs::path in_project = fs::path(config::source_dir) / source;
-  if (fs::exists(in_project, ec)) return in_project.lexically_normal().string();
-  if (fs::exists(source, ec)) return fs::absolute(source, ec).lexically_normal().string();
-  return "";
 }
 
 double parse_number_option(const std::string& text, const std::string& option) {
@@ -261,33 +244,6 @@ Scene load_scene_or_throw(const std::string& path, const std::vector<std::string
   return load_scene(path, sets, resolve_model_spec, bundled_names());
 }
 
-/** Runs the plotting script on an output folder; returns false (after a warning) on failure. */
-bool run_plot_script(const std::string& out_dir) {
-  std::vector<std::string> argv_strings = {config::python, config::plot_script, out_dir};
-  std::vector<char*> argv;
-  for (auto& s : argv_strings) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int spawn_error = ::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
-  if (spawn_error != 0) {
-    std::fprintf(stderr, "warning: plots not written: cannot run %s: %s\n", config::python, std::strerror(spawn_error));
-    return false;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) {
-      std::fprintf(stderr, "warning: plots not written: waitpid failed: %s\n", std::strerror(errno));
-      return false;
-    }
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::fprintf(stderr, "warning: plots not written: %s %s exited with status %d\n", config::python,
-                 config::plot_script, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-    return false;
-  }
-  return true;
-}
-
 struct SolveArgs {
   std::string scene;
   std::string out;
@@ -357,11 +313,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   fs::create_directories(out_dir, ec);
   if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
   if (pardel::mpi::world_size() > 1) {  // under mpirun: one solve decomposed over the ranks
-    const std::string source = scene.model_path.empty()
-                                   ? model_source_path(*scene.model)
-                                   : fs::absolute(scene.model_path, ec).lexically_normal().string();
-    return run_distributed_solve(scene, trajectory,
-                                 {out_dir, source, args.quiet, !args.no_plot, [](const std::string& dir) { run_plot_script(dir); }});
+    return run_distributed_solve(scene, trajectory, {out_dir, args.quiet, !args.no_plot});
   }
 
   ProgressLine progress(!args.quiet, scene.options.tol);
@@ -381,23 +333,8 @@ int run_solve_unguarded(const SolveArgs& args) {
   if (resume && summary.termination == Termination::invalid_input)
     throw CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
 
-  // The certificate needs a trajectory on the problem's grid; skip it when the solve stopped
-  // before producing one (invalid input).
-  Certificate certificate;
-  Problem final_problem = scene.problem;
-  final_problem.N = trajectory.N;
-  const bool have_trajectory = trajectory.N >= 2 && static_cast<int>(trajectory.t.size()) == trajectory.N + 1;
-  if (have_trajectory) certificate = certify(final_problem, trajectory, scene.options.threads);
-
+  const SolveOutputs outputs = write_solve_outputs(scene, summary, trajectory, out_dir);
   const pardel_model& model = *scene.model;
-  std::string source = model_source_path(model);
-  if (!scene.model_path.empty()) source = fs::absolute(scene.model_path, ec).lexically_normal().string();
-  write_file_atomic((fs::path(out_dir) / "summary.json").string(),
-                    summary_json(scene, summary, trajectory, certificate, source).dump(2) + "\n");
-  if (have_trajectory) {
-    write_file_atomic((fs::path(out_dir) / "trajectory.csv").string(), trajectory_csv(model, trajectory));
-  }
-  write_file_atomic((fs::path(out_dir) / "convergence.csv").string(), convergence_csv(summary));
   if (summary.termination == Termination::interrupted && summary.state.valid) {
     Checkpoint checkpoint;
     checkpoint.scene_path = resume ? scene_path : fs::absolute(scene_path, ec).lexically_normal().string();
@@ -412,19 +349,8 @@ int run_solve_unguarded(const SolveArgs& args) {
     // A finished solve leaves no checkpoint behind that could resume it again.
     fs::remove(fs::path(out_dir) / checkpoint_file_name(), ec);
   }
-  if (!args.no_plot && have_trajectory) run_plot_script(out_dir);
-
-  if (!args.quiet) {
-    const PhysicalCost cost = physical_cost(scene, summary, trajectory);
-    std::cout << summary.brief_report() << "\n";
-    std::cout << fmt::format("{} = {} ({})\n", cost.name, format_double(cost.value), cost.definition);
-    std::cout << fmt::format("certificate: theorem {}, Hessian {} (inertia +{} -{} 0:{}), Jacobi spectral radius {}\n",
-                             certificate.theorem_holds ? "holds" : "does not hold",
-                             certificate.hessian_positive_definite ? "positive definite" : "not positive definite",
-                             certificate.inertia_positive, certificate.inertia_negative, certificate.inertia_zero,
-                             format_double(certificate.jacobi_spectral_radius));
-    std::cout << "output: " << out_dir << "\n";
-  }
+  if (!args.no_plot && outputs.have_trajectory) run_plot_script(config::plot_script, out_dir, "plots");
+  if (!args.quiet) print_solve_report(scene, summary, trajectory, outputs.certificate, out_dir);
   if (!summary.converged()) {
     std::fprintf(stderr, "pardel solve: %s: %s\n", to_string(summary.termination), summary.message.c_str());
   }

@@ -1,9 +1,22 @@
 // convergence.csv, summary.json and the physical cost of a solve (see outputs.hpp).
 #include "outputs.hpp"
 
-#include <cmath>
+#include <fmt/format.h>
+#include <spawn.h>
+#include <sys/wait.h>
 
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <vector>
+
+#include "pardel_cli/config.hpp"
 #include "trajectory_io.hpp"
+
+extern char** environ;
 
 namespace pardel::cli {
 
@@ -126,6 +139,87 @@ int exit_code(Termination termination) {
     case Termination::stalled: return 7;
   }
   return 1;
+}
+
+std::string model_source_path(const pardel_model& model) {
+  namespace fs = std::filesystem;
+  if (!model.source || !*model.source) return "";
+  const fs::path source(model.source);
+  std::error_code ec;
+  if (source.is_absolute()) return fs::exists(source, ec) ? source.string() : "";
+  const fs::path in_project = fs::path(config::source_dir) / source;
+  if (fs::exists(in_project, ec)) return in_project.lexically_normal().string();
+  if (fs::exists(source, ec)) return fs::absolute(source, ec).lexically_normal().string();
+  return "";
+}
+
+std::string scene_model_source(const Scene& scene) {
+  if (scene.model_path.empty()) return model_source_path(*scene.model);
+  std::error_code ec;
+  return std::filesystem::absolute(scene.model_path, ec).lexically_normal().string();
+}
+
+SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
+                                 const std::string& out_dir, const nlohmann::ordered_json& extra) {
+  namespace fs = std::filesystem;
+  SolveOutputs outputs;
+  // The certificate needs a trajectory on the problem's grid.
+  outputs.have_trajectory = trajectory.N >= 2 && static_cast<int>(trajectory.t.size()) == trajectory.N + 1;
+  if (outputs.have_trajectory) {
+    Problem final_problem = scene.problem;
+    final_problem.N = trajectory.N;
+    outputs.certificate = certify(final_problem, trajectory, scene.options.threads);
+  }
+  nlohmann::ordered_json summary_doc =
+      summary_json(scene, summary, trajectory, outputs.certificate, scene_model_source(scene));
+  for (const auto& [key, value] : extra.items()) summary_doc[key] = value;
+  write_file_atomic((fs::path(out_dir) / "summary.json").string(), summary_doc.dump(2) + "\n");
+  if (outputs.have_trajectory) {
+    write_file_atomic((fs::path(out_dir) / "trajectory.csv").string(), trajectory_csv(*scene.model, trajectory));
+  }
+  write_file_atomic((fs::path(out_dir) / "convergence.csv").string(), convergence_csv(summary));
+  return outputs;
+}
+
+void print_solve_report(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
+                        const Certificate& certificate, const std::string& out_dir, const std::string& extra_line) {
+  const PhysicalCost cost = physical_cost(scene, summary, trajectory);
+  std::cout << summary.brief_report() << "\n";
+  if (!extra_line.empty()) std::cout << extra_line << "\n";
+  std::cout << fmt::format("{} = {} ({})\n", cost.name, format_double(cost.value), cost.definition);
+  std::cout << fmt::format("certificate: theorem {}, Hessian {} (inertia +{} -{} 0:{}), Jacobi spectral radius {}\n",
+                           certificate.theorem_holds ? "holds" : "does not hold",
+                           certificate.hessian_positive_definite ? "positive definite" : "not positive definite",
+                           certificate.inertia_positive, certificate.inertia_negative, certificate.inertia_zero,
+                           format_double(certificate.jacobi_spectral_radius));
+  std::cout << "output: " << out_dir << "\n";
+}
+
+bool run_plot_script(const std::string& script, const std::string& out_dir, const std::string& what) {
+  std::vector<std::string> argv_strings = {config::python, script, out_dir};
+  std::vector<char*> argv;
+  for (auto& s : argv_strings) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawn_error = ::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
+  if (spawn_error != 0) {
+    std::fprintf(stderr, "warning: %s not written: cannot run %s: %s\n", what.c_str(), config::python,
+                 std::strerror(spawn_error));
+    return false;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      std::fprintf(stderr, "warning: %s not written: waitpid failed: %s\n", what.c_str(), std::strerror(errno));
+      return false;
+    }
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::fprintf(stderr, "warning: %s not written: %s %s exited with status %d\n", what.c_str(), config::python,
+                 script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    return false;
+  }
+  return true;
 }
 
 }  // namespace pardel::cli

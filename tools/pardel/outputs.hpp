@@ -42,6 +42,41 @@ nlohmann::ordered_json certificate_json(const Certificate& certificate, std::siz
 nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                                     const Certificate& certificate, const std::string& model_source);
 
+/** The absolute path of a model's .lag source (as recorded, inside the project, or relative to the
+ *  working folder), or "" when it cannot be found. */
+std::string model_source_path(const pardel_model& model);
+
+/** The .lag a scene's model comes from, for summary.json: the scene's `model` path made absolute,
+ *  else the bundled model's source (model_source_path). */
+std::string scene_model_source(const Scene& scene);
+
+/** What a finished solve wrote. */
+struct SolveOutputs {
+  bool have_trajectory = false;  ///< the returned trajectory lies on the problem's grid
+  Certificate certificate;       ///< at that trajectory (empty without one)
+};
+
+/**
+ * Certifies the returned trajectory (when there is one: a solve refused as invalid input returns
+ * none) and writes summary.json (with the fields of `extra` appended), trajectory.csv and
+ * convergence.csv into out_dir, each atomically.
+ */
+SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
+                                 const std::string& out_dir, const nlohmann::ordered_json& extra = {});
+
+/** The report `pardel solve` prints on stdout: the brief report, `extra_line` when not empty, the
+ *  physical cost, the certificate's verdicts and the output folder. */
+void print_solve_report(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
+                        const Certificate& certificate, const std::string& out_dir,
+                        const std::string& extra_line = "");
+
+/**
+ * Runs a plotting script (tools/pardel/plot.py, plot_sweep.py) with the configured Python on an
+ * output folder. A plot is optional: on failure it warns "warning: WHAT not written: ..." on
+ * stderr and returns false.
+ */
+bool run_plot_script(const std::string& script, const std::string& out_dir, const std::string& what);
+
 /** The exit status of `pardel solve` for a termination: 0 converged, 2 invalid_input,
  *  3 max_iterations, 4 diverged, 5 non_finite, 6 interrupted, 7 stalled (tol below round-off). */
 int exit_code(Termination termination);

@@ -251,8 +251,6 @@ bool is_bare_key(const std::string& key) {
   });
 }
 
-void check_ascii_outside_strings(std::string_view text, const std::string& source_name);
-
 /** Applies one --set KEY=VALUE to the document; returns the dotted key. */
 std::string apply_override(toml::table& root, const std::string& assignment) {
   const std::string origin = "--set " + assignment;
@@ -312,6 +310,8 @@ bool looks_like_path(const std::string& spec) {
   return spec.find('/') != std::string::npos ||
          (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
 }
+
+}  // namespace
 
 /**
  * Refuses non-ASCII bytes outside strings and comments before toml++ sees them: toml++ 3.3.0
@@ -388,8 +388,6 @@ void check_ascii_outside_strings(std::string_view text, const std::string& sourc
     }
   }
 }
-
-}  // namespace
 
 Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
                   const ModelResolver& resolve, const std::vector<std::string>& model_names) {

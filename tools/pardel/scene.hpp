@@ -85,6 +85,13 @@ std::string boundary_prefix(int d);
 bool parse_clock_mode(std::string_view text, ClockMode* mode);
 const char* to_string(ClockMode mode);
 
+/**
+ * Refuses non-ASCII bytes outside strings and comments (SceneError naming FILE:LINE:COL) before
+ * toml++ sees them: toml++ 3.3.0 reaches undefined behaviour on some non-ASCII code points where
+ * whitespace may stand. Every TOML reader of the command line calls it first.
+ */
+void check_ascii_outside_strings(std::string_view text, const std::string& source_name);
+
 }  // namespace pardel::cli
 
 #endif  // PARDEL_CLI_SCENE_HPP

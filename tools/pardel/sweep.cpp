@@ -79,46 +79,6 @@ std::string quote_toml_string(const std::string& text) {
   return out + "\"";
 }
 
-/** Refuses non-ASCII bytes outside strings and comments (toml++ 3.3.0 may misbehave on them). */
-void check_ascii(std::string_view text, const std::string& source_name) {
-  enum class State { normal, comment, basic, literal };
-  State state = State::normal;
-  long line = 1, column = 0;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    ++column;
-    if (c == '\n') {
-      ++line;
-      column = 0;
-      state = State::normal;
-      continue;
-    }
-    switch (state) {
-      case State::normal:
-        if (static_cast<unsigned char>(c) >= 0x80) {
-          throw SceneError(fmt::format("{}:{}:{}: error: non-ASCII character outside a string or comment",
-                                       source_name, line, column));
-        }
-        if (c == '#') state = State::comment;
-        else if (c == '"') state = State::basic;
-        else if (c == '\'') state = State::literal;
-        break;
-      case State::comment: break;
-      case State::basic:
-        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') {
-          ++i;
-          ++column;
-        } else if (c == '"') {
-          state = State::normal;
-        }
-        break;
-      case State::literal:
-        if (c == '\'') state = State::normal;
-        break;
-    }
-  }
-}
-
 /** Reads the sweep document; every error names FILE:LINE:COL. */
 class SweepReader {
  public:
@@ -270,7 +230,7 @@ VaryAxis read_axis(const SweepReader& r, const toml::node& node, const std::stri
 Sweep parse_sweep(std::string_view text, const std::string& source_name,
                   const std::vector<std::string>& command_line_sets, const ModelResolver& resolve,
                   const std::vector<std::string>& model_names) {
-  check_ascii(text, source_name);
+  check_ascii_outside_strings(text, source_name);
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -688,16 +648,6 @@ const VariantResult* find_result(const std::vector<VariantResult>& results, int 
   return nullptr;
 }
 
-std::string model_source_path(const pardel_model& model) {
-  if (!model.source || !*model.source) return "";
-  const fs::path source(model.source);
-  std::error_code ec;
-  if (source.is_absolute()) return fs::exists(source, ec) ? source.string() : "";
-  const fs::path in_project = fs::path(config::source_dir) / source;
-  if (fs::exists(in_project, ec)) return in_project.lexically_normal().string();
-  return "";
-}
-
 }  // namespace
 
 std::string solutions_csv(const std::vector<VariantResult>& results, const std::vector<Solution>& solutions) {
@@ -753,8 +703,7 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
   j["sweep"] = sweep.path;
   j["scene"] = sweep.scene_path;
   j["model"] = first.model->name;
-  j["model_source"] = first.model_path.empty() ? model_source_path(*first.model)
-                                               : fs::absolute(first.model_path, ec).lexically_normal().string();
+  j["model_source"] = scene_model_source(first);
   j["discretization"] = first.discretization;
   j["cost"] = {{"name", cost_kind.name}, {"definition", cost_kind.definition}};
   j["set"] = sweep.sets;

@@ -3,8 +3,6 @@
 #include "sweep_command.hpp"
 
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -30,8 +28,6 @@
 #ifdef PARDEL_HAVE_MPI
 #include <mpi.h>
 #endif
-
-extern char** environ;
 
 namespace pardel::cli {
 
@@ -168,34 +164,6 @@ int threads_per_variant(const SweepArgs& args, const Sweep& sweep, int size) {
   }
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   return std::max(1, cores / local);
-}
-
-bool run_plot_script(const std::string& out_dir) {
-  const std::string script = (fs::path(config::plot_script).parent_path() / "plot_sweep.py").string();
-  std::vector<std::string> argv_strings = {config::python, script, out_dir};
-  std::vector<char*> argv;
-  for (auto& s : argv_strings) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int spawn_error = ::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
-  if (spawn_error != 0) {
-    std::fprintf(stderr, "warning: sweep.png not written: cannot run %s: %s\n", config::python,
-                 std::strerror(spawn_error));
-    return false;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) {
-      std::fprintf(stderr, "warning: sweep.png not written: waitpid failed: %s\n", std::strerror(errno));
-      return false;
-    }
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::fprintf(stderr, "warning: sweep.png not written: %s %s exited with status %d\n", config::python,
-                 script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-    return false;
-  }
-  return true;
 }
 
 std::string short_number(double v) { return fmt::format("{:.10g}", v); }
@@ -359,7 +327,10 @@ int SweepCommand::run(const ModelResolver& resolve, const std::vector<std::strin
       if (out_dir.empty()) out_dir = sweep.output_dir;
       if (out_dir.empty()) out_dir = (fs::path("out") / fs::path(args_.sweep).stem()).string();
       write_sweep_outputs(sweep, results, solutions, solution_of, info, out_dir);
-      if (!args_.no_plot && sweep.plot && !solutions.empty()) run_plot_script(out_dir);
+      if (!args_.no_plot && sweep.plot && !solutions.empty()) {
+        run_plot_script((fs::path(config::plot_script).parent_path() / "plot_sweep.py").string(), out_dir,
+                        "sweep.png");
+      }
       if (!args_.quiet) print_report(sweep, results, solutions, info, out_dir);
       const bool interrupted = std::any_of(results.begin(), results.end(), [](const VariantResult& r) {
         return r.status == to_string(Termination::interrupted);
