@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "../engine.hpp"
+#include "../levenberg_marquardt.hpp"
 #include "decomposition.hpp"
 #include "schur_solver.hpp"
 #endif
@@ -276,14 +277,8 @@ class DistributedNewton : public pardel::detail::Method_ {
     rhs_.assign(n, 0.0);
     dxl_.assign(ctx.q.size(), 0.0);
     pardel::detail::ensure_interval_arrays(ctx, Evaluated::full);  // both sets sized before the first step
-    Ld_ = ctx.Ld;
-    D1_ = ctx.D1;
-    D2_ = ctx.D2;
-    D11_ = ctx.D11;
-    D12_ = ctx.D12;
-    D22_ = ctx.D22;
-    res_ = ctx.res;
-    mu_ = 0;
+    trial_.size_like(ctx);
+    shift_.restart();
   }
 
   int evaluate(Context& ctx) override {
@@ -326,13 +321,13 @@ class DistributedNewton : public pardel::detail::Method_ {
     scale = detail::max_all(scale, comm);
     if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
     const double mu_min = 1e-10 * scale;
-    if (mu_ > 0 && mu_ < mu_min) mu_ = mu_min;
+    shift_.clamp(mu_min);
     for (int attempt = 0; attempt < 200; ++attempt) {
-      assemble(ctx, mu_);
+      assemble(ctx, shift_.mu());
       const bool ok = solver_.solve(rhs_.data(), dxl_.data() + off0, comm);
       if (!ok) {
-        raise(mu_min);
-        if (mu_ > 1e30 * scale) break;
+        shift_.raise(mu_min);
+        if (shift_.exhausted(scale)) break;
         continue;
       }
       detail::exchange_halos(L, dxl_.data(), d, comm);
@@ -359,54 +354,28 @@ class DistributedNewton : public pardel::detail::Method_ {
       }
       MPI_Allreduce(part, sums, 3, MPI_DOUBLE, MPI_SUM, comm);
       const double gdx = sums[0], dx2 = sums[1];
-      const double pred = -(gdx + 0.5 * (sums[2] - mu_ * dx2));
+      const double pred = -(gdx + 0.5 * (sums[2] - shift_.mu() * dx2));
       // Trial point: owned unknowns moved, halos from the neighbours.
       ctx.q_next = ctx.q;
       for (std::size_t i = 0; i < n; ++i) ctx.q_next[off0 + i] = ctx.q[off0 + i] + dxl_[off0 + i];
       detail::exchange_halos(L, ctx.q_next.data(), d, comm);
-      swap_arrays(ctx);
+      trial_.swap_with(ctx);
       pardel::detail::eval_full(ctx, ctx.q_next);
       const int bad = globalize_residual(local_, pardel::detail::compute_residual(ctx));
       const double Fn = global_sum_Ld(local_);
-      const double ared = F - Fn;
-      const double roundoff = 1e-13 * (1 + std::fabs(F));
-      bool accept = false;
-      double rho = 0;
-      if (bad < 0 && std::isfinite(Fn)) {
-        if (pred > roundoff) {
-          rho = ared / pred;
-          accept = rho >= 1e-4;
-        } else {
-          accept = ctx.residual < r0 && ared > -roundoff;
-          rho = accept ? 1 : 0;
-        }
-      }
-      if (accept) {
+      if (shift_.accept(F, Fn, pred, bad < 0, ctx.residual, r0, mu_min)) {
         ctx.action = Fn;
         ctx.action_known = true;
-        const double t = 2 * std::min(rho, 1.0) - 1;
-        mu_ *= std::max(1.0 / 3.0, 1 - t * t * t);
-        if (mu_ < mu_min) mu_ = 0;
-        nu_ = 2;
         StepOutcome done;
         done.next_evaluated = true;
         return done;
       }
-      swap_arrays(ctx);
+      trial_.swap_with(ctx);
       ctx.residual = r0;
-      raise(mu_min);
-      if (mu_ > 1e30 * scale) break;
+      shift_.raise(mu_min);
+      if (shift_.exhausted(scale)) break;
     }
-    StepOutcome out;
-    char buf[320];
-    out.failure = Termination::stalled;
-    std::snprintf(buf, sizeof buf,
-                  "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
-                  "the DEL residual %.3g is at the round-off level of this problem (estimate %.3g) and the "
-                  "tolerance cannot be reached in double precision",
-                  iteration, r0, ctx.residual_floor);
-    out.message = buf;
-    return out;
+    return pardel::detail::newton_stalled(iteration, r0, ctx.residual_floor);
   }
 
  private:
@@ -460,27 +429,12 @@ class DistributedNewton : public pardel::detail::Method_ {
     }
   }
 
-  void raise(double mu_min) {
-    mu_ = mu_ == 0 ? mu_min : std::max(nu_ * mu_, mu_min);
-    nu_ = std::min(2 * nu_, 64.0);
-  }
-
-  void swap_arrays(Context& ctx) {
-    std::swap(ctx.Ld, Ld_);
-    std::swap(ctx.D1, D1_);
-    std::swap(ctx.D2, D2_);
-    std::swap(ctx.D11, D11_);
-    std::swap(ctx.D12, D12_);
-    std::swap(ctx.D22, D22_);
-    std::swap(ctx.res, res_);
-  }
-
   Local& local_;
   bool difference_;
   detail::SchurBlockSolver<D> solver_;
   std::vector<double> rhs_, dxl_;
-  std::vector<double> Ld_, D1_, D2_, D11_, D12_, D22_, res_;
-  double mu_ = 0, nu_ = 2;
+  pardel::detail::TrialEvaluation trial_;
+  pardel::detail::LevenbergMarquardtShift shift_;
 };
 
 /** hybrid.cpp over the ranks: Jacobi-Newton sweeps until the distributed factorization certifies
