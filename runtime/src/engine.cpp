@@ -60,6 +60,23 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   ctx.action = 0;
 }
 
+int knot_node(const Problem& problem, std::size_t a, int N, std::string* message) {
+  const Knot& knot = problem.knots[a];
+  const double s = (knot.t - problem.t0) / problem.T * N;
+  const double k_near = std::floor(s);
+  const int k = static_cast<int>(std::lround(s));
+  if (std::fabs(s - k) <= 1e-9 * std::max(1.0, std::fabs(s)) && k > 0 && k < N) return k;
+  char buf[320];
+  const int lo = static_cast<int>(std::max(0.0, std::min<double>(N, k_near)));
+  const int hi = std::min(N, lo + 1);
+  std::snprintf(buf, sizeof buf,
+                "knot %zu at t = %.12g is not on an interior grid node with N = %d; nearest nodes: "
+                "%d (t = %.12g) and %d (t = %.12g)",
+                a, knot.t, N, lo, problem.t0 + problem.T * lo / N, hi, problem.t0 + problem.T * hi / N);
+  if (message) *message = buf;
+  return -1;
+}
+
 bool apply_constraints(const Problem& problem, Context& ctx, std::string* message) {
   const int d = ctx.dim, N = ctx.N;
   std::fill(ctx.is_free.begin(), ctx.is_free.end(), 1);
@@ -77,20 +94,8 @@ bool apply_constraints(const Problem& problem, Context& ctx, std::string* messag
   fix(N, 0, d);
   for (std::size_t a = 0; a < problem.knots.size(); ++a) {
     const Knot& knot = problem.knots[a];
-    const double s = (knot.t - problem.t0) / problem.T * N;
-    const double k_near = std::floor(s);
-    const int k = static_cast<int>(std::lround(s));
-    if (std::fabs(s - k) > 1e-9 * std::max(1.0, std::fabs(s)) || k <= 0 || k >= N) {
-      char buf[320];
-      const int lo = static_cast<int>(std::max(0.0, std::min<double>(N, k_near)));
-      const int hi = std::min(N, lo + 1);
-      std::snprintf(buf, sizeof buf,
-                    "knot %zu at t = %.12g is not on an interior grid node with N = %d; nearest nodes: "
-                    "%d (t = %.12g) and %d (t = %.12g)",
-                    a, knot.t, N, lo, problem.t0 + problem.T * lo / N, hi, problem.t0 + problem.T * hi / N);
-      if (message) *message = buf;
-      return false;
-    }
+    const int k = knot_node(problem, a, N, message);
+    if (k < 0) return false;
     // Order 1: the whole node is fixed; order >= 2: only the coordinates (seed eq2-interpolation).
     fix(k, 0, ctx.order == 1 ? d : ctx.ncoords);
     double* qk = ctx.node(ctx.q, k);

@@ -10,6 +10,9 @@
 #ifndef PARDEL_RUNTIME_ENGINE_HPP
 #define PARDEL_RUNTIME_ENGINE_HPP
 
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
 #include <memory>
 #include <type_traits>
 #include <string>
@@ -68,6 +71,15 @@ struct Context {
 
 /** Builds the context for `problem` at N intervals from `trajectory` (resampled by the caller). */
 void setup_context(const Problem& problem, int N, int threads, Context& ctx);
+/** The interior node of knot `a` on a grid of N intervals, or -1 (with `message` naming the knot
+ *  and the nearest nodes) when the knot's time is not on one. */
+int knot_node(const Problem& problem, std::size_t a, int N, std::string* message);
+/** The iteration of the history record after `iteration`: every `every` iterations while fewer
+ *  than 1000 are recorded, then geometrically spaced (1 %) so that long runs keep a bounded history. */
+inline long next_history_record(long iteration, long every, std::size_t recorded) {
+  if (recorded < 1000) return (iteration / every + 1) * every;
+  return std::max(iteration + every, static_cast<long>(std::ceil(iteration * 1.01)));
+}
 /** Marks knots and boundaries; `message` is set and false returned for a knot off the grid. */
 bool apply_constraints(const Problem& problem, Context& ctx, std::string* message);
 

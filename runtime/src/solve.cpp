@@ -268,13 +268,7 @@ class Driver {
 
   bool should_record() {
     if (iteration_ < next_record_) return false;
-    const long every = options_.history_every;
-    if (s_.history.size() < 1000) {
-      next_record_ = (iteration_ / every + 1) * every;
-    } else {
-      // Long runs: geometrically spaced records keep the history bounded.
-      next_record_ = std::max(iteration_ + every, static_cast<long>(std::ceil(iteration_ * 1.01)));
-    }
+    next_record_ = detail::next_history_record(iteration_, options_.history_every, s_.history.size());
     return true;
   }
 

@@ -131,20 +131,8 @@ bool setup_local(const Problem& problem, int threads, const Trajectory& guess, L
   fix(N, 0, ctx.dim);
   for (std::size_t a = 0; a < problem.knots.size(); ++a) {
     const Knot& knot = problem.knots[a];
-    const double s = (knot.t - problem.t0) / problem.T * N;
-    const double k_near = std::floor(s);
-    const int k = static_cast<int>(std::lround(s));
-    if (std::fabs(s - k) > 1e-9 * std::max(1.0, std::fabs(s)) || k <= 0 || k >= N) {
-      char buf[320];
-      const int lo = static_cast<int>(std::max(0.0, std::min<double>(N, k_near)));
-      const int hi = std::min(N, lo + 1);
-      std::snprintf(buf, sizeof buf,
-                    "knot %zu at t = %.12g is not on an interior grid node with N = %d; nearest nodes: "
-                    "%d (t = %.12g) and %d (t = %.12g)",
-                    a, knot.t, N, lo, problem.t0 + problem.T * lo / N, hi, problem.t0 + problem.T * hi / N);
-      if (message) *message = buf;
-      return false;
-    }
+    const int k = pardel::detail::knot_node(problem, a, N, message);
+    if (k < 0) return false;
     fix(k, 0, ctx.order == 1 ? ctx.dim : ctx.ncoords);
     if (k >= L.lo && k <= L.hi) {
       double* qk = ctx.node(ctx.q, L.local(k));
@@ -659,12 +647,7 @@ class Driver {
 
   bool should_record() {
     if (iteration_ < next_record_) return false;
-    const long every = options_.history_every;
-    if (s_.history.size() < 1000) {
-      next_record_ = (iteration_ / every + 1) * every;
-    } else {
-      next_record_ = std::max(iteration_ + every, static_cast<long>(std::ceil(iteration_ * 1.01)));
-    }
+    next_record_ = pardel::detail::next_history_record(iteration_, options_.history_every, s_.history.size());
     return true;
   }
 
