@@ -46,6 +46,7 @@ const pardel_discretization* find_discretization(const pardel_model& model, std:
 
 const char* to_string(Method method) {
   switch (method) {
+    case Method::automatic: return "auto";
     case Method::jacobi: return "jacobi";
     case Method::jacobi_newton: return "jacobi-newton";
     case Method::newton: return "newton";
@@ -56,7 +57,7 @@ const char* to_string(Method method) {
 }
 
 bool parse_method(std::string_view text, Method* method) {
-  static const Method all[] = {Method::jacobi, Method::jacobi_newton, Method::newton, Method::multigrid,
+  static const Method all[] = {Method::automatic, Method::jacobi, Method::jacobi_newton, Method::newton, Method::multigrid,
                                Method::hybrid};
   for (Method m : all) {
     if (text == to_string(m)) {
@@ -120,12 +121,24 @@ const char* to_string(Termination termination) {
   return "unknown";
 }
 
+const char* to_string(PointKind kind) {
+  switch (kind) {
+    case PointKind::unknown: return "unknown";
+    case PointKind::minimum: return "minimum";
+    case PointKind::saddle: return "saddle";
+    case PointKind::degenerate: return "degenerate";
+  }
+  return "unknown";
+}
+
 bool Options::is_valid(std::string* error) const {
   auto bad = [&](const char* name, const std::string& value, const char* rule) {
     if (error) *error = std::string("option ") + name + " = " + value + " is invalid: " + rule;
     return false;
   };
-  if (!(tol > 0) || !std::isfinite(tol)) return bad("tol", number(tol), "must be a positive finite number");
+  if (!(tol >= 0) || !std::isfinite(tol))
+    return bad("tol", number(tol), "must be a finite number >= 0 (0: the relative tolerance rtol)");
+  if (!(rtol > 0 && rtol < 1)) return bad("rtol", number(rtol), "must be in (0, 1)");
   if (max_iterations < 0) return bad("max_iterations", std::to_string(max_iterations), "must be >= 0");
   if (!(damping >= 0 && damping < 1)) return bad("damping", number(damping), "must be in [0, 1)");
   if (newton_substeps < 1) return bad("newton_substeps", std::to_string(newton_substeps), "must be >= 1");
@@ -139,7 +152,7 @@ bool Options::is_valid(std::string* error) const {
   if (!(refine_settle > 0 && refine_settle < 1))
     return bad("refine_settle", number(refine_settle), "must be in (0, 1)");
   if (!(divergence_factor > 1)) return bad("divergence_factor", number(divergence_factor), "must be > 1");
-  if (method != Method::jacobi && method != Method::jacobi_newton && method != Method::newton &&
+  if (method != Method::automatic && method != Method::jacobi && method != Method::jacobi_newton && method != Method::newton &&
       method != Method::multigrid && method != Method::hybrid)
     return bad("method", std::to_string(static_cast<int>(method)), "is not a known method");
   if (linear_solver != LinearSolver::block_ldlt && linear_solver != LinearSolver::cyclic_reduction)

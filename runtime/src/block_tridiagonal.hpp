@@ -286,6 +286,85 @@ class BlockTridiagonal {
     return s;
   }
 
+  /** y = H x with the blocks as assembled (shift included); x, y in node layout 1..N-1. */
+  void multiply(const double* x, double* y) const {
+    const int d = d_;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      Eigen::Map<Vec> yi(y + ii * d, d);
+      yi.noalias() = diag_[ii] * VecMap(x + ii * d, d);
+      if (i + 1 < n_) yi.noalias() += off_[ii] * VecMap(x + (ii + 1) * d, d);
+      if (i > 0) yi.noalias() += off_[ii - 1].transpose() * VecMap(x + (ii - 1) * d, d);
+    }
+  }
+
+  /** Gershgorin's bound on the largest |eigenvalue| of H as assembled. */
+  double gershgorin_bound() const {
+    double bound = 0;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      for (int a = 0; a < d_; ++a) {
+        double row = diag_[ii].row(a).cwiseAbs().sum();
+        if (i + 1 < n_) row += off_[ii].row(a).cwiseAbs().sum();
+        if (i > 0) row += off_[ii - 1].col(a).cwiseAbs().sum();
+        bound = std::max(bound, row);
+      }
+    }
+    return bound;
+  }
+
+  /** Counts of positive, negative and zero eigenvalues. */
+  struct Inertia {
+    long positive = 0, negative = 0, zero = 0;
+  };
+
+  /**
+   * The inertia of H as assembled, by block elimination (Haynsworth: the inertia of H is the sum of
+   * the inertias of the pivots S_i = D_i - C_{i-1}^T S_{i-1}^{-1} C_{i-1}). A pivot that is not
+   * positive definite is split by its symmetric eigendecomposition; an eigenvalue of a pivot with
+   * |value| <= zero_tol * max(1, |D_i|) counts as zero and is left out of the elimination (a
+   * pseudo-inverse). Overwrites the LDL^T factorization (factor_ldlt() must be called again).
+   */
+  Inertia inertia(double zero_tol) {
+    Inertia in;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      Mat S = diag_[ii];
+      if (i > 0) S.noalias() -= off_[ii - 1].transpose() * W_[ii - 1];
+      const double size = std::max(1.0, diag_[ii].cwiseAbs().maxCoeff());
+      Mat L = S;
+      bool pd = false;
+      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L);
+      if (pd) {
+        in.positive += d_;
+        W_[ii] = off_[ii];
+        cholesky_solve_columns(L, W_[ii]);
+        continue;
+      }
+      Eigen::SelfAdjointEigenSolver<Mat> eig(S);
+      if (eig.info() != Eigen::Success) {
+        in.zero += d_;
+        W_[ii].setZero();
+        continue;
+      }
+      Vec inv = eig.eigenvalues();
+      for (int a = 0; a < d_; ++a) {
+        const double v = inv(a);
+        if (!std::isfinite(v) || std::fabs(v) <= zero_tol * size) {
+          ++in.zero;
+          inv(a) = 0;
+        } else {
+          if (v > 0) ++in.positive; else ++in.negative;
+          inv(a) = 1 / v;
+        }
+      }
+      const Mat VtC = eig.eigenvectors().transpose() * off_[ii];
+      const Mat V = eig.eigenvectors();
+      W_[ii] = V * (inv.asDiagonal() * VtC);
+    }
+    return in;
+  }
+
   int failed_block() const { return failed_; }
   /** Cholesky factorization of pivot i after a successful factor_ldlt(). */
   const Eigen::LLT<Mat>& pivot(int i) const {

@@ -55,6 +55,7 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   ctx.res.assign(n1 * d, 0.0);
   ctx.node_max.assign(n1, 0.0);
   ctx.node_scale.assign(n1, 0.0);
+  ctx.node_hq.assign(n1, 0.0);
   ctx.evaluated = Evaluated::nothing;
   ctx.residual = 0;
   ctx.action = 0;
@@ -169,6 +170,8 @@ void eval_grad(Context& ctx, const std::vector<double>& q) {
 int compute_residual(Context& ctx) {
   const int d = ctx.dim, N = ctx.N;
   const std::size_t dz = static_cast<std::size_t>(d);
+  // The Hessian term of the round-off level needs the full kernel's arrays at ctx.q.
+  const bool hessian = ctx.evaluated == Evaluated::full && ctx.D12.size() >= static_cast<std::size_t>(N) * dz * dz;
 #pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
   for (int k = 0; k <= N; ++k) {
     const std::size_t kk = static_cast<std::size_t>(k);
@@ -189,16 +192,41 @@ int compute_residual(Context& ctx) {
     }
     ctx.node_max[kk] = finite ? mx : std::numeric_limits<double>::infinity();
     ctx.node_scale[kk] = scale;
+    ctx.node_hq[kk] = 0;
+    if (hessian && k > 0 && k < N) {
+      // |H_k| |q| over the node's row of the Hessian: D22(k-1), D11(k), D12(k-1)^T, D12(k).
+      const std::size_t dd = dz * dz;
+      const double* A = ctx.D22.data() + (kk - 1) * dd;
+      const double* B = ctx.D11.data() + kk * dd;
+      const double* Cm = ctx.D12.data() + (kk - 1) * dd;
+      const double* Cp = ctx.D12.data() + kk * dd;
+      const double* qm = ctx.q.data() + (kk - 1) * dz;
+      const double* q0 = ctx.q.data() + kk * dz;
+      const double* qp = ctx.q.data() + (kk + 1) * dz;
+      double hq = 0;
+      for (int i = 0; i < d; ++i) {
+        if (!f[i]) continue;
+        double row = 0;
+        for (int j = 0; j < d; ++j)
+          row += std::fabs(A[i * d + j] * q0[j]) + std::fabs(B[i * d + j] * q0[j]) + std::fabs(Cm[j * d + i] * qm[j]) +
+                 std::fabs(Cp[i * d + j] * qp[j]);
+        hq = std::max(hq, row);
+      }
+      ctx.node_hq[kk] = hq;
+    }
   }
-  double mx = 0, scale = 0;
+  double mx = 0, scale = 0, hq = 0;
   int bad = -1;
   for (int k = 0; k <= N; ++k) {
     const double v = ctx.node_max[static_cast<std::size_t>(k)];
     if (!std::isfinite(v) && bad < 0) bad = k;
     mx = std::max(mx, v);
     scale = std::max(scale, ctx.node_scale[static_cast<std::size_t>(k)]);
+    if (hessian) hq = std::max(hq, ctx.node_hq[static_cast<std::size_t>(k)]);
   }
-  ctx.residual_floor = 16 * std::numeric_limits<double>::epsilon() * scale;
+  const double eps = std::numeric_limits<double>::epsilon();
+  ctx.residual_scale = scale;
+  ctx.residual_floor = 16 * eps * scale + 2 * eps * hq;
   ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : mx;
   return bad;
 }

@@ -53,10 +53,14 @@ struct Context {
   std::vector<double> res;
   std::vector<double> node_max;    ///< N+1 scratch: max |r_k| per node
   std::vector<double> node_scale;  ///< N+1 scratch: max |D2(k-1)| + |D1(k)| per node
+  std::vector<double> node_hq;     ///< N+1 scratch: |H_k| |q| per node (full evaluations only)
   double residual = 0;             ///< infinity-norm of res
-  /** Round-off level of the residual: 16 eps max_k (|D2(k-1)| + |D1(k)|); a residual near it cannot
-   *  be reduced further in double precision. */
+  /** Round-off level of the residual: 16 eps max_k (|D2(k-1)| + |D1(k)|), plus, when the Hessian
+   *  blocks are at hand, 2 eps max_k |H_k| |q| (the rounding of the nodes seen through the Hessian,
+   *  which dominates at small steps); a residual near it cannot be reduced in double precision. */
   double residual_floor = 0;
+  /** Size of the terms that cancel in the residual, max_k (|D2(k-1)| + |D1(k)|) (relative tolerance). */
+  double residual_scale = 0;
   double action = 0;
   bool action_known = false;     ///< whether `action` belongs to q
 
@@ -132,6 +136,12 @@ class Method_ {
   /** Evaluates at ctx.q; returns the first node with a non-finite residual or -1. */
   virtual int evaluate(Context& ctx) = 0;
   virtual StepOutcome iterate(Context& ctx, long iteration) = 0;
+  /** Called when the residual has reached the tolerance: false refuses to stop there (Newton at a
+   *  saddle of the action, which it then leaves along negative curvature); true by default. */
+  virtual bool accept_stop(Context& ctx) {
+    (void)ctx;
+    return true;
+  }
   /** The method's own state between two iterations (checkpoint and resume); none by default. */
   virtual std::vector<double> save_state() const { return {}; }
   /** Restores what save_state() returned, after reset(); false if it does not fit this method. */
@@ -145,6 +155,13 @@ std::unique_ptr<Method_> make_newton(const Options& options, int dim);
 std::unique_ptr<Method_> make_hybrid(const Options& options, int dim);
 /** nullptr when this build has no multigrid (message says why). */
 std::unique_ptr<Method_> make_multigrid(const Options& options, int dim, std::string* message);
+
+/** The residual that counts as converged at the context's iterate: Options::tol when set, else
+ *  max(rtol x residual_scale, 10 x residual_floor). */
+inline double target_residual(const Options& options, const Context& ctx) {
+  if (options.tol > 0) return options.tol;
+  return std::max(options.rtol * ctx.residual_scale, 10 * ctx.residual_floor);
+}
 
 /** Number of threads to use for Options::threads (0: all cores). */
 int resolve_threads(int requested);

@@ -37,6 +37,8 @@ class Hybrid : public Method_ {
     return newton_mode_ ? newton_->iterate(ctx, iteration) : sweeps_->iterate(ctx, iteration);
   }
 
+  bool accept_stop(Context& ctx) override { return newton_mode_ ? newton_->accept_stop(ctx) : true; }
+
   /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. */
   std::vector<double> save_state() const override {
     std::vector<double> state = {newton_mode_ ? 1.0 : 0.0, static_cast<double>(since_check_)};

@@ -135,6 +135,7 @@ class JacobiSweeps : public Method_ {
       if (s.bad_value >= 0 && (bad_value_ < 0 || s.bad_value < bad_value_)) bad_value_ = s.bad_value;
     }
     ctx.residual_floor = 16 * std::numeric_limits<double>::epsilon() * scale;
+    ctx.residual_scale = scale;
     ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : residual;
     ctx.action_known = false;
     have_next_ = true;

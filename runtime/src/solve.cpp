@@ -11,6 +11,7 @@
 #include <limits>
 #include <utility>
 
+#include "assessment.hpp"
 #include "engine.hpp"
 
 namespace pardel {
@@ -34,10 +35,29 @@ bool knots_on_grid(const Problem& problem, int n) {
   return true;
 }
 
+/** The coarsest grid of the automatic method's grid sequencing, and the N above which it is used. */
+constexpr int kAutoCoarseN = 200;
+
+/** Grid sequencing of the automatic method: N, N/2, N/4, ... (each rounded up to a grid that holds
+ *  the knots) down to about kAutoCoarseN, coarsest first; {N} when N <= 2 kAutoCoarseN. */
+std::vector<int> automatic_levels(const Problem& problem) {
+  std::vector<int> down{problem.N};
+  int n = problem.N;
+  while (n > 2 * kAutoCoarseN) {
+    int next = (n + 1) / 2;
+    while (next < n && !knots_on_grid(problem, next)) ++next;
+    if (next >= n) break;
+    down.push_back(next);
+    n = next;
+  }
+  return std::vector<int>(down.rbegin(), down.rend());
+}
+
 /** Grid sizes of coarse-to-fine refinement, ending at problem.N. */
-std::vector<int> refinement_levels(const Problem& problem, const Options& options) {
+std::vector<int> refinement_levels(const Problem& problem, const Options& options, bool automatic) {
   std::vector<int> levels;
   const int N = problem.N;
+  if (automatic && options.refine_start_N <= 0) return automatic_levels(problem);
   if (options.refine_start_N <= 0 || options.refine_start_N >= N) return {N};
   int n = options.refine_start_N;
   while (n < N && !knots_on_grid(problem, n)) ++n;
@@ -78,6 +98,14 @@ class Driver {
       return false;
     }
     if (problem_.clock != ClockMode::none) detail::update_times(ctx_, ctx_.q);
+    if (!checked_regular_) {
+      checked_regular_ = true;
+      if (!detail::lagrangian_regular(ctx_, &message)) {
+        s_.termination = Termination::invalid_input;
+        s_.message = message;
+        return false;
+      }
+    }
     method_.reset(ctx_);
     return true;
   }
@@ -113,6 +141,7 @@ class Driver {
     level_ = LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
                            st.level_checkpoint_residual};
     resumed_level_ = true;
+    checked_regular_ = true;
     s_.history = st.history;
     start_ -= std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(st.seconds));
     return true;
@@ -162,7 +191,7 @@ class Driver {
       int bad = method_.evaluate(ctx_);
       if (bad >= 0) return non_finite_residual(bad);
       double r = ctx_.residual;
-      if (clocked && r <= options_.tol && since_clock > 0) {
+      if (clocked && r <= target_residual() && since_clock > 0) {
         // Declare convergence only with node times consistent with this trajectory.
         detail::update_times(ctx_, ctx_.q);
         since_clock = 0;
@@ -182,16 +211,18 @@ class Driver {
           return false;
         }
       }
-      if (last && r <= options_.tol) {
-        finish(Termination::converged, format("DEL residual %.3g <= tol %.3g", r, options_.tol));
+      const double target = target_residual();
+      const bool at_target = r <= target && method_.accept_stop(ctx_);
+      if (last && at_target) {
+        finish(Termination::converged, converged_message(r, target));
         return false;
       }
       if (!last && options_.method == Method::newton) {
-        // Nested iteration: a coarse level is solved to tol (quadratic convergence makes the last
-        // digits cheap), so that the next level can start from the extrapolation of two levels.
-        if (r <= options_.tol) return true;
+        // Nested iteration: a coarse level is solved to the tolerance (quadratic convergence makes
+        // the last digits cheap), so that the next level can start from a solution.
+        if (at_target) return true;
       } else if (!last) {
-        if (r <= std::max(options_.tol, options_.refine_settle * r_level0)) return true;
+        if (r <= std::max(target, options_.refine_settle * r_level0)) return true;
         if (level_it > 0 && level_it % 50 == 0) {
           if (r > 0.99 * r_checkpoint) return true;  // stagnating: less than 1% over 50 iterations
           r_checkpoint = r;
@@ -206,13 +237,13 @@ class Driver {
         finish(Termination::stalled,
                format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has not "
                       "improved in 200 iterations; tol %.3g cannot be reached in double precision",
-                      r, ctx_.residual_floor, options_.tol));
+                      r, ctx_.residual_floor, target));
         return false;
       }
       if (iteration_ >= options_.max_iterations) {
         finish(Termination::max_iterations,
                format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
-                      static_cast<double>(options_.max_iterations), r, options_.tol));
+                      static_cast<double>(options_.max_iterations), r, target));
         return false;
       }
       if (iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_) {
@@ -223,6 +254,13 @@ class Driver {
       }
       const detail::StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
       if (!outcome.ok()) {
+        if (outcome.failure == Termination::stalled && r <= target) {
+          // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer,
+          // and the point assessment says what it is.
+          if (!last) return true;
+          finish(Termination::converged, converged_message(r, target));
+          return false;
+        }
         finish(outcome.failure, outcome.message);
         return false;
       }
@@ -248,6 +286,15 @@ class Driver {
       ++level_it;
       ++since_clock;
     }
+  }
+
+  /** The residual that counts as converged at the current iterate (Options::rtol or tol). */
+  double target_residual() const { return detail::target_residual(options_, ctx_); }
+
+  std::string converged_message(double r, double target) const {
+    if (options_.tol > 0) return format("DEL residual %.3g <= tol %.3g", r, target);
+    return format("DEL residual %.3g <= %.3g = max(rtol x scale of the DEL terms %.3g, 10 x round-off level)", r,
+                  target, ctx_.residual_scale);
   }
 
   bool non_finite_residual(int node) {
@@ -304,6 +351,7 @@ class Driver {
     s_.action = detail::action_at(ctx_, ctx_.q);
     s_.final_time = ctx_.t.back();
     s_.residual_floor = ctx_.residual_floor;
+    s_.tolerance = target_residual();
     if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != ctx_.N) {
       IterationRecord rec;
       rec.iteration = iteration_;
@@ -333,6 +381,7 @@ class Driver {
   };
   LevelCounters level_;
   bool resumed_level_ = false;
+  bool checked_regular_ = false;
   long iteration_ = 0, next_record_ = 0;
   double r_initial_ = 0, last_good_residual_ = 0;
   double best_residual_ = std::numeric_limits<double>::infinity();
@@ -360,6 +409,7 @@ std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, st
   switch (options.method) {
     case Method::jacobi: return detail::make_jacobi(options, dim);
     case Method::jacobi_newton: return detail::make_jacobi_newton(options, dim);
+    case Method::automatic:
     case Method::newton: return detail::make_newton(options, dim);
     case Method::hybrid: return detail::make_hybrid(options, dim);
     case Method::multigrid: return detail::make_multigrid(options, dim, message);
@@ -407,8 +457,12 @@ bool check_state(const Problem& problem, const Options& options, const SolverSta
 
 }  // namespace
 
-Summary solve(const Problem& problem, const Options& options, Trajectory& trajectory) {
+Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
   const auto start = std::chrono::steady_clock::now();
+  // The automatic method is Newton with grid sequencing (refinement_levels).
+  const bool automatic = requested.method == Method::automatic;
+  Options options = requested;
+  if (automatic) options.method = Method::newton;
   Summary summary;
   summary.method = options.method;
   summary.N = problem.N;
@@ -426,7 +480,7 @@ Summary solve(const Problem& problem, const Options& options, Trajectory& trajec
     summary.message = error;
     return summary;
   }
-  const std::vector<int> levels = refinement_levels(problem, options);
+  const std::vector<int> levels = refinement_levels(problem, options, automatic);
   if (resume) {
     if (!check_state(problem, options, *resume, levels, &error)) {
       summary.termination = Termination::invalid_input;
@@ -474,6 +528,11 @@ Summary solve(const Problem& problem, const Options& options, Trajectory& trajec
     driver.capture(summary.state, static_cast<int>(l));
     if (extrapolate) summary.state.previous_level = previous_level;
   }
+  // What the returned point is; the method's storage is released first so that the assessment's
+  // factorization does not add to the solve's peak memory.
+  method.reset();
+  detail::assess(driver.context(), summary.point);
+  summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary.termination != Termination::converged && trajectory.N != problem.N)
     summary.message += " (stopped at the refinement level N = " + std::to_string(trajectory.N) + ")";
   return summary;

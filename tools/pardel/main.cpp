@@ -253,6 +253,7 @@ struct SolveArgs {
   bool no_plot = false;
   std::string resume;  ///< output folder of an interrupted solve to continue
   bool no_memory_check = false;
+  std::string certificate = "inertia";  ///< "full": also the seed's certificate (pardel check's)
 };
 
 /** FNV-1a hash of a file's bytes (how a checkpoint recognizes its scene). */
@@ -333,7 +334,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   if (resume && summary.termination == Termination::invalid_input)
     throw CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
 
-  const SolveOutputs outputs = write_solve_outputs(scene, summary, trajectory, out_dir);
+  const SolveOutputs outputs = write_solve_outputs(scene, summary, trajectory, out_dir, {}, args.certificate == "full");
   const pardel_model& model = *scene.model;
   if (summary.termination == Termination::interrupted && summary.state.valid) {
     Checkpoint checkpoint;
@@ -447,6 +448,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 4096));
   solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
   solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
+  solve_cmd->add_option("--certificate", s.certificate,
+                        "inertia (default: the point assessment from the solve's factorization) or full (also the "
+                        "interval-by-interval test and the Jacobi spectral radius of pardel check)")
+      ->check(CLI::IsMember({"inertia", "full"}));
   solve_cmd->add_option("--resume", s.resume,
                         "Continue the interrupted solve whose outputs (and checkpoint.json) are in this folder");
   solve_cmd->add_flag("--no-memory-check", s.no_memory_check,

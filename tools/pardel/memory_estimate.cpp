@@ -48,14 +48,15 @@ double context_bytes(double N, int d) {
          + N * 8                   // Ld
          + N * d * 8 * 2           // D1, D2
          + N * d * d * 8 * 3       // D11, D12, D22
-         + n1 * 8 * 2;             // node_max, node_scale
+         + n1 * 8 * 3;             // node_max, node_scale, node_hq
 }
 
 double trajectory_bytes(double N, int d) { return (N + 1) * (d + 1) * 8.0; }
 
-/** Newton's own arrays (newton.cpp): copies of the interval arrays, rhs and step, the Hessian. */
+/** Newton's own arrays (newton.cpp): copies of the interval arrays, four vectors (right-hand side,
+ *  step and two of the secular iteration), the Hessian. */
 double newton_bytes(double N, int d, bool cyclic) {
-  return N * 8 + N * d * 8 * 2 + N * d * d * 8 * 3 + (N + 1) * d * 8 + 2 * std::max(N - 1, 0.0) * d * 8 +
+  return N * 8 + N * d * 8 * 2 + N * d * d * 8 * 3 + (N + 1) * d * 8 + 4 * std::max(N - 1, 0.0) * d * 8 +
          block_tridiagonal_bytes(N, d, cyclic);
 }
 
@@ -63,6 +64,7 @@ double method_bytes(Method method, bool cyclic, double N, int d) {
   switch (method) {
     case Method::jacobi:
     case Method::jacobi_newton: return N + 1;  // node status
+    case Method::automatic:
     case Method::newton: return newton_bytes(N, d, cyclic);
     case Method::hybrid: return (N + 1) + newton_bytes(N, d, cyclic) + block_tridiagonal_bytes(N, d, false);
     case Method::multigrid: return 2 * (N + 1) + 2 * context_bytes(N / 2, d);  // coarse levels, at most N in all
@@ -94,9 +96,13 @@ MemoryEstimate estimate_solve_memory(const Scene& scene) {
   const int d = scene.model->dim;
   MemoryEstimate e;
   // The initial guess, solve()'s working copy, and with refinement the resampled level.
-  const double trajectories = (scene.options.refine_start_N > 0 ? 3 : 2) * trajectory_bytes(N, d);
+  const bool levels = scene.options.refine_start_N > 0 || scene.options.method == Method::automatic;
+  const double trajectories = (levels ? 3 : 2) * trajectory_bytes(N, d);
   const bool cyclic = scene.options.linear_solver == LinearSolver::cyclic_reduction;
-  e.solve = context_bytes(N, d) + method_bytes(scene.options.method, cyclic, N, d) + trajectories;
+  // After the method's arrays are released, the point assessment (assessment.cpp): a Hessian and
+  // three pairs of vectors of the subspace iteration.
+  const double assessment = block_tridiagonal_bytes(N, d, false) + 6 * std::max(N - 1, 0.0) * d * 8;
+  e.solve = context_bytes(N, d) + std::max(method_bytes(scene.options.method, cyclic, N, d), assessment) + trajectories;
   // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
   // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).

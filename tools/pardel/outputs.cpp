@@ -94,6 +94,19 @@ nlohmann::ordered_json certificate_json(const Certificate& c, std::size_t max_vi
   return j;
 }
 
+nlohmann::ordered_json point_json(const PointAssessment& p) {
+  nlohmann::ordered_json j;
+  j["kind"] = to_string(p.kind);
+  j["inertia"] = {{"positive", p.positive}, {"negative", p.negative}, {"zero", p.zero}};
+  j["lambda_min"] = p.lambda_min;
+  j["lambda_next"] = p.lambda_next;
+  j["lambda_max_bound"] = p.lambda_max;
+  j["nearly_degenerate"] = p.nearly_degenerate;
+  j["soft_motion"] = p.soft_motion;
+  j["note"] = p.note;
+  return j;
+}
+
 nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                                     const Certificate& certificate, const std::string& model_source) {
   const Problem& problem = scene.problem;
@@ -123,8 +136,11 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   j["t0"] = problem.t0;
   j["T"] = problem.T;
   j["tol"] = scene.options.tol;
+  j["rtol"] = scene.options.rtol;
+  j["tolerance"] = summary.tolerance;
   j["scene"] = scene.path;
-  j["certificate"] = certificate_json(certificate);
+  j["point"] = point_json(summary.point);
+  if (certificate.free_components > 0 || !certificate.error.empty()) j["certificate"] = certificate_json(certificate);
   return j;
 }
 
@@ -160,12 +176,13 @@ std::string scene_model_source(const Scene& scene) {
 }
 
 SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
-                                 const std::string& out_dir, const nlohmann::ordered_json& extra) {
+                                 const std::string& out_dir, const nlohmann::ordered_json& extra,
+                                 bool full_certificate) {
   namespace fs = std::filesystem;
   SolveOutputs outputs;
   // The certificate needs a trajectory on the problem's grid.
   outputs.have_trajectory = trajectory.N >= 2 && static_cast<int>(trajectory.t.size()) == trajectory.N + 1;
-  if (outputs.have_trajectory) {
+  if (outputs.have_trajectory && full_certificate) {
     Problem final_problem = scene.problem;
     final_problem.N = trajectory.N;
     outputs.certificate = certify(final_problem, trajectory, scene.options.threads);
@@ -187,11 +204,15 @@ void print_solve_report(const Scene& scene, const Summary& summary, const Trajec
   std::cout << summary.brief_report() << "\n";
   if (!extra_line.empty()) std::cout << extra_line << "\n";
   std::cout << fmt::format("{} = {} ({})\n", cost.name, format_double(cost.value), cost.definition);
-  std::cout << fmt::format("certificate: theorem {}, Hessian {} (inertia +{} -{} 0:{}), Jacobi spectral radius {}\n",
-                           certificate.theorem_holds ? "holds" : "does not hold",
-                           certificate.hessian_positive_definite ? "positive definite" : "not positive definite",
-                           certificate.inertia_positive, certificate.inertia_negative, certificate.inertia_zero,
-                           format_double(certificate.jacobi_spectral_radius));
+  if (summary.point.kind != PointKind::unknown)
+    std::cout << fmt::format("point: {} (inertia +{} -{} 0:{}): {}\n", to_string(summary.point.kind),
+                             summary.point.positive, summary.point.negative, summary.point.zero, summary.point.note);
+  if (certificate.free_components > 0)
+    std::cout << fmt::format("certificate: theorem {}, Hessian {} (inertia +{} -{} 0:{}), Jacobi spectral radius {}\n",
+                             certificate.theorem_holds ? "holds" : "does not hold",
+                             certificate.hessian_positive_definite ? "positive definite" : "not positive definite",
+                             certificate.inertia_positive, certificate.inertia_negative, certificate.inertia_zero,
+                             format_double(certificate.jacobi_spectral_radius));
   std::cout << "output: " << out_dir << "\n";
 }
 

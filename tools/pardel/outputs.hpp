@@ -38,7 +38,10 @@ std::string convergence_csv(const Summary& summary);
  *  (violations_total gives their number). */
 nlohmann::ordered_json certificate_json(const Certificate& certificate, std::size_t max_violations = 100);
 
-/** summary.json for one solve. */
+/** The solve's point assessment (minimum, saddle, degenerate; inertia; smallest eigenvalues). */
+nlohmann::ordered_json point_json(const PointAssessment& point);
+
+/** summary.json for one solve (the certificate only when it was computed: free_components > 0). */
 nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                                     const Certificate& certificate, const std::string& model_source);
 
@@ -53,19 +56,21 @@ std::string scene_model_source(const Scene& scene);
 /** What a finished solve wrote. */
 struct SolveOutputs {
   bool have_trajectory = false;  ///< the returned trajectory lies on the problem's grid
-  Certificate certificate;       ///< at that trajectory (empty without one)
+  Certificate certificate;       ///< at that trajectory (empty without one, or unless asked for)
 };
 
 /**
- * Certifies the returned trajectory (when there is one: a solve refused as invalid input returns
- * none) and writes summary.json (with the fields of `extra` appended), trajectory.csv and
+ * With `full_certificate`, certifies the returned trajectory (when there is one: a solve refused as
+ * invalid input returns none; the summary's point assessment is always there), and writes summary.json (with the fields of `extra` appended), trajectory.csv and
  * convergence.csv into out_dir, each atomically.
  */
 SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
-                                 const std::string& out_dir, const nlohmann::ordered_json& extra = {});
+                                 const std::string& out_dir, const nlohmann::ordered_json& extra = {},
+                                 bool full_certificate = false);
 
 /** The report `pardel solve` prints on stdout: the brief report, `extra_line` when not empty, the
- *  physical cost, the certificate's verdicts and the output folder. */
+ *  physical cost, the point assessment, the certificate's verdicts (when computed) and the output
+ *  folder. */
 void print_solve_report(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                         const Certificate& certificate, const std::string& out_dir,
                         const std::string& extra_line = "");

@@ -78,7 +78,7 @@ const char* to_string(ClockMode mode) {
 
 namespace {
 
-const std::vector<std::string> kMethodNames = {"jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"};
+const std::vector<std::string> kMethodNames = {"auto", "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"};
 const std::vector<std::string> kClockNames = {"none", "free_final_time", "fixed_total_time"};
 const std::vector<std::string> kGuessKinds = {"linear", "polyline", "csv"};
 
@@ -542,7 +542,7 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
   const toml::table* solver = r.table(root, "solver", "solver");
   if (solver) {
     r.check_keys(*solver, "solver",
-                 {"method", "tol", "max_iterations", "damping", "newton_substeps", "newton_shift", "threads",
+                 {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift", "threads",
                   "refine", "clock_update_every", "clock"});
     if (const auto method = r.string(solver, "method", "solver.method")) {
       if (!parse_method(*method, &options.method)) {
@@ -556,6 +556,11 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
     if (const auto tol = r.number(solver, "tol", "solver.tol")) {
       if (!(*tol > 0)) r.fail(*solver->get("tol"), "solver.tol", fmt::format("solver.tol must be > 0, got {}", *tol));
       options.tol = *tol;
+    }
+    if (const auto rtol = r.number(solver, "rtol", "solver.rtol")) {
+      if (!(*rtol > 0 && *rtol < 1))
+        r.fail(*solver->get("rtol"), "solver.rtol", fmt::format("solver.rtol must be in (0, 1), got {}", *rtol));
+      options.rtol = *rtol;
     }
     if (const auto max_it = r.integer(solver, "max_iterations", "solver.max_iterations")) {
       if (*max_it < 1) {

@@ -522,13 +522,12 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
     const bool have_trajectory = trajectory.N >= 2 && static_cast<int>(trajectory.t.size()) == trajectory.N + 1;
     result.cost = have_trajectory ? physical_cost(scene, summary, trajectory).value : std::nan("");
     if (summary.converged() && have_trajectory) {
-      Problem problem = scene.problem;
-      problem.N = trajectory.N;
-      const Certificate certificate = certify(problem, trajectory, scene.options.threads, scene.options.tol);
-      result.certificate_valid = certificate.error.empty();
-      result.hessian_positive_definite = certificate.hessian_positive_definite;
-      result.inertia_negative = certificate.inertia_negative;
-      result.inertia_zero = certificate.inertia_zero;
+      // The solve's own point assessment (inertia from its factorization, O(N)).
+      const PointAssessment& point = summary.point;
+      result.certificate_valid = point.kind != PointKind::unknown;
+      result.hessian_positive_definite = point.kind == PointKind::minimum;
+      result.inertia_negative = point.negative;
+      result.inertia_zero = point.zero;
       result.trajectory = std::move(trajectory);
     } else if (summary.converged()) {
       result.status = "error";

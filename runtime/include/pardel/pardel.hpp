@@ -80,6 +80,7 @@ Trajectory resample(const Problem& problem, const Trajectory& from, int N);
 // Solving
 
 enum class Method {
+  automatic,      ///< "auto", the default: newton, with grid sequencing (nested iteration) for large N
   jacobi,         ///< nonlinear block Jacobi (seed eq. pDEL), each block by Newton to a tolerance
   jacobi_newton,  ///< the seed's m-step block Jacobi-Newton (eq. NewtonRaphson)
   newton,         ///< globalized Newton on the whole DEL system, block-tridiagonal solves
@@ -87,7 +88,7 @@ enum class Method {
   hybrid,         ///< Jacobi-Newton until the certificate holds, then Newton
 };
 const char* to_string(Method method);
-/** Parses "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"; false if unknown. */
+/** Parses "auto", "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"; false if unknown. */
 bool parse_method(std::string_view text, Method* method);
 
 /** How Newton-type methods solve the block-tridiagonal systems. */
@@ -99,12 +100,12 @@ const char* to_string(LinearSolver solver);
 /** Parses "ldlt", "cyclic-reduction"; false if unknown. */
 bool parse_linear_solver(std::string_view text, LinearSolver* solver);
 
-/** The shift Newton's Levenberg-Marquardt globalization adds to the Hessian, H + mu M. */
+/** The metric M of Newton's trust region |s|_M <= Delta (and of the shift H + lambda M). */
 enum class NewtonShift {
-  identity,    ///< M = I: the classic Levenberg-Marquardt shift
-  difference,  ///< M = tridiag(-1, 2, -1) per component: the shape of the kinetic part of these
-               ///< Hessians, so every wavelength is damped alike and the iteration count does not
-               ///< grow with N (it removes the stall at large N; it may reach another local minimum)
+  identity,    ///< M = I
+  difference,  ///< M = tridiag(-1, 2, -1) per component (the default): the shape of the kinetic part
+               ///< of these Hessians, |s|_M^2 = sum_k |s_{k+1} - s_k|^2, so every wavelength is
+               ///< treated alike and the iteration count does not grow with N
 };
 const char* to_string(NewtonShift shift);
 /** Parses "identity", "difference"; false if unknown. */
@@ -165,8 +166,12 @@ struct SolverState {
 };
 
 struct Options {
-  Method method = Method::jacobi_newton;
-  double tol = 1e-10;            ///< on the infinity-norm of the DEL residual
+  Method method = Method::automatic;
+  /** Convergence: the infinity-norm of the DEL residual at most max(rtol * scale, 10 * floor), with
+   *  scale = max_k (|D2 Ld(k-1)| + |D1 Ld(k)|) the size of the terms that cancel in it and floor its
+   *  round-off level (Summary::residual_floor); or, when tol > 0, at most the absolute tol. */
+  double rtol = 1e-10;
+  double tol = 0;                ///< absolute tolerance (0: the relative test above)
   long max_iterations = 1000000;
   double damping = 0;            ///< epsilon: q <- q + (1 - epsilon)(qbar - q)
   int newton_substeps = 1;       ///< m of the m-step Jacobi-Newton
@@ -176,7 +181,7 @@ struct Options {
   int clock_update_every = 100;  ///< iterations between node-time updates under a clock
   long history_every = 1;        ///< record the history every this many iterations
   LinearSolver linear_solver = LinearSolver::block_ldlt;  ///< newton and hybrid
-  NewtonShift newton_shift = NewtonShift::identity;       ///< newton and hybrid
+  NewtonShift newton_shift = NewtonShift::difference;     ///< newton and hybrid: trust-region metric
   double refine_settle = 1e-3;   ///< a coarse level is settled when its residual fell by this factor
   double divergence_factor = 1e8;  ///< diverged when the residual exceeds this times the initial one
   /** Called after each recorded iteration; returning false interrupts the solve. */
@@ -219,6 +224,36 @@ struct Certificate {
   std::string report() const;      ///< human-readable
 };
 
+/** What a stationary point of the discrete action is, by the inertia of its Hessian. */
+enum class PointKind {
+  unknown,     ///< not assessed (the solve failed before a point existed, or the trajectory is invalid)
+  minimum,     ///< Hessian positive definite: a strict local minimum
+  saddle,      ///< Hessian with negative eigenvalues (their number is the index): a saddle
+  degenerate,  ///< no negative eigenvalue but a zero one (numerically): not an isolated solution
+};
+const char* to_string(PointKind kind);
+
+/**
+ * The inertia of the Hessian of the discrete action at a trajectory, from its block LDL^T (O(N)),
+ * and, at a minimum, its two smallest eigenvalues by inverse subspace iteration (a few more O(N)
+ * solves) against Gershgorin's bound on the largest. It says what a returned point is; at a
+ * residual above the tolerance it describes the point, not a solution.
+ */
+struct PointAssessment {
+  PointKind kind = PointKind::unknown;
+  long positive = 0, negative = 0, zero = 0;  ///< inertia (negative = the saddle's index)
+  double lambda_min = 0;    ///< smallest eigenvalue (minimum only; 0 otherwise)
+  double lambda_next = 0;   ///< the next one (0 when the Hessian has one row or at a non-minimum)
+  double lambda_max = 0;    ///< Gershgorin's upper bound on the largest |eigenvalue|
+  /** A minimum whose smallest eigenvalue is below 1e-4 of the next: the action is determined to
+   *  round-off, the trajectory only up to a motion along the eigenvector of lambda_min. */
+  bool nearly_degenerate = false;
+  /** For a nearly degenerate minimum: the Euclidean size, over all unknowns, of a motion along that
+   *  eigenvector that changes the action by its round-off, sqrt(2 * 1e-16 |action| / lambda_min). */
+  double soft_motion = 0;
+  std::string note;         ///< one sentence: what was found and what it means
+};
+
 struct Summary {
   Termination termination = Termination::invalid_input;
   std::string message;
@@ -231,6 +266,8 @@ struct Summary {
   double final_time = 0;  ///< t_N (the travel time under free_final_time)
   double wall_seconds = 0;
   double residual_floor = 0;  ///< round-off level of the residual at the returned iterate
+  double tolerance = 0;       ///< the residual that counted as converged (Options::rtol or tol)
+  PointAssessment point;      ///< what the returned trajectory is (minimum, saddle, degenerate)
   std::vector<IterationRecord> history;
   SolverState state;  ///< filled (state.valid) when the solve ended `interrupted`
   bool converged() const { return termination == Termination::converged; }
@@ -249,6 +286,9 @@ double discrete_action(const Problem& problem, const Trajectory& trajectory);
 
 /** The convergence certificate at a trajectory. */
 Certificate certify(const Problem& problem, const Trajectory& trajectory, int threads = 0, double tol = 1e-10);
+
+/** What a trajectory (on the problem's grid) is as a stationary point of the discrete action. */
+PointAssessment assess_point(const Problem& problem, const Trajectory& trajectory, int threads = 0);
 
 /** Checks a problem and a trajectory for it; on failure writes a message naming the field. */
 bool validate(const Problem& problem, const Trajectory& trajectory, std::string* error);

@@ -234,11 +234,12 @@ int globalize_residual(Local& local, int local_bad) {
   // One reduction: max residual, max round-off level (non-finite nodes are skipped by both, as
   // in compute_residual) and the lowest non-finite node as the max of its negative.
   const bool bad_here = local_bad >= 0;
-  double in[3] = {bad_here ? 0.0 : ctx.residual, ctx.residual_floor,
-                  bad_here ? -static_cast<double>(local.layout.lo + local_bad) : -1e300};
-  double out[3] = {0, 0, 0};
-  MPI_Allreduce(in, out, 3, MPI_DOUBLE, MPI_MAX, local.comm);
+  double in[4] = {bad_here ? 0.0 : ctx.residual, ctx.residual_floor,
+                  bad_here ? -static_cast<double>(local.layout.lo + local_bad) : -1e300, ctx.residual_scale};
+  double out[4] = {0, 0, 0, 0};
+  MPI_Allreduce(in, out, 4, MPI_DOUBLE, MPI_MAX, local.comm);
   ctx.residual_floor = out[1];
+  ctx.residual_scale = out[3];
   if (out[2] > -1e300) {
     ctx.residual = std::numeric_limits<double>::quiet_NaN();
     return static_cast<int>(-out[2]);
@@ -488,7 +489,7 @@ class Driver {
       int bad = globalize_residual(local_, method_.evaluate(ctx_));
       if (bad >= 0) return non_finite_residual(bad);
       double r = ctx_.residual;
-      if (clocked && r <= options_.tol && since_clock > 0) {
+      if (clocked && r <= pardel::detail::target_residual(options_, ctx_) && since_clock > 0) {
         // Declare convergence only with node times consistent with this trajectory.
         update_times_distributed(local_);
         since_clock = 0;
@@ -504,7 +505,8 @@ class Driver {
       if (should_record() && !record()) {
         return finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
       }
-      if (r <= options_.tol) return finish(Termination::converged, format("DEL residual %.3g <= tol %.3g", r, options_.tol));
+      const double target = pardel::detail::target_residual(options_, ctx_);
+      if (r <= target) return finish(Termination::converged, format("DEL residual %.3g <= tolerance %.3g", r, target));
       if (r < 0.99 * best_residual_) {
         best_residual_ = r;
         best_iteration_ = iteration_;
@@ -513,12 +515,12 @@ class Driver {
         return finish(Termination::stalled,
                       format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has "
                              "not improved in 200 iterations; tol %.3g cannot be reached in double precision",
-                             r, ctx_.residual_floor, options_.tol));
+                             r, ctx_.residual_floor, target));
       }
       if (iteration_ >= options_.max_iterations) {
         return finish(Termination::max_iterations,
                       format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
-                             static_cast<double>(options_.max_iterations), r, options_.tol));
+                             static_cast<double>(options_.max_iterations), r, target));
       }
       if (iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_) {
         return finish(Termination::diverged, format("DEL residual %.3g grew beyond divergence_factor x initial "
@@ -702,9 +704,12 @@ std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, Loc
   }
 }
 
-Summary solve_over_ranks(const Problem& problem, const Options& options, Trajectory& trajectory, int ranks,
+Summary solve_over_ranks(const Problem& problem, const Options& requested, Trajectory& trajectory, int ranks,
                          int rank) {
   const auto start = std::chrono::steady_clock::now();
+  // The automatic method over ranks is Newton on the requested grid (no grid sequencing).
+  Options options = requested;
+  if (options.method == Method::automatic) options.method = Method::newton;
   Summary summary;
   summary.method = options.method;
   summary.N = problem.N;

@@ -1,0 +1,24 @@
+/**
+ * @file assessment.hpp
+ * Internal: the assessment of a returned point (inertia and smallest eigenvalues of the Hessian of
+ * the discrete action) and the regularity check of a Lagrangian, both over a solve context.
+ */
+#ifndef PARDEL_RUNTIME_ASSESSMENT_HPP
+#define PARDEL_RUNTIME_ASSESSMENT_HPP
+
+#include <string>
+
+#include "engine.hpp"
+
+namespace pardel::detail {
+
+/** Assesses ctx.q (evaluating the full kernel there if needed) into `out`. */
+void assess(Context& ctx, PointAssessment& out);
+
+/** False (with `message` naming the model and why) when D12 Ld is singular on every sampled
+ *  interval of ctx.q: a degenerate Lagrangian whose DEL equations do not determine the motion. */
+bool lagrangian_regular(const Context& ctx, std::string* message);
+
+}  // namespace pardel::detail
+
+#endif  // PARDEL_RUNTIME_ASSESSMENT_HPP
