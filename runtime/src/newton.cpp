@@ -102,6 +102,8 @@ class Newton : public Method_ {
     try_newton_ = !watchdog_.failed;
     watchdog_.failed = false;
     if (watchdog_.active && (watchdog_.steps >= kWatchdogSteps || !factor(ctx, 0))) return revert(ctx);
+    bool nonfinite_trials = false;
+    int nonfinite_node = -1;
     for (int attempt = 0; attempt < 60; ++attempt) {
       Step step;
       if (!trust_region_step(ctx, scale, escaping, &step)) break;
@@ -160,9 +162,25 @@ class Newton : public Method_ {
       }
       trial_.swap_with(ctx);  // restore the evaluation at q
       ctx.residual = r0;
+      if (!finite) {
+        nonfinite_trials = true;
+        nonfinite_node = bad;
+      } else {
+        nonfinite_trials = false;
+      }
       if (step.newton && step.norm > delta_) continue;  // the full step beyond the radius: now within it
       delta_ = 0.25 * std::min(delta_, step.norm);
       if (!(delta_ > 1e-15 * std::max(1.0, metric_norm_of_iterate(ctx)))) break;
+    }
+    if (nonfinite_trials) {
+      // Every step, down to a vanishing one, reaches a point where the model is not finite.
+      StepOutcome out;
+      out.failure = Termination::non_finite;
+      out.message = "newton: in iteration " + std::to_string(iteration) +
+                    " every trial step, down to a vanishing radius, gives a non-finite DEL residual or action" +
+                    (nonfinite_node >= 0 ? " (node " + std::to_string(nonfinite_node) + ")" : std::string()) +
+                    "; the last finite iterate is returned";
+      return out;
     }
     return newton_stalled(iteration, r0, ctx.residual_floor);
   }

@@ -175,8 +175,9 @@ TEST(Scene, DefaultsWhenKeysAreLeftOut) {
   EXPECT_EQ(scene.problem.t0, 0);
   EXPECT_STREQ(scene.problem.discretization->name, scene.model->discretizations[0].name);
   EXPECT_EQ(scene.guess.kind, GuessKind::linear);
-  EXPECT_EQ(scene.options.method, Method::jacobi_newton);
-  EXPECT_EQ(scene.options.tol, 1e-10);
+  EXPECT_EQ(scene.options.method, Method::automatic);
+  EXPECT_EQ(scene.options.tol, 0);  // no absolute tolerance: the relative one
+  EXPECT_EQ(scene.options.rtol, 1e-10);
   EXPECT_TRUE(scene.output_dir.empty());
 }
 

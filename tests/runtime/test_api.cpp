@@ -50,7 +50,9 @@ TEST(Api, OptionsValidationNamesOptionAndValue) {
     EXPECT_FALSE(o.is_valid(&e));
     EXPECT_NE(e.find(needle), std::string::npos) << e;
   };
-  pardel::Options o;
+  pardel::Options o;  // the seed's method at an absolute tolerance unless the test says otherwise
+  o.method = pardel::Method::jacobi_newton;
+  o.tol = 1e-10;
   o.tol = -1;
   check(o, "tol = -1");
   o = {};
@@ -144,7 +146,9 @@ TEST(Api, FindDiscretizationByName) {
 TEST(Api, SummaryReportsHowTheSolveEnded) {
   auto p = good_problem();
   auto traj = pardel::linear_guess(p);
-  pardel::Options o;
+  pardel::Options o;  // the seed's method at an absolute tolerance unless the test says otherwise
+  o.method = pardel::Method::jacobi_newton;
+  o.tol = 1e-10;
   o.method = pardel::Method::newton;
   const auto s = pardel::solve(p, o, traj);
   ASSERT_TRUE(s.converged());
@@ -160,7 +164,9 @@ TEST(Api, HistoryStaysBoundedOnLongRuns) {
   auto p = good_problem();
   p.N = 400;
   auto traj = pardel::linear_guess(p);
-  pardel::Options o;
+  pardel::Options o;  // the seed's method at an absolute tolerance unless the test says otherwise
+  o.method = pardel::Method::jacobi_newton;
+  o.tol = 1e-10;
   o.threads = 1;
   o.max_iterations = 20000;
   const auto s = pardel::solve(p, o, traj);

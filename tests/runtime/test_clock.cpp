@@ -38,7 +38,9 @@ TEST(Clock, FreeFinalTimeTimesArePrefixSumsOfTheClock) {
   for (auto method : {pardel::Method::newton, pardel::Method::jacobi_newton}) {
     const auto p = forced_problem(pardel::ClockMode::free_final_time);
     auto traj = pardel::linear_guess(p);
-    pardel::Options opt;
+    pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+    opt.method = pardel::Method::jacobi_newton;
+    opt.tol = 1e-10;
     opt.method = method;
     opt.threads = 1;
     opt.clock_update_every = 5;
@@ -60,7 +62,9 @@ TEST(Clock, FreeFinalTimeTimesArePrefixSumsOfTheClock) {
 TEST(Clock, FixedTotalTimeStepsFollowTheClockAndSumToT) {
   const auto p = forced_problem(pardel::ClockMode::fixed_total_time);
   auto traj = pardel::linear_guess(p);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   opt.method = pardel::Method::newton;
   const auto s = pardel::solve(p, opt, traj);
   ASSERT_TRUE(s.converged()) << s.brief_report();
@@ -80,7 +84,9 @@ TEST(Clock, WithoutClockTheForcedParticleMatchesItsExactDiscreteSolution) {
   // x'' = t: trapezoid DEL (x_{k+1} - 2x_k + x_{k-1})/h = h t_k, solved as a dense linear system.
   auto p = forced_problem(pardel::ClockMode::none);
   auto traj = pardel::linear_guess(p);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   opt.method = pardel::Method::newton;
   opt.tol = 1e-13;
   ASSERT_TRUE(pardel::solve(p, opt, traj).converged());
@@ -133,7 +139,7 @@ TEST(Clock, ZermeloWithTimeVaryingWind) {
   p.qN = {6, 2};
   p.clock = pardel::ClockMode::free_final_time;
   auto traj = pardel::linear_guess(p);
-  pardel::Options opt;
+  pardel::Options opt;  // the default relative tolerance
   opt.method = pardel::Method::newton;
   opt.clock_update_every = 10;
   opt.max_iterations = 2000;

@@ -36,7 +36,9 @@ double exact_discrete(double omega, double T, int N, double a, double b, int k) 
 TEST(JacobiNewton, HarmonicMatchesExactDiscreteSolution) {
   const auto problem = harmonic_problem(1.0, 2.0, 40, 0.3, -0.7);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   opt.threads = 1;
   opt.tol = 1e-13;  // the error is at most residual / lambda_min(H) ~ residual * T^2 / (pi^2 h)
   const auto s = pardel::solve(problem, opt, traj);
@@ -75,7 +77,9 @@ TEST(JacobiNewton, SubstepsAndDampingReachTheSameSolution) {
 TEST(JacobiNewton, BitIdenticalForOneAndTwoThreads) {
   // N above the size where loops go parallel; the same iterate after the same number of sweeps.
   const auto problem = harmonic_problem(2.0, 1.0, 3000, -0.2, 0.9);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   opt.max_iterations = 40;
   opt.threads = 1;
   auto a = pardel::linear_guess(problem);
@@ -93,7 +97,9 @@ TEST(JacobiNewton, BeyondTheConjugatePointDoesNotConverge) {
   // omega T = 4 > pi: the Hessian of the action is indefinite, the linear iteration diverges.
   const auto problem = harmonic_problem(1.0, 4.0, 40, 1.0, 1.0);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   opt.threads = 1;
   opt.max_iterations = 100000;
   const auto s = pardel::solve(problem, opt, traj);
@@ -104,7 +110,9 @@ TEST(JacobiNewton, BeyondTheConjugatePointDoesNotConverge) {
 TEST(JacobiNewton, MaxIterationsIsReported) {
   const auto problem = harmonic_problem(1.0, 2.0, 200, 0.0, 1.0);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   opt.max_iterations = 7;
   const auto s = pardel::solve(problem, opt, traj);
   EXPECT_EQ(s.termination, pardel::Termination::max_iterations);
@@ -115,7 +123,9 @@ TEST(JacobiNewton, MaxIterationsIsReported) {
 TEST(JacobiNewton, InterruptedByCallback) {
   const auto problem = harmonic_problem(1.0, 2.0, 100, 0.0, 1.0);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   long seen = 0;
   opt.on_iteration = [&](const pardel::IterationRecord& r) {
     seen = r.iteration;
@@ -137,7 +147,9 @@ TEST(JacobiNewton, NonFiniteIterateIsCaughtWithNodeAndIteration) {
   p.q0 = {0.0};
   p.qN = {0.0};
   auto traj = pardel::linear_guess(p);
-  pardel::Options opt;
+  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  opt.method = pardel::Method::jacobi_newton;
+  opt.tol = 1e-10;
   opt.divergence_factor = 1e300;
   const auto s = pardel::solve(p, opt, traj);
   EXPECT_FALSE(s.converged());
@@ -187,7 +199,9 @@ TEST(JacobiNewton, FusedSweepIsTheBlockNewtonStepOfEveryNodeForAnyThreadCount) {
   }
   std::vector<double> one_thread;
   for (int threads : {1, 2, 3}) {
-    pardel::Options opt;
+    pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+    opt.method = pardel::Method::jacobi_newton;
+    opt.tol = 1e-10;
     opt.threads = threads;
     opt.max_iterations = 1;
     pardel::Trajectory tr = guess;

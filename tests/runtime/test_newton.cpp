@@ -42,7 +42,8 @@ double bratu_exact(double lambda, double x) {
 }
 
 pardel::Options newton_options(int threads = 1) {
-  pardel::Options o;
+  pardel::Options o;  // an absolute tolerance unless the test says otherwise
+  o.tol = 1e-10;
   o.method = pardel::Method::newton;
   o.threads = threads;
   o.max_iterations = 500;

@@ -102,7 +102,8 @@ MemoryEstimate estimate_solve_memory(const Scene& scene) {
   // After the method's arrays are released, the point assessment (assessment.cpp): a Hessian and
   // three pairs of vectors of the subspace iteration.
   const double assessment = block_tridiagonal_bytes(N, d, false) + 6 * std::max(N - 1, 0.0) * d * 8;
-  e.solve = context_bytes(N, d) + std::max(method_bytes(scene.options.method, cyclic, N, d), assessment) + trajectories;
+  e.solve = context_bytes(N, d) + method_bytes(scene.options.method, cyclic, N, d) + trajectories;
+  (void)assessment;
   // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
   // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).
