@@ -99,11 +99,7 @@ MemoryEstimate estimate_solve_memory(const Scene& scene) {
   const bool levels = scene.options.refine_start_N > 0 || scene.options.method == Method::automatic;
   const double trajectories = (levels ? 3 : 2) * trajectory_bytes(N, d);
   const bool cyclic = scene.options.linear_solver == LinearSolver::cyclic_reduction;
-  // After the method's arrays are released, the point assessment (assessment.cpp): a Hessian and
-  // three pairs of vectors of the subspace iteration.
-  const double assessment = block_tridiagonal_bytes(N, d, false) + 6 * std::max(N - 1, 0.0) * d * 8;
   e.solve = context_bytes(N, d) + method_bytes(scene.options.method, cyclic, N, d) + trajectories;
-  (void)assessment;
   // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
   // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).
