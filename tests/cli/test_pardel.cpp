@@ -212,10 +212,21 @@ TEST(PardelSolve, WritesEveryOutputAndExitsWith0WhenConverged) {
   EXPECT_EQ(summary["discretization"], "trapezoid");
   EXPECT_EQ(summary["cost"]["name"], "fuel");
   EXPECT_EQ(summary["cost"]["value"], summary["action"]);
-  for (const char* key : {"message", "iterations", "wall_seconds", "threads", "certificate"}) {
+  for (const char* key : {"message", "iterations", "wall_seconds", "threads", "tolerance", "point"}) {
     EXPECT_TRUE(summary.contains(key)) << key;
   }
-  EXPECT_TRUE(summary["certificate"].contains("hessian_positive_definite"));
+  // Every solve says what it found; the seed's certificate is computed only on request.
+  EXPECT_EQ(summary["point"]["kind"], "minimum");
+  EXPECT_EQ(summary["point"]["inertia"]["negative"], 0);
+  EXPECT_EQ(summary["point"]["inertia"]["positive"], 2 * 39);
+  EXPECT_GT(summary["point"]["lambda_min"].get<double>(), 0);
+  EXPECT_FALSE(summary.contains("certificate"));
+  const Result full = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "full") +
+                             "' --quiet --no-plot --certificate full");
+  ASSERT_EQ(full.code, 0) << full.err;
+  const auto with_certificate = nlohmann::json::parse(slurp(dir / "full/summary.json"));
+  EXPECT_TRUE(with_certificate["certificate"]["hessian_positive_definite"].get<bool>());
+  EXPECT_EQ(with_certificate["certificate"]["inertia_positive"], summary["point"]["inertia"]["positive"]);
   // The trajectory file holds the solution: its residual, recomputed here, is below the tolerance.
   const Trajectory trajectory = cli::read_trajectory_csv(dir / "out/trajectory.csv", *find_model("fuel_nav"));
   ASSERT_EQ(trajectory.N, 40);

@@ -24,8 +24,7 @@ class NonFiniteModel : public reliability::ModelWorkshop {
 
   /** Solves with `method` from the straight line and checks how the solve ended. */
   void expect_reported_failure(const pardel::Problem& problem, pardel::Method method, bool may_diverge) {
-    pardel::Options options;  // the seed's method at an absolute tolerance unless the test says otherwise
-    options.method = pardel::Method::jacobi_newton;
+    pardel::Options options;  // an absolute tolerance
     options.tol = 1e-10;
     options.method = method;
     options.max_iterations = 2000;

@@ -50,9 +50,8 @@ TEST(Api, OptionsValidationNamesOptionAndValue) {
     EXPECT_FALSE(o.is_valid(&e));
     EXPECT_NE(e.find(needle), std::string::npos) << e;
   };
-  pardel::Options o;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options o;
   o.method = pardel::Method::jacobi_newton;
-  o.tol = 1e-10;
   o.tol = -1;
   check(o, "tol = -1");
   o = {};
@@ -146,8 +145,7 @@ TEST(Api, FindDiscretizationByName) {
 TEST(Api, SummaryReportsHowTheSolveEnded) {
   auto p = good_problem();
   auto traj = pardel::linear_guess(p);
-  pardel::Options o;  // the seed's method at an absolute tolerance unless the test says otherwise
-  o.method = pardel::Method::jacobi_newton;
+  pardel::Options o;  // an absolute tolerance
   o.tol = 1e-10;
   o.method = pardel::Method::newton;
   const auto s = pardel::solve(p, o, traj);
@@ -164,7 +162,7 @@ TEST(Api, HistoryStaysBoundedOnLongRuns) {
   auto p = good_problem();
   p.N = 400;
   auto traj = pardel::linear_guess(p);
-  pardel::Options o;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options o;  // the seed's method at an absolute tolerance
   o.method = pardel::Method::jacobi_newton;
   o.tol = 1e-10;
   o.threads = 1;

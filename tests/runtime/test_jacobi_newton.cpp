@@ -36,9 +36,8 @@ double exact_discrete(double omega, double T, int N, double a, double b, int k) 
 TEST(JacobiNewton, HarmonicMatchesExactDiscreteSolution) {
   const auto problem = harmonic_problem(1.0, 2.0, 40, 0.3, -0.7);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options opt;  // the seed's method at an absolute tolerance
   opt.method = pardel::Method::jacobi_newton;
-  opt.tol = 1e-10;
   opt.threads = 1;
   opt.tol = 1e-13;  // the error is at most residual / lambda_min(H) ~ residual * T^2 / (pi^2 h)
   const auto s = pardel::solve(problem, opt, traj);
@@ -77,7 +76,7 @@ TEST(JacobiNewton, SubstepsAndDampingReachTheSameSolution) {
 TEST(JacobiNewton, BitIdenticalForOneAndTwoThreads) {
   // N above the size where loops go parallel; the same iterate after the same number of sweeps.
   const auto problem = harmonic_problem(2.0, 1.0, 3000, -0.2, 0.9);
-  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options opt;  // the seed's method at an absolute tolerance
   opt.method = pardel::Method::jacobi_newton;
   opt.tol = 1e-10;
   opt.max_iterations = 40;
@@ -97,7 +96,7 @@ TEST(JacobiNewton, BeyondTheConjugatePointDoesNotConverge) {
   // omega T = 4 > pi: the Hessian of the action is indefinite, the linear iteration diverges.
   const auto problem = harmonic_problem(1.0, 4.0, 40, 1.0, 1.0);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options opt;  // the seed's method at an absolute tolerance
   opt.method = pardel::Method::jacobi_newton;
   opt.tol = 1e-10;
   opt.threads = 1;
@@ -110,7 +109,7 @@ TEST(JacobiNewton, BeyondTheConjugatePointDoesNotConverge) {
 TEST(JacobiNewton, MaxIterationsIsReported) {
   const auto problem = harmonic_problem(1.0, 2.0, 200, 0.0, 1.0);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options opt;  // the seed's method at an absolute tolerance
   opt.method = pardel::Method::jacobi_newton;
   opt.tol = 1e-10;
   opt.max_iterations = 7;
@@ -123,7 +122,7 @@ TEST(JacobiNewton, MaxIterationsIsReported) {
 TEST(JacobiNewton, InterruptedByCallback) {
   const auto problem = harmonic_problem(1.0, 2.0, 100, 0.0, 1.0);
   auto traj = pardel::linear_guess(problem);
-  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options opt;  // the seed's method at an absolute tolerance
   opt.method = pardel::Method::jacobi_newton;
   opt.tol = 1e-10;
   long seen = 0;
@@ -147,7 +146,7 @@ TEST(JacobiNewton, NonFiniteIterateIsCaughtWithNodeAndIteration) {
   p.q0 = {0.0};
   p.qN = {0.0};
   auto traj = pardel::linear_guess(p);
-  pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+  pardel::Options opt;  // the seed's method at an absolute tolerance
   opt.method = pardel::Method::jacobi_newton;
   opt.tol = 1e-10;
   opt.divergence_factor = 1e300;
@@ -199,7 +198,7 @@ TEST(JacobiNewton, FusedSweepIsTheBlockNewtonStepOfEveryNodeForAnyThreadCount) {
   }
   std::vector<double> one_thread;
   for (int threads : {1, 2, 3}) {
-    pardel::Options opt;  // the seed's method at an absolute tolerance unless the test says otherwise
+    pardel::Options opt;  // the seed's method at an absolute tolerance
     opt.method = pardel::Method::jacobi_newton;
     opt.tol = 1e-10;
     opt.threads = threads;

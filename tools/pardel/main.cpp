@@ -295,7 +295,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   }
   const int threads = args.threads >= 0 ? args.threads : resume ? resumed.threads : -1;
   if (threads >= 0) scene.options.threads = threads;
-  const MemoryEstimate memory = estimate_solve_memory(scene);
+  const MemoryEstimate memory = estimate_solve_memory(scene, args.certificate == "full");
   g_solve_context = fmt::format("solving {} with grid.N = {} (method {}, model dim {}; estimated need {})", scene_path,
                                 scene.problem.N, to_string(scene.options.method), scene.model->dim,
                                 format_bytes(memory.peak));

@@ -91,7 +91,7 @@ double proc_kb(const std::string& text, const std::string& key) {
 
 }  // namespace
 
-MemoryEstimate estimate_solve_memory(const Scene& scene) {
+MemoryEstimate estimate_solve_memory(const Scene& scene, bool certificate) {
   const double N = scene.problem.N;
   const int d = scene.model->dim;
   MemoryEstimate e;
@@ -100,17 +100,25 @@ MemoryEstimate estimate_solve_memory(const Scene& scene) {
   const double trajectories = (levels ? 3 : 2) * trajectory_bytes(N, d);
   const bool cyclic = scene.options.linear_solver == LinearSolver::cyclic_reduction;
   e.solve = context_bytes(N, d) + method_bytes(scene.options.method, cyclic, N, d) + trajectories;
+  // The point assessment (assessment.cpp): the solve's context and trajectories, the Hessian and
+  // six vectors of the inverse subspace iteration.
+  const double n = std::max(N - 1, 0.0);
+  e.assessment = context_bytes(N, d) + trajectories + block_tridiagonal_bytes(N, d, false) + 6 * n * d * 8;
   // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
   // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).
-  const double n = std::max(N - 1, 0.0);
-  e.certificate = trajectory_bytes(N, d) + context_bytes(N, d) + block_tridiagonal_bytes(N, d, false) +
-                  n * llt_bytes(d) + 3 * n * lu_bytes(d) + 4 * n * d * 8 + N * 32;
+  if (certificate) {
+    e.certificate = trajectory_bytes(N, d) + context_bytes(N, d) + block_tridiagonal_bytes(N, d, false) +
+                    n * llt_bytes(d) + 3 * n * lu_bytes(d) + 4 * n * d * 8 + N * 32;
+  }
   // trajectory.csv: about 24 characters per number, a std::string that grows by doubling.
   const int columns = 2 + d + (scene.model->order == 1 ? scene.model->ncoords : 0);
   e.output = trajectory_bytes(N, d) + 2 * (N + 1) * (24.0 * columns + 8);
-  e.peak = std::max({e.solve, e.certificate, e.output});
-  e.largest = e.peak == e.solve ? "solve" : e.peak == e.certificate ? "certificate" : "output";
+  e.peak = std::max({e.solve, e.assessment, e.certificate, e.output});
+  e.largest = e.peak == e.solve        ? "solve"
+              : e.peak == e.assessment ? "assessment"
+              : e.peak == e.certificate ? "certificate"
+                                        : "output";
   return e;
 }
 

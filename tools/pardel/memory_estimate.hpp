@@ -22,14 +22,16 @@ namespace pardel::cli {
 /** Bytes a solve of the scene needs at its peak, beyond the process's start-up footprint. */
 struct MemoryEstimate {
   double solve = 0;        ///< while iterating: context, method scratch, input and working trajectories
-  double certificate = 0;  ///< while certifying the result (after the solver's memory is freed)
+  double assessment = 0;   ///< while assessing the returned point (after the method's memory is freed)
+  double certificate = 0;  ///< while certifying the result (only with `--certificate full`; else 0)
   double output = 0;       ///< while writing trajectory.csv
-  double peak = 0;         ///< the largest of the three
-  std::string largest;     ///< which phase is the peak: "solve", "certificate" or "output"
+  double peak = 0;         ///< the largest of the four
+  std::string largest;     ///< which phase is the peak: "solve", "assessment", "certificate" or "output"
 };
 
-/** Estimates the memory of `pardel solve` for the scene (its N, model dim, method, linear solver). */
-MemoryEstimate estimate_solve_memory(const Scene& scene);
+/** Estimates the memory of `pardel solve` for the scene (its N, model dim, method, linear solver),
+ *  with the seed's certificate when `certificate` is true. */
+MemoryEstimate estimate_solve_memory(const Scene& scene, bool certificate = false);
 
 /** What the machine offers; a value < 0 means unknown or unlimited. */
 struct MachineMemory {

@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "../engine.hpp"
-#include "../levenberg_marquardt.hpp"
+#include "../trust_region.hpp"
 #include "decomposition.hpp"
 #include "schur_solver.hpp"
 #endif
@@ -248,124 +248,119 @@ int globalize_residual(Local& local, int local_bad) {
   return -1;
 }
 
-/** Newton on the whole DEL system with the Levenberg-Marquardt globalization of newton.cpp; the
- *  linear solves by the Schur-complement split, every reduction over all ranks. */
+/**
+ * The unknowns of one rank for the trust-region Newton of trust_region.hpp: its owned unknown
+ * nodes u0..u1, the Hessian rows of those nodes solved by the Schur-complement split, every sum
+ * and verdict reduced over all ranks. Vectors hold the owned unknowns in node layout; the metric
+ * and the quadratic form, which couple neighbouring nodes, read the neighbours' values through a
+ * halo exchange.
+ */
 template <int D>
-class DistributedNewton : public pardel::detail::Method_ {
+class DistributedSpace {
  public:
   using Mat = Eigen::Matrix<double, D, D>;
+  using Vec = Eigen::Matrix<double, D, 1>;
   using RowMap = Eigen::Map<const Eigen::Matrix<double, D, D, (D == 1 ? Eigen::ColMajor : Eigen::RowMajor)>>;
 
-  DistributedNewton(const Options& o, Local& local)
+  DistributedSpace(const Options& o, Local& local)
       : local_(local), difference_(o.newton_shift == NewtonShift::difference) {}
 
-  void reset(Context& ctx) override {
+  void resize(Context& ctx) {
     const Layout& L = local_.layout;
     solver_.resize(local_.owned_unknowns(), ctx.dim, L.rank, L.ranks);
-    const std::size_t n = static_cast<std::size_t>(local_.owned_unknowns()) * ctx.dim;
-    rhs_.assign(n, 0.0);
-    dxl_.assign(ctx.q.size(), 0.0);
-    pardel::detail::ensure_interval_arrays(ctx, Evaluated::full);  // both sets sized before the first step
-    trial_.size_like(ctx);
-    shift_.restart();
+    dz_ = static_cast<std::size_t>(ctx.dim);
+    n_ = static_cast<std::size_t>(local_.owned_unknowns()) * dz_;
+    off0_ = static_cast<std::size_t>(L.local(local_.u0)) * dz_;
+    halo_.assign(ctx.q.size(), 0.0);
   }
-
-  int evaluate(Context& ctx) override {
-    if (ctx.evaluated != Evaluated::full) pardel::detail::eval_full(ctx, ctx.q);
-    const int bad = pardel::detail::compute_residual(ctx);
-    ctx.action = global_sum_Ld(local_);
-    ctx.action_known = true;
-    return bad;
+  std::size_t size() const { return n_; }
+  std::size_t offset() const { return off0_; }
+  bool is_free(const Context&, std::size_t i) const { return local_.global_free[off0_ + i] != 0; }
+  int first_node() const { return local_.u0; }
+  int intervals() const { return local_.layout.N; }
+  double sum(double v) const {
+    double out = 0;
+    MPI_Allreduce(&v, &out, 1, MPI_DOUBLE, MPI_SUM, local_.comm);
+    return out;
   }
-
-  /** Whether the unshifted Hessian at the full evaluation in ctx is positive definite (every
-   *  pivot of the distributed factorization; collective). */
-  bool hessian_positive_definite(const Context& ctx) {
-    assemble(ctx, 0.0);
-    std::fill(rhs_.begin(), rhs_.end(), 0.0);
-    const std::size_t off0 = static_cast<std::size_t>(local_.layout.local(local_.u0)) * ctx.dim;
-    return solver_.solve(rhs_.data(), dxl_.data() + off0, local_.comm);
-  }
-
-  StepOutcome iterate(Context& ctx, long iteration) override {
+  /** The largest diagonal entry of the unshifted Hessian (1 on fixed components), over all ranks. */
+  double max_abs_diagonal(const Context& ctx) const {
     const Layout& L = local_.layout;
-    const MPI_Comm comm = local_.comm;
-    const int d = ctx.dim;
-    const std::size_t dz = static_cast<std::size_t>(d);
-    const std::size_t n = rhs_.size();
-    const std::size_t off0 = static_cast<std::size_t>(L.local(local_.u0)) * dz;  // first owned unknown, local layout
-    const double F = ctx.action, r0 = ctx.residual;
-    for (std::size_t i = 0; i < n; ++i) rhs_[i] = -ctx.res[off0 + i];
-    // Scale of the shift: the largest diagonal entry of the unshifted Hessian (1 on fixed components).
+    const std::size_t dd = dz_ * dz_;
     double scale = 0;
-    const std::size_t dd = dz * dz;
     for (int g = local_.u0; g <= local_.u1; ++g) {
       const std::size_t j = static_cast<std::size_t>(L.local(g));
-      const unsigned char* f = local_.global_free.data() + j * dz;
-      for (std::size_t a = 0; a < dz; ++a) {
-        const std::size_t aa = a * (dz + 1);
+      const unsigned char* f = local_.global_free.data() + j * dz_;
+      for (std::size_t a = 0; a < dz_; ++a) {
+        const std::size_t aa = a * (dz_ + 1);
         scale = std::max(scale, f[a] ? std::fabs(ctx.D22[(j - 1) * dd + aa] + ctx.D11[j * dd + aa]) : 1.0);
       }
     }
-    scale = detail::max_all(scale, comm);
-    if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
-    const double mu_min = 1e-10 * scale;
-    shift_.clamp(mu_min);
-    for (int attempt = 0; attempt < 200; ++attempt) {
-      assemble(ctx, shift_.mu());
-      const bool ok = solver_.solve(rhs_.data(), dxl_.data() + off0, comm);
-      if (!ok) {
-        shift_.raise(mu_min);
-        if (shift_.exhausted(scale)) break;
-        continue;
-      }
-      detail::exchange_halos(L, dxl_.data(), d, comm);
-      // Quadratic model of the action: gdx, dx.M.dx and dx.H.dx summed over all ranks.
-      double part[3] = {0, 0, 0}, sums[3] = {0, 0, 0};
-      for (std::size_t i = 0; i < n; ++i) part[0] -= rhs_[i] * dxl_[off0 + i];
-      for (int g = local_.u0; g <= local_.u1; ++g) {
-        const double* x = dxl_.data() + static_cast<std::size_t>(L.local(g)) * dz;
-        const double* xp = x - dz;  // node g-1 (a halo or node 0, zero there when fixed)
-        for (int a = 0; a < d; ++a) {
-          if (difference_) {
-            const double step = x[a] - (g >= 2 ? xp[a] : 0.0);
-            part[1] += step * step;
-            if (g == L.N - 1) part[1] += x[a] * x[a];
-          } else {
-            part[1] += x[a] * x[a];
-          }
-        }
-        const int i = g - local_.u0;
-        const Eigen::Map<const Eigen::Matrix<double, D, 1>> xi(x, d);
-        part[2] += xi.dot(solver_.diag(i) * xi);
-        if (g < L.N - 1)
-          part[2] += 2 * xi.dot(solver_.off(i) * Eigen::Map<const Eigen::Matrix<double, D, 1>>(x + dz, d));
-      }
-      MPI_Allreduce(part, sums, 3, MPI_DOUBLE, MPI_SUM, comm);
-      const double gdx = sums[0], dx2 = sums[1];
-      const double pred = -(gdx + 0.5 * (sums[2] - shift_.mu() * dx2));
-      // Trial point: owned unknowns moved, halos from the neighbours.
-      ctx.q_next = ctx.q;
-      for (std::size_t i = 0; i < n; ++i) ctx.q_next[off0 + i] = ctx.q[off0 + i] + dxl_[off0 + i];
-      detail::exchange_halos(L, ctx.q_next.data(), d, comm);
-      trial_.swap_with(ctx);
-      pardel::detail::eval_full(ctx, ctx.q_next);
-      const int bad = globalize_residual(local_, pardel::detail::compute_residual(ctx));
-      const double Fn = global_sum_Ld(local_);
-      if (shift_.accept(F, Fn, pred, bad < 0, ctx.residual, r0, mu_min)) {
-        ctx.action = Fn;
-        ctx.action_known = true;
-        StepOutcome done;
-        done.next_evaluated = true;
-        return done;
-      }
-      trial_.swap_with(ctx);
-      ctx.residual = r0;
-      shift_.raise(mu_min);
-      if (shift_.exhausted(scale)) break;
-    }
-    return pardel::detail::newton_stalled(iteration, r0, ctx.residual_floor);
+    return detail::max_all(scale, local_.comm);
   }
+
+  bool factor(const Context& ctx, double lambda, const double* b, double* x) {
+    assemble(ctx, lambda);
+    return solver_.solve(b, x, local_.comm);
+  }
+  /** The split refactors on every solve (its factorization is not kept between calls). */
+  void solve(const Context&, const double* in, double* out) { solver_.solve(in, out, local_.comm); }
+  double quadratic_form(const double* x) {
+    const double* h = with_halos(x);
+    const Layout& L = local_.layout;
+    double part = 0;
+    for (int g = local_.u0; g <= local_.u1; ++g) {
+      const double* xg = h + static_cast<std::size_t>(L.local(g)) * dz_;
+      const int i = g - local_.u0;
+      const Eigen::Map<const Vec> xi(xg, static_cast<int>(dz_));
+      part += xi.dot(solver_.diag(i) * xi);
+      if (g < L.N - 1) part += 2 * xi.dot(solver_.off(i) * Eigen::Map<const Vec>(xg + dz_, static_cast<int>(dz_)));
+    }
+    return sum(part);
+  }
+  /** The Schur split factors positive definite matrices only: the inertia of an indefinite
+   *  Hessian is not computed over ranks. */
+  long negative_eigenvalues(const Context&) const { return -1; }
+
+  void apply_metric(const Context&, const double* x, double* y) {
+    if (!difference_) {
+      std::copy(x, x + n_, y);
+      return;
+    }
+    const double* h = with_halos(x) + off0_;  // node u0's first value; neighbours at -dz and +dz
+    for (std::size_t i = 0; i < n_; ++i)
+      y[i] = local_.global_free[off0_ + i] ? 2 * h[i] - h[static_cast<std::ptrdiff_t>(i) - static_cast<std::ptrdiff_t>(dz_)] - h[i + dz_] : 0.0;
+  }
+  double metric_norm(const double* x) {
+    if (!difference_) {
+      double s = 0;
+      for (std::size_t i = 0; i < n_; ++i) s += x[i] * x[i];
+      return std::sqrt(sum(s));
+    }
+    // |x|_M^2 = sum over intervals of |x_{k+1} - x_k|^2 with x = 0 at nodes 0 and N; this rank
+    // counts the intervals ending at its unknowns and, on the rank of node N-1, the last one.
+    const double* h = with_halos(x) + off0_;
+    const Layout& L = local_.layout;
+    double s = 0;
+    for (std::size_t i = 0; i < n_; ++i) {
+      const double step = h[i] - h[static_cast<std::ptrdiff_t>(i) - static_cast<std::ptrdiff_t>(dz_)];
+      s += step * step;
+    }
+    if (local_.u1 == L.N - 1)
+      for (std::size_t i = n_ - dz_; i < n_; ++i) s += h[i] * h[i];
+    return std::sqrt(sum(s));
+  }
+
+  void trial_point(Context& ctx, const double* step) const {
+    ctx.q_next = ctx.q;
+    for (std::size_t i = 0; i < n_; ++i) ctx.q_next[off0_ + i] = ctx.q[off0_ + i] + step[i];
+    detail::exchange_halos(local_.layout, ctx.q_next.data(), ctx.dim, local_.comm);
+  }
+  int evaluate(Context& ctx, const std::vector<double>& q) const {
+    pardel::detail::eval_full(ctx, q);
+    return globalize_residual(local_, pardel::detail::compute_residual(ctx));
+  }
+  double action(const Context&) const { return global_sum_Ld(local_); }
 
  private:
   /** The blocks of the owned unknowns (and the coupling from the left separator), as
@@ -418,13 +413,23 @@ class DistributedNewton : public pardel::detail::Method_ {
     }
   }
 
+  /** x (owned unknowns) in the local node layout with the neighbours' unknowns in the halo slots
+   *  and zeros at nodes 0 and N. */
+  const double* with_halos(const double* x) {
+    std::copy(x, x + n_, halo_.begin() + static_cast<std::ptrdiff_t>(off0_));
+    detail::exchange_halos(local_.layout, halo_.data(), static_cast<int>(dz_), local_.comm);
+    return halo_.data();
+  }
+
   Local& local_;
   bool difference_;
   detail::SchurBlockSolver<D> solver_;
-  std::vector<double> rhs_, dxl_;
-  pardel::detail::TrialEvaluation trial_;
-  pardel::detail::LevenbergMarquardtShift shift_;
+  std::size_t dz_ = 0, n_ = 0, off0_ = 0;
+  std::vector<double> halo_;
 };
+
+template <int D>
+using DistributedNewton = pardel::detail::TrustRegionNewton<DistributedSpace<D>>;
 
 /** hybrid.cpp over the ranks: Jacobi-Newton sweeps until the distributed factorization certifies
  *  a positive definite Hessian (checked every 10 sweeps, as in one process), then Newton. */
@@ -454,6 +459,8 @@ class DistributedHybrid : public pardel::detail::Method_ {
     }
     return newton_mode_ ? newton_.iterate(ctx, iteration) : sweeps_->iterate(ctx, iteration);
   }
+
+  bool accept_stop(Context& ctx) override { return newton_mode_ ? newton_.accept_stop(ctx) : true; }
 
  private:
   static constexpr int check_every = 10;
@@ -506,7 +513,8 @@ class Driver {
         return finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
       }
       const double target = pardel::detail::target_residual(options_, ctx_);
-      if (r <= target) return finish(Termination::converged, format("DEL residual %.3g <= tolerance %.3g", r, target));
+      if (r <= target && method_.accept_stop(ctx_))
+        return finish(Termination::converged, format("DEL residual %.3g <= tolerance %.3g", r, target));
       if (r < 0.99 * best_residual_) {
         best_residual_ = r;
         best_iteration_ = iteration_;
