@@ -189,3 +189,19 @@ bool lagrangian_regular(const Context& ctx, std::string* message) {
 }
 
 }  // namespace pardel::detail
+
+namespace pardel {
+
+PointAssessment assess_point(const Problem& problem, const Trajectory& trajectory, int threads) {
+  PointAssessment out;
+  detail::Context ctx;
+  std::string error;
+  if (!detail::context_at(problem, trajectory, threads, ctx, &error)) {
+    out.note = error;
+    return out;
+  }
+  detail::assess(ctx, out);
+  return out;
+}
+
+}  // namespace pardel

@@ -192,31 +192,8 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
 Certificate certify(const Problem& problem, const Trajectory& trajectory, int threads, double tol) {
   Certificate c;
   c.tol = tol;
-  std::string error;
-  if (!validate(problem, trajectory, &error)) {
-    c.error = error;
-    return c;
-  }
-  if (trajectory.N != problem.N) {
-    c.error = "trajectory.N = " + std::to_string(trajectory.N) + " differs from problem.N = " + std::to_string(problem.N);
-    return c;
-  }
   Context ctx;
-  detail::setup_context(problem, problem.N, detail::resolve_threads(threads), ctx);
-  if (!detail::apply_constraints(problem, ctx, &error)) {
-    c.error = error;
-    return c;
-  }
-  ctx.q = trajectory.q;
-  if (problem.clock != ClockMode::none) {
-    if (trajectory.t.size() == ctx.t.size()) {
-      ctx.t = trajectory.t;
-      if (problem.clock == ClockMode::fixed_total_time)
-        for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
-    } else {
-      detail::update_times(ctx, ctx.q);
-    }
-  }
+  if (!detail::context_at(problem, trajectory, threads, ctx, &c.error)) return c;
   detail::eval_full(ctx, ctx.q);
   detail::compute_residual(ctx);
   c.residual = ctx.residual;

@@ -297,4 +297,25 @@ int first_non_finite_node(const Context& ctx, const std::vector<double>& q) {
   return -1;
 }
 
+bool context_at(const Problem& problem, const Trajectory& trajectory, int threads, Context& ctx, std::string* error) {
+  if (!validate(problem, trajectory, error)) return false;
+  if (trajectory.N != problem.N) {
+    *error = "trajectory.N = " + std::to_string(trajectory.N) + " differs from problem.N = " + std::to_string(problem.N);
+    return false;
+  }
+  setup_context(problem, problem.N, resolve_threads(threads), ctx);
+  if (!apply_constraints(problem, ctx, error)) return false;
+  ctx.q = trajectory.q;
+  if (problem.clock != ClockMode::none) {
+    if (trajectory.t.size() == ctx.t.size()) {
+      ctx.t = trajectory.t;
+      if (problem.clock == ClockMode::fixed_total_time)
+        for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+    } else {
+      update_times(ctx, ctx.q);
+    }
+  }
+  return true;
+}
+
 }  // namespace pardel::detail

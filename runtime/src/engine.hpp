@@ -86,6 +86,9 @@ inline long next_history_record(long iteration, long every, std::size_t recorded
 }
 /** Marks knots and boundaries; `message` is set and false returned for a knot off the grid. */
 bool apply_constraints(const Problem& problem, Context& ctx, std::string* message);
+/** A context for the problem at a given trajectory on its grid (its node times under a clock, or
+ *  times from the clock when the trajectory has none); false with `error` for an invalid pair. */
+bool context_at(const Problem& problem, const Trajectory& trajectory, int threads, Context& ctx, std::string* error);
 
 /** Sizes the interval arrays that a kernel of `kind` fills (sweep: D1, D2, D11, D22; grad: Ld, D1, D2;
  *  full: all) for ctx.N; setup_context leaves them empty, so methods that never store interval

@@ -243,7 +243,7 @@ struct PointAssessment {
   PointKind kind = PointKind::unknown;
   long positive = 0, negative = 0, zero = 0;  ///< inertia (negative = the saddle's index)
   double lambda_min = 0;    ///< smallest eigenvalue (minimum only; 0 otherwise)
-  double lambda_next = 0;   ///< the next one (0 when the Hessian has one row or at a non-minimum)
+  double lambda_next = 0;   ///< the next one, from above (a Ritz value; 0 with one row or at a non-minimum)
   double lambda_max = 0;    ///< Gershgorin's upper bound on the largest |eigenvalue|
   /** A minimum whose smallest eigenvalue is below 1e-4 of the next: the action is determined to
    *  round-off, the trajectory only up to a motion along the eigenvector of lambda_min. */
@@ -287,7 +287,8 @@ double discrete_action(const Problem& problem, const Trajectory& trajectory);
 /** The convergence certificate at a trajectory. */
 Certificate certify(const Problem& problem, const Trajectory& trajectory, int threads = 0, double tol = 1e-10);
 
-/** What a trajectory (on the problem's grid) is as a stationary point of the discrete action. */
+/** What a trajectory (on the problem's grid) is as a stationary point of the discrete action
+ *  (kind unknown, with the reason in note, for an invalid problem or trajectory). */
 PointAssessment assess_point(const Problem& problem, const Trajectory& trajectory, int threads = 0);
 
 /** Checks a problem and a trajectory for it; on failure writes a message naming the field. */
