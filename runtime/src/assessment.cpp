@@ -50,9 +50,11 @@ void assess_dim(Context& ctx, PointAssessment& out) {
       if (in.zero > 0) out.note += format(" and %.0f zero one(s)", static_cast<double>(in.zero));
     } else {
       out.kind = PointKind::degenerate;
-      out.note = format("degenerate: the Hessian of the action has %.0f zero eigenvalue(s) and no negative one; "
-                        "the solution is not isolated (a family of trajectories, or a Lagrangian that does not "
-                        "determine the motion)",
+      out.note = format("degenerate to working precision: the Hessian of the action has %.0f eigenvalue(s) that "
+                        "are zero within 1e-12 of its largest and no negative one; either the solution is not "
+                        "isolated (a family of trajectories, or a Lagrangian that does not determine the motion) "
+                        "or the Hessian is too ill-conditioned for double precision to tell (high-order models "
+                        "at large N)",
                         static_cast<double>(in.zero));
     }
     return;

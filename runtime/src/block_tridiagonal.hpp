@@ -322,16 +322,19 @@ class BlockTridiagonal {
    * The inertia of H as assembled, by block elimination (Haynsworth: the inertia of H is the sum of
    * the inertias of the pivots S_i = D_i - C_{i-1}^T S_{i-1}^{-1} C_{i-1}). A pivot that is not
    * positive definite is split by its symmetric eigendecomposition; an eigenvalue of a pivot with
-   * |value| <= zero_tol * max(1, |D_i|) counts as zero and is left out of the elimination (a
-   * pseudo-inverse). Overwrites the LDL^T factorization (factor_ldlt() must be called again).
+   * |value| <= zero_tol * max(1, |D_i|, |H|) (|H| Gershgorin's bound: the size of what the
+   * elimination rounds, so that a pivot lost to round-off in an ill-conditioned H is not taken
+   * for a sign) counts as zero and is left out of the elimination (a pseudo-inverse). Overwrites
+   * the LDL^T factorization (factor_ldlt() must be called again).
    */
   Inertia inertia(double zero_tol) {
     Inertia in;
+    const double global = std::max(1.0, gershgorin_bound());
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
       Mat S = diag_[ii];
       if (i > 0) S.noalias() -= off_[ii - 1].transpose() * W_[ii - 1];
-      const double size = std::max(1.0, diag_[ii].cwiseAbs().maxCoeff());
+      const double size = std::max(global, diag_[ii].cwiseAbs().maxCoeff());
       Mat L = S;
       bool pd = false;
       if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L);
