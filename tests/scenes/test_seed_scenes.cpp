@@ -68,8 +68,9 @@ INSTANTIATE_TEST_SUITE_P(
                       SeedScene{"zermelo_4.toml", "--set solver.method=newton", "travel_time", 9.662035876121704},
                       SeedScene{"zermelo_5.toml", "--set solver.method=newton", "travel_time", 9.662035876121928},
                       SeedScene{"zermelo_6.toml", "--set solver.method=newton", "travel_time", 8.92625337662602},
-                      // These two solve to a residual of 1e-7 (the scenes' tol; round-off floor near
-                      // 1e-8 with gradients of 1e5), hence a looser 1e-6 on the cost. The fixed-step
+                      // These two stop at the default tolerance, which here is 10x the residual's
+                      // round-off level (~1e-6 with Hessian entries near 1e15), hence a looser 1e-6
+                      // on the cost. The fixed-step
                       // problem has several nearby local minima (another, fuel 1.1025631, also has a
                       // positive definite Hessian): a change in Newton's globalization may move it.
                       // The trust-region Newton reaches the minimum of fuel 0.2153475 (Hessian
