@@ -233,6 +233,14 @@ class Driver {
         best_residual_ = r;
         best_iteration_ = iteration_;
       }
+      if (r <= target && iteration_ - best_iteration_ >= 200) {
+        // At the tolerance, but the method would not stop (a saddle it tried to leave) and has
+        // found nothing better in 200 iterations: this point is the answer, and the point
+        // assessment says what it is.
+        if (!last) return true;
+        finish(Termination::converged, converged_message(r, target));
+        return false;
+      }
       if (r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200) {
         finish(Termination::stalled,
                format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has not "
