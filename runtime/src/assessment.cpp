@@ -65,9 +65,11 @@ void assess_dim(Context& ctx, PointAssessment& out) {
     out.note = "no unknowns";
     return;
   }
-  // Inverse subspace iteration with two vectors and Rayleigh-Ritz on the free components.
+  // Inverse subspace iteration with two vectors and Rayleigh-Ritz on the free components. With
+  // Y = H^-1 X, H Y = X: the Gram-Schmidt steps that orthonormalize Y, applied to X as well, give
+  // H Y without a multiplication by H.
   const int m = out.positive >= 2 ? 2 : 1;
-  std::vector<double> X(2 * n, 0.0), Y(2 * n, 0.0), HX(2 * n, 0.0);
+  std::vector<double> X(2 * n, 0.0), Y(2 * n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     if (!ctx.is_free[dz + i]) continue;
     const double s = static_cast<double>(i / dz + 1) / static_cast<double>(n / dz + 1);
@@ -80,16 +82,23 @@ void assess_dim(Context& ctx, PointAssessment& out) {
     for (std::size_t i = 0; i < n; ++i) s += a[i] * b[i];
     return s;
   };
-  auto orthonormalize = [&](double* v0, double* v1) {
+  /** Orthonormalizes v0, v1 (Gram-Schmidt) and applies the same steps to w0, w1 when given. */
+  auto orthonormalize = [&](double* v0, double* v1, double* w0, double* w1) {
     const double n0 = std::sqrt(dot(v0, v0));
     for (std::size_t i = 0; i < n; ++i) v0[i] /= n0;
+    if (w0)
+      for (std::size_t i = 0; i < n; ++i) w0[i] /= n0;
     if (m < 2) return;
     const double c = dot(v0, v1);
     for (std::size_t i = 0; i < n; ++i) v1[i] -= c * v0[i];
+    if (w1)
+      for (std::size_t i = 0; i < n; ++i) w1[i] -= c * w0[i];
     const double n1 = std::sqrt(dot(v1, v1));
     for (std::size_t i = 0; i < n; ++i) v1[i] /= n1;
+    if (w1)
+      for (std::size_t i = 0; i < n; ++i) w1[i] /= n1;
   };
-  orthonormalize(X.data(), X.data() + n);
+  orthonormalize(X.data(), X.data() + n, nullptr, nullptr);
   double theta[2] = {0, 0}, previous[2] = {-1, -1};
   for (int it = 0; it < 12; ++it) {
     for (int j = 0; j < m; ++j) {
@@ -97,13 +106,12 @@ void assess_dim(Context& ctx, PointAssessment& out) {
       for (std::size_t i = 0; i < n; ++i)
         if (!ctx.is_free[dz + i]) Y[j * n + i] = 0;
     }
-    orthonormalize(Y.data(), Y.data() + n);
-    for (int j = 0; j < m; ++j) H.multiply(Y.data() + j * n, HX.data() + j * n);
+    orthonormalize(Y.data(), Y.data() + n, X.data(), X.data() + n);  // X is now H Y
     Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
-    A(0, 0) = dot(Y.data(), HX.data());
+    A(0, 0) = dot(Y.data(), X.data());
     if (m == 2) {
-      A(0, 1) = A(1, 0) = dot(Y.data(), HX.data() + n);
-      A(1, 1) = dot(Y.data() + n, HX.data() + n);
+      A(0, 1) = A(1, 0) = 0.5 * (dot(Y.data(), X.data() + n) + dot(Y.data() + n, X.data()));
+      A(1, 1) = dot(Y.data() + n, X.data() + n);
     }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(A);
     const Eigen::Matrix2d V = m == 2 ? eig.eigenvectors() : Eigen::Matrix2d::Identity();
@@ -114,8 +122,8 @@ void assess_dim(Context& ctx, PointAssessment& out) {
       X[i] = V(0, 0) * y0 + V(1, 0) * y1;
       if (m == 2) X[n + i] = V(0, 1) * y0 + V(1, 1) * y1;
     }
-    const bool settled = std::fabs(theta[0] - previous[0]) <= 1e-6 * std::fabs(theta[0]) &&
-                         (m < 2 || std::fabs(theta[1] - previous[1]) <= 1e-3 * std::fabs(theta[1]));
+    const bool settled = std::fabs(theta[0] - previous[0]) <= 1e-5 * std::fabs(theta[0]) &&
+                         (m < 2 || std::fabs(theta[1] - previous[1]) <= 3e-3 * std::fabs(theta[1]));
     previous[0] = theta[0];
     previous[1] = theta[1];
     if (settled) break;

@@ -286,18 +286,6 @@ class BlockTridiagonal {
     return s;
   }
 
-  /** y = H x with the blocks as assembled (shift included); x, y in node layout 1..N-1. */
-  void multiply(const double* x, double* y) const {
-    const int d = d_;
-    for (int i = 0; i < n_; ++i) {
-      const std::size_t ii = static_cast<std::size_t>(i);
-      Eigen::Map<Vec> yi(y + ii * d, d);
-      yi.noalias() = diag_[ii] * VecMap(x + ii * d, d);
-      if (i + 1 < n_) yi.noalias() += off_[ii] * VecMap(x + (ii + 1) * d, d);
-      if (i > 0) yi.noalias() += off_[ii - 1].transpose() * VecMap(x + (ii - 1) * d, d);
-    }
-  }
-
   /** Gershgorin's bound on the largest |eigenvalue| of H as assembled. */
   double gershgorin_bound() const {
     double bound = 0;

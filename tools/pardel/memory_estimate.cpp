@@ -101,9 +101,9 @@ MemoryEstimate estimate_solve_memory(const Scene& scene, bool certificate) {
   const bool cyclic = scene.options.linear_solver == LinearSolver::cyclic_reduction;
   e.solve = context_bytes(N, d) + method_bytes(scene.options.method, cyclic, N, d) + trajectories;
   // The point assessment (assessment.cpp): the solve's context and trajectories, the Hessian and
-  // six vectors of the inverse subspace iteration.
+  // four vectors of the inverse subspace iteration.
   const double n = std::max(N - 1, 0.0);
-  e.assessment = context_bytes(N, d) + trajectories + block_tridiagonal_bytes(N, d, false) + 6 * n * d * 8;
+  e.assessment = context_bytes(N, d) + trajectories + block_tridiagonal_bytes(N, d, false) + 4 * n * d * 8;
   // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
   // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).
