@@ -134,8 +134,11 @@ struct StepOutcome {
 class Method_ {
  public:
   virtual ~Method_() = default;
-  /** Called whenever the context is (re)built (new N) or node times changed. */
+  /** Called whenever the context is (re)built (new N). */
   virtual void reset(Context& ctx) = 0;
+  /** Called after the node times were recomputed from the clock: the action and the residual are
+   *  those of a changed problem, so values remembered from before do not compare. */
+  virtual void times_changed() {}
   /** Evaluates at ctx.q; returns the first node with a non-finite residual or -1. */
   virtual int evaluate(Context& ctx) = 0;
   virtual StepOutcome iterate(Context& ctx, long iteration) = 0;

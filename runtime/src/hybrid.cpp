@@ -38,6 +38,7 @@ class Hybrid : public Method_ {
   }
 
   bool accept_stop(Context& ctx) override { return newton_mode_ ? newton_->accept_stop(ctx) : true; }
+  void times_changed() override { newton_->times_changed(); }
 
   /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. */
   std::vector<double> save_state() const override {

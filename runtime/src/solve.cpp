@@ -186,6 +186,7 @@ class Driver {
     for (;;) {
       if (clocked && since_clock >= options_.clock_update_every) {
         detail::update_times(ctx_, ctx_.q);
+        method_.times_changed();
         since_clock = 0;
       }
       int bad = method_.evaluate(ctx_);
@@ -194,6 +195,7 @@ class Driver {
       if (clocked && r <= target_residual() && since_clock > 0) {
         // Declare convergence only with node times consistent with this trajectory.
         detail::update_times(ctx_, ctx_.q);
+        method_.times_changed();
         since_clock = 0;
         bad = method_.evaluate(ctx_);
         if (bad >= 0) return non_finite_residual(bad);

@@ -152,6 +152,14 @@ class TrustRegionNewton : public Method_ {
     return factor(ctx, 0, u_, w_);
   }
 
+  /** New node times: the watchdog's reference action and the level's best residual belong to the
+   *  problem before the change. */
+  void times_changed() override {
+    watchdog_.active = false;
+    watchdog_.failed = false;
+    best_residual_ = std::numeric_limits<double>::infinity();
+  }
+
   /** At the tolerance: stop at a minimum or a degenerate point, but leave a saddle along negative
    *  curvature (up to kMaxEscapes times in a level; then the saddle is reported as found). */
   bool accept_stop(Context& ctx) override {

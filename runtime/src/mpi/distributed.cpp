@@ -461,6 +461,7 @@ class DistributedHybrid : public pardel::detail::Method_ {
   }
 
   bool accept_stop(Context& ctx) override { return newton_mode_ ? newton_.accept_stop(ctx) : true; }
+  void times_changed() override { newton_.times_changed(); }
 
  private:
   static constexpr int check_every = 10;
@@ -491,6 +492,7 @@ class Driver {
     for (;;) {
       if (clocked && since_clock >= options_.clock_update_every) {
         update_times_distributed(local_);
+        method_.times_changed();
         since_clock = 0;
       }
       int bad = globalize_residual(local_, method_.evaluate(ctx_));
@@ -499,6 +501,7 @@ class Driver {
       if (clocked && r <= pardel::detail::target_residual(options_, ctx_) && since_clock > 0) {
         // Declare convergence only with node times consistent with this trajectory.
         update_times_distributed(local_);
+        method_.times_changed();
         since_clock = 0;
         bad = globalize_residual(local_, method_.evaluate(ctx_));
         if (bad >= 0) return non_finite_residual(bad);
