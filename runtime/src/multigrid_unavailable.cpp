@@ -8,7 +8,9 @@
 namespace pardel::detail {
 
 std::unique_ptr<Method_> make_multigrid(const Options&, int, std::string* message) {
-  if (message) *message = "method 'multigrid' is not available in this build (runtime/src/multigrid.cpp is absent)";
+  if (message)
+    *message = "solver.method = multigrid is not available: the nonlinear multigrid (FAS) was measured and lost to "
+               "newton on the fuel example (docs/benchmarks.md, Multigrid), so it is not built; use auto or newton";
   return nullptr;
 }
 

@@ -261,6 +261,15 @@ TEST(PardelSolve, ExitCodeSaysHowItEnded) {
   const Result missing = pardel("solve '" + (dir / "absent.toml") + "' --quiet");
   EXPECT_EQ(missing.code, 2);
   EXPECT_NE(missing.err.find("cannot open scene file"), std::string::npos) << missing.err;
+  // A method this build lacks: a usage error naming the key, and no outputs.
+  const Result multigrid = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "mg") +
+                                  "' --no-plot --set solver.method=multigrid");
+  EXPECT_EQ(multigrid.code, 2);
+  EXPECT_NE(multigrid.err.find("small.toml: error: solver.method = multigrid is not available"), std::string::npos)
+      << multigrid.err;
+  EXPECT_EQ(multigrid.err.find(".cpp"), std::string::npos) << multigrid.err;
+  EXPECT_TRUE(multigrid.out.empty()) << multigrid.out;
+  EXPECT_FALSE(fs::exists(dir / "mg"));
 }
 
 TEST(PardelSolve, DrawsBothPlots) {

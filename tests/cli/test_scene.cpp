@@ -135,6 +135,8 @@ tol = 1e-9
 max_iterations = 500
 damping = 0.25
 newton_substeps = 2
+newton_shift = "identity"
+linear_solver = "cyclic-reduction"
 threads = 1
 refine = { start_N = 40, factor = 1.5 }
 clock_update_every = 10
@@ -162,6 +164,8 @@ dir = "somewhere"
   EXPECT_EQ(scene.options.max_iterations, 500);
   EXPECT_EQ(scene.options.damping, 0.25);
   EXPECT_EQ(scene.options.newton_substeps, 2);
+  EXPECT_EQ(scene.options.newton_shift, NewtonShift::identity);
+  EXPECT_EQ(scene.options.linear_solver, LinearSolver::cyclic_reduction);
   EXPECT_EQ(scene.options.threads, 1);
   EXPECT_EQ(scene.options.refine_start_N, 40);
   EXPECT_EQ(scene.options.refine_factor, 1.5);
@@ -178,6 +182,8 @@ TEST(Scene, DefaultsWhenKeysAreLeftOut) {
   EXPECT_EQ(scene.options.method, Method::automatic);
   EXPECT_EQ(scene.options.tol, 0);  // no absolute tolerance: the relative one
   EXPECT_EQ(scene.options.rtol, 1e-10);
+  EXPECT_EQ(scene.options.newton_shift, NewtonShift::difference);
+  EXPECT_EQ(scene.options.linear_solver, LinearSolver::block_ldlt);
   EXPECT_TRUE(scene.output_dir.empty());
 }
 

@@ -311,6 +311,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   if (out_dir.empty()) out_dir = scene.output_dir;
   if (out_dir.empty()) out_dir = (fs::path("out") / fs::path(args.scene).stem()).string();
   std::error_code ec;
+  const bool created_out_dir = !fs::exists(out_dir, ec);
   fs::create_directories(out_dir, ec);
   if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
   if (pardel::mpi::world_size() > 1) {  // under mpirun: one solve decomposed over the ranks
@@ -333,6 +334,13 @@ int run_solve_unguarded(const SolveArgs& args) {
   // A checkpoint that does not fit is refused before anything in the folder is overwritten.
   if (resume && summary.termination == Termination::invalid_input)
     throw CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
+  // Input the runtime refused (a degenerate model, a method this build lacks, ...): an error,
+  // and nothing is written.
+  if (summary.termination == Termination::invalid_input) {
+    if (created_out_dir) fs::remove(out_dir, ec);  // still empty: nothing was written
+    std::fprintf(stderr, "%s: error: %s\n", scene_path.c_str(), summary.message.c_str());
+    return exit_code(summary.termination);
+  }
 
   const SolveOutputs outputs = write_solve_outputs(scene, summary, trajectory, out_dir, {}, args.certificate == "full");
   const pardel_model& model = *scene.model;

@@ -542,8 +542,8 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
   const toml::table* solver = r.table(root, "solver", "solver");
   if (solver) {
     r.check_keys(*solver, "solver",
-                 {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift", "threads",
-                  "refine", "clock_update_every", "clock"});
+                 {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift",
+                  "linear_solver", "threads", "refine", "clock_update_every", "clock"});
     if (const auto method = r.string(solver, "method", "solver.method")) {
       if (!parse_method(*method, &options.method)) {
         const std::string suggestion = nearest_name(*method, kMethodNames);
@@ -587,6 +587,12 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
       if (!parse_newton_shift(*shift, &options.newton_shift)) {
         r.fail(*solver->get("newton_shift"), "solver.newton_shift",
                fmt::format("unknown newton_shift '{}' (expected 'identity' or 'difference')", *shift));
+      }
+    }
+    if (const auto ls = r.string(solver, "linear_solver", "solver.linear_solver")) {
+      if (!parse_linear_solver(*ls, &options.linear_solver)) {
+        r.fail(*solver->get("linear_solver"), "solver.linear_solver",
+               fmt::format("unknown linear_solver '{}' (expected 'ldlt' or 'cyclic-reduction')", *ls));
       }
     }
     if (const auto threads = r.integer(solver, "threads", "solver.threads")) {
