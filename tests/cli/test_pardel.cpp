@@ -285,6 +285,24 @@ TEST(PardelSolve, DrawsBothPlots) {
   }
 }
 
+TEST(PardelSolve, PlotsASolveThatEndedNonFinite) {
+  // summary.json writes the non-finite cost of such a solve as null: the plots are still drawn.
+  TempDir dir;
+  cli::write_file_atomic(dir / "edge.lag", "model cli_edge\ncoords x\nL = 1/2*x'^2 + log(1 - x)\n"
+                                             "discretizations trapezoid\n");
+  cli::write_file_atomic(dir / "edge.toml", "model = \"edge.lag\"\n[grid]\nT = 1\nN = 50\n[boundary]\nq0 = [0]\n"
+                                              "qN = [3]\n[solver]\nmethod = \"jacobi-newton\"\n");
+  const Result r = pardel("solve '" + (dir / "edge.toml") + "' --out '" + (dir / "out") + "' --quiet");
+  EXPECT_EQ(r.code, 5) << r.err;  // non_finite
+  EXPECT_EQ(r.err.find("plots not written"), std::string::npos) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(slurp(dir / "out/summary.json"))["cost"]["value"].is_null());
+  for (const char* png : {"trajectory.png", "convergence.png"}) {
+    const std::string bytes = slurp(dir / (std::string("out/") + png));
+    ASSERT_GT(bytes.size(), 8u) << png;
+    EXPECT_EQ(bytes.substr(1, 3), "PNG") << png;
+  }
+}
+
 TEST(PardelCheck, ReportsTheCertificateOfAGuessAndOfASolution) {
   TempDir dir;
   cli::write_file_atomic(dir / "small.toml", kSmallScene);

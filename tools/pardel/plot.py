@@ -139,7 +139,9 @@ def save(fig, path):
 def cost_text(summary):
     cost = summary.get("cost", {})
     name = cost.get("name", "cost").replace("_", " ")
-    return "%s = %.6g" % (name, cost.get("value", float("nan")))
+    value = cost.get("value")
+    # summary.json writes a non-finite cost (a non_finite solve) as null
+    return "%s = %s" % (name, "%.6g" % value if isinstance(value, (int, float)) else "not finite")
 
 
 def box(xs, ys, margin=0.12):
