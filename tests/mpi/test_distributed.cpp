@@ -291,6 +291,43 @@ TEST(Hybrid, FuelNavAgreesToTheTolerance) {
 
 // ---- refusals and failures
 
+// ---- the point assessment over ranks: the kind and inertia of the one-process assessment
+
+void expect_same_point(const Both& b) {
+  EXPECT_EQ(b.dist.point.kind, b.one.point.kind) << b.one.point.note << " | " << b.dist.point.note;
+  EXPECT_EQ(b.dist.point.positive, b.one.point.positive);
+  EXPECT_EQ(b.dist.point.negative, b.one.point.negative);
+  EXPECT_EQ(b.dist.point.zero, b.one.point.zero);
+}
+
+TEST(Point, MinimumSaddleAndKnotsAsInOneProcess) {
+  // A minimum (fuel_nav solved), saddles (the harmonic oscillator past its conjugate point after
+  // a few sweeps; the fuel example at the straight line), and a problem with knots (fixed
+  // components) after a few sweeps.
+  pardel::Options newton;
+  newton.method = pardel::Method::newton;
+  newton.threads = 1;
+  const auto fuel = fuel_nav(200);
+  const Both solved = solve_both(fuel, newton, pardel::linear_guess(fuel));
+  ASSERT_TRUE(solved.one.converged()) << solved.one.message;
+  EXPECT_EQ(solved.dist.point.kind, pardel::PointKind::minimum) << solved.dist.point.note;
+  expect_same_point(solved);
+  pardel::Options sweeps;
+  sweeps.method = pardel::Method::jacobi_newton;
+  sweeps.threads = 1;
+  sweeps.max_iterations = 5;
+  const auto harmonic = bundled_problem("harmonic", "trapezoid", 4.0, 40, {1.0}, {1.0});
+  const Both past = solve_both(harmonic, sweeps, pardel::linear_guess(harmonic));
+  EXPECT_EQ(past.dist.point.kind, pardel::PointKind::saddle) << past.dist.point.note;
+  expect_same_point(past);
+  sweeps.max_iterations = 1;
+  const Both line = solve_both(fuel, sweeps, pardel::linear_guess(fuel));
+  expect_same_point(line);
+  const auto knots = interp_fuel(240);
+  const Both with_knots = solve_both(knots, sweeps, pardel::linear_guess(knots));
+  expect_same_point(with_knots);
+}
+
 TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   if (world_size() < 2) GTEST_SKIP() << "refusals apply to more than one rank";
   const auto problem = fuel_nav(100);

@@ -318,9 +318,19 @@ class DistributedSpace {
     }
     return sum(part);
   }
-  /** The Schur split factors positive definite matrices only: the inertia of an indefinite
-   *  Hessian is not computed over ranks. */
-  long negative_eigenvalues(const Context&) const { return -1; }
+  /** Of the unshifted Hessian, over all ranks (the split's inertia with eigen-split pivots). */
+  long negative_eigenvalues(const Context& ctx) { return inertia(ctx).negative; }
+  /** The inertia of the unshifted Hessian at the full evaluation in ctx, fixed components (identity
+   *  rows) taken out of the positive count; collective. */
+  typename detail::SchurBlockSolver<D>::Inertia inertia(const Context& ctx) {
+    assemble(ctx, 0.0);
+    auto in = solver_.inertia(kZeroPivot, local_.comm);
+    long fixed = 0;
+    for (std::size_t i = 0; i < n_; ++i) fixed += local_.global_free[off0_ + i] ? 0 : 1;
+    MPI_Allreduce(MPI_IN_PLACE, &fixed, 1, MPI_LONG, MPI_SUM, local_.comm);
+    in.positive -= fixed;
+    return in;
+  }
 
   void apply_metric(const Context&, const double* x, double* y) {
     if (!difference_) {
@@ -421,6 +431,9 @@ class DistributedSpace {
     return halo_.data();
   }
 
+  /** Pivot eigenvalues below this fraction of the largest block entry count as zero (inertia). */
+  static constexpr double kZeroPivot = 1e-12;
+
   Local& local_;
   bool difference_;
   detail::SchurBlockSolver<D> solver_;
@@ -430,6 +443,41 @@ class DistributedSpace {
 
 template <int D>
 using DistributedNewton = pardel::detail::TrustRegionNewton<DistributedSpace<D>>;
+
+/** What the returned point is, over the ranks: the kind and inertia of the Hessian (its smallest
+ *  eigenvalues are computed in one process only). Collective. */
+void assess_distributed(const Options& options, Local& local, PointAssessment& out) {
+  Context& ctx = local.ctx;
+  out = PointAssessment{};
+  pardel::detail::ensure_interval_arrays(ctx, Evaluated::full);
+  pardel::detail::eval_full(ctx, ctx.q);
+  pardel::detail::dispatch_dim(ctx.dim, [&](auto D) {
+    DistributedSpace<decltype(D)::value> space(options, local);
+    space.resize(ctx);
+    const auto in = space.inertia(ctx);
+    out.positive = in.positive;
+    out.negative = in.negative;
+    out.zero = in.zero;
+  });
+  char buf[320];
+  if (out.negative > 0) {
+    out.kind = PointKind::saddle;
+    std::snprintf(buf, sizeof buf, "a saddle of the action: the Hessian has %ld negative eigenvalue(s) (index %ld)",
+                  out.negative, out.negative);
+  } else if (out.zero > 0) {
+    out.kind = PointKind::degenerate;
+    std::snprintf(buf, sizeof buf,
+                  "degenerate to working precision: %ld eigenvalue(s) of the Hessian are zero within 1e-12 of its "
+                  "largest entry and none is negative",
+                  out.zero);
+  } else {
+    out.kind = PointKind::minimum;
+    std::snprintf(buf, sizeof buf,
+                  "a strict local minimum: Hessian positive definite (its smallest eigenvalues are computed in one "
+                  "process only)");
+  }
+  out.note = buf;
+}
 
 /** hybrid.cpp over the ranks: Jacobi-Newton sweeps until the distributed factorization certifies
  *  a positive definite Hessian (checked every 10 sweeps, as in one process), then Newton. */
@@ -757,6 +805,10 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
   Driver driver(options, *method, local, summary);
   driver.run();
   driver.write_result(problem, trajectory);
+  // What the returned point is; the method's storage is released first, as in one process.
+  method.reset();
+  if (summary.termination != Termination::invalid_input && summary.termination != Termination::non_finite)
+    assess_distributed(options, local, summary.point);
   return summary;
 }
 

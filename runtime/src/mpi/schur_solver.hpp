@@ -17,6 +17,7 @@
 #include <mpi.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -187,6 +188,108 @@ class SchurBlockSolver {
     }
     if (has_right_) Eigen::Map<Vec>(x + static_cast<std::size_t>(interior_) * d, d) = Sx_[static_cast<std::size_t>(rank_)];
     return true;
+  }
+
+  /** Counts of positive, negative and zero eigenvalues. */
+  struct Inertia {
+    long positive = 0, negative = 0, zero = 0;
+  };
+
+  /**
+   * The inertia of H as assembled, by Haynsworth's theorem over the split: the inertias of the
+   * interiors' pivots (block elimination) plus that of the separators' Schur complement. Pivots
+   * are split by their symmetric eigendecomposition (so H need not be definite); an eigenvalue with
+   * |value| <= zero_tol * max(1, largest block entry over all ranks) counts as zero and is left out
+   * of the elimination (a pseudo-inverse). Collective over `comm`; the same counts on every rank.
+   * Overwrites the factorization of solve() (which refactors on every call).
+   */
+  Inertia inertia(double zero_tol, MPI_Comm comm) {
+    const int d = d_;
+    double scale = 1;
+    for (int i = 0; i < owned_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      scale = std::max({scale, diag_[ii].cwiseAbs().maxCoeff(), off_[ii].cwiseAbs().maxCoeff()});
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &scale, 1, MPI_DOUBLE, MPI_MAX, comm);
+    const double tol = zero_tol * scale;
+    Inertia local;
+    // p = pseudo-inverse of the symmetric pivot S, its eigenvalues counted into `in`.
+    auto pivot = [&](const Mat& S, Mat& p, Inertia& in) {
+      Eigen::SelfAdjointEigenSolver<Mat> eig(S);
+      Vec inv = Vec::Zero(d);
+      for (int a = 0; a < d; ++a) {
+        const double v = eig.info() == Eigen::Success ? eig.eigenvalues()(a) : 0.0;
+        if (!std::isfinite(v) || std::fabs(v) <= tol) {
+          ++in.zero;
+        } else {
+          if (v > 0) ++in.positive; else ++in.negative;
+          inv(a) = 1 / v;
+        }
+      }
+      p = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+    };
+    // Interior: pivots P_i, G_i = P_i C_i, and the eliminations XL = T^+ E_L, XR = T^+ E_R.
+    std::vector<Mat> P(static_cast<std::size_t>(std::max(interior_, 0)), Mat::Zero(d, d));
+    for (int i = 0; i < interior_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      Mat S = diag_[ii];
+      if (i > 0) S.noalias() -= off_[ii - 1].transpose() * G_[ii - 1];
+      pivot(S, P[ii], local);
+      if (i + 1 < interior_) G_[ii] = P[ii] * off_[ii]; else G_[ii].setZero();
+      if (has_left_) {
+        if (i == 0) XL_[0] = left_.transpose(); else XL_[ii].noalias() = -G_[ii - 1].transpose() * XL_[ii - 1];
+      }
+      if (has_right_) {
+        if (i + 1 < interior_) XR_[ii].setZero(); else XR_[ii] = off_[ii];
+      }
+    }
+    for (int i = interior_ - 1; i >= 0; --i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      if (has_left_) {
+        XL_[ii] = P[ii] * XL_[ii];
+        if (i + 1 < interior_) XL_[ii].noalias() -= G_[ii] * XL_[ii + 1];
+      }
+      if (has_right_) {
+        XR_[ii] = P[ii] * XR_[ii];
+        if (i + 1 < interior_) XR_[ii].noalias() -= G_[ii] * XR_[ii + 1];
+      }
+    }
+    // This rank's counts and Schur contributions, gathered by every rank.
+    const int size = 3 + 3 * d * d;
+    std::vector<double> mine(static_cast<std::size_t>(size), 0.0), all(static_cast<std::size_t>(size) * ranks_, 0.0);
+    mine[0] = static_cast<double>(local.positive);
+    mine[1] = static_cast<double>(local.negative);
+    mine[2] = static_cast<double>(local.zero);
+    Eigen::Map<Mat> SRR(mine.data() + 3, d, d), SLL(mine.data() + 3 + d * d, d, d), SLR(mine.data() + 3 + 2 * d * d, d, d);
+    if (interior_ > 0) {
+      const std::size_t last = static_cast<std::size_t>(interior_ - 1);
+      if (has_right_) SRR = diag_[static_cast<std::size_t>(interior_)] - off_[last].transpose() * XR_[last];
+      if (has_left_) {
+        SLL.noalias() = -left_ * XL_[0];
+        if (has_right_) SLR.noalias() = -left_ * XR_[0];
+      }
+    }
+    MPI_Allgather(mine.data(), size, MPI_DOUBLE, all.data(), size, MPI_DOUBLE, comm);
+    Inertia total;
+    for (int r = 0; r < ranks_; ++r) {
+      const double* pr = all.data() + static_cast<std::size_t>(r) * size;
+      total.positive += static_cast<long>(pr[0]);
+      total.negative += static_cast<long>(pr[1]);
+      total.zero += static_cast<long>(pr[2]);
+    }
+    // The separators' Schur complement, eliminated with pseudo-inverse pivots.
+    Mat W = Mat::Zero(d, d), Pj = Mat::Zero(d, d), So = Mat::Zero(d, d);
+    for (int j = 0; j + 1 < ranks_; ++j) {
+      const double* pj = all.data() + static_cast<std::size_t>(j) * size;
+      const double* pn = pj + size;  // rank j + 1
+      Mat S = Eigen::Map<const Mat>(pj + 3, d, d);
+      S += Eigen::Map<const Mat>(pn + 3 + d * d, d, d);
+      if (j > 0) S.noalias() -= So.transpose() * W;
+      pivot(S, Pj, total);
+      So = j + 2 < ranks_ ? Mat(Eigen::Map<const Mat>(pn + 3 + 2 * d * d, d, d)) : Mat(Mat::Zero(d, d));
+      W = Pj * So;
+    }
+    return total;
   }
 
  private:
