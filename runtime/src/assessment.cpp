@@ -43,19 +43,9 @@ void assess_dim(Context& ctx, PointAssessment& out) {
     out.positive = in.positive - fixed;
     out.negative = in.negative;
     out.zero = in.zero;
-    if (in.negative > 0) {
-      out.kind = PointKind::saddle;
-      out.note = format("a saddle of the action: the Hessian has %.0f negative eigenvalue(s) (index %.0f)", static_cast<double>(in.negative),
-                        static_cast<double>(in.negative));
-      if (in.zero > 0) out.note += format(" and %.0f zero one(s)", static_cast<double>(in.zero));
-    } else {
+    if (!classify_indefinite(out)) {  // a failed Cholesky pivot that the inertia counts positive
       out.kind = PointKind::degenerate;
-      out.note = format("degenerate to working precision: the Hessian of the action has %.0f eigenvalue(s) that "
-                        "are zero within 1e-12 of its largest and no negative one; either the solution is not "
-                        "isolated (a family of trajectories, or a Lagrangian that does not determine the motion) "
-                        "or the Hessian is too ill-conditioned for double precision to tell (high-order models "
-                        "at large N)",
-                        static_cast<double>(in.zero));
+      out.note = "degenerate to working precision: the factorization of the Hessian failed";
     }
     return;
   }
@@ -155,6 +145,27 @@ double relative_smallest_singular_value(const double* block, int d) {
 }
 
 }  // namespace
+
+bool classify_indefinite(PointAssessment& out) {
+  if (out.negative > 0) {
+    out.kind = PointKind::saddle;
+    out.note = format("a saddle of the action: the Hessian has %.0f negative eigenvalue(s) (index %.0f)",
+                      static_cast<double>(out.negative), static_cast<double>(out.negative));
+    if (out.zero > 0) out.note += format(" and %.0f zero one(s)", static_cast<double>(out.zero));
+    return true;
+  }
+  if (out.zero > 0) {
+    out.kind = PointKind::degenerate;
+    out.note = format("degenerate to working precision: the Hessian of the action has %.0f eigenvalue(s) that "
+                      "are zero within 1e-12 of its largest and no negative one; either the solution is not "
+                      "isolated (a family of trajectories, or a Lagrangian that does not determine the motion) "
+                      "or the Hessian is too ill-conditioned for double precision to tell (high-order models "
+                      "at large N)",
+                      static_cast<double>(out.zero));
+    return true;
+  }
+  return false;
+}
 
 void assess(Context& ctx, PointAssessment& out) {
   out = PointAssessment{};

@@ -15,6 +15,10 @@ namespace pardel::detail {
 /** Assesses ctx.q (evaluating the full kernel there if needed) into `out`. */
 void assess(Context& ctx, PointAssessment& out);
 
+/** From the inertia in out.positive, negative and zero: a saddle or a degenerate point gets its
+ *  kind and note (true); a positive definite Hessian is left to the caller (false). */
+bool classify_indefinite(PointAssessment& out);
+
 /** False (with `message` naming the model and why) when D12 Ld is singular on every sampled
  *  interval of ctx.q: a degenerate Lagrangian whose DEL equations do not determine the motion. */
 bool lagrangian_regular(const Context& ctx, std::string* message);

@@ -235,14 +235,9 @@ class Driver {
         best_residual_ = r;
         best_iteration_ = iteration_;
       }
-      if (r <= target && iteration_ - best_iteration_ >= 200) {
-        // At the tolerance, but the method would not stop (a saddle it tried to leave) and has
-        // found nothing better in 200 iterations: this point is the answer, and the point
-        // assessment says what it is.
-        if (!last) return true;
-        finish(Termination::converged, converged_message(r, target));
-        return false;
-      }
+      // At the tolerance, but the method would not stop (a saddle it tried to leave) and has found
+      // nothing better in 200 iterations: this point is the answer.
+      if (r <= target && iteration_ - best_iteration_ >= 200) return answer_at_tolerance(last, r, target);
       if (r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200) {
         finish(Termination::stalled,
                format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has not "
@@ -264,13 +259,8 @@ class Driver {
       }
       const detail::StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
       if (!outcome.ok()) {
-        if (outcome.failure == Termination::stalled && r <= target) {
-          // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer,
-          // and the point assessment says what it is.
-          if (!last) return true;
-          finish(Termination::converged, converged_message(r, target));
-          return false;
-        }
+        // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer.
+        if (outcome.failure == Termination::stalled && r <= target) return answer_at_tolerance(last, r, target);
         finish(outcome.failure, outcome.message);
         return false;
       }
@@ -296,6 +286,14 @@ class Driver {
       ++level_it;
       ++since_clock;
     }
+  }
+
+  /** The iterate at the tolerance is this level's answer (the point assessment says what it is):
+   *  on to the next level (true), or the solve has converged (false). */
+  bool answer_at_tolerance(bool last, double r, double target) {
+    if (!last) return true;
+    finish(Termination::converged, converged_message(r, target));
+    return false;
   }
 
   /** The residual that counts as converged at the current iterate (Options::rtol or tol). */

@@ -27,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include "../assessment.hpp"
 #include "../engine.hpp"
 #include "../trust_region.hpp"
 #include "decomposition.hpp"
@@ -459,24 +460,10 @@ void assess_distributed(const Options& options, Local& local, PointAssessment& o
     out.negative = in.negative;
     out.zero = in.zero;
   });
-  char buf[320];
-  if (out.negative > 0) {
-    out.kind = PointKind::saddle;
-    std::snprintf(buf, sizeof buf, "a saddle of the action: the Hessian has %ld negative eigenvalue(s) (index %ld)",
-                  out.negative, out.negative);
-  } else if (out.zero > 0) {
-    out.kind = PointKind::degenerate;
-    std::snprintf(buf, sizeof buf,
-                  "degenerate to working precision: %ld eigenvalue(s) of the Hessian are zero within 1e-12 of its "
-                  "largest entry and none is negative",
-                  out.zero);
-  } else {
-    out.kind = PointKind::minimum;
-    std::snprintf(buf, sizeof buf,
-                  "a strict local minimum: Hessian positive definite (its smallest eigenvalues are computed in one "
-                  "process only)");
-  }
-  out.note = buf;
+  if (pardel::detail::classify_indefinite(out)) return;
+  out.kind = PointKind::minimum;
+  out.note = "a strict local minimum: Hessian positive definite (its smallest eigenvalues are computed in one "
+             "process only)";
 }
 
 /** hybrid.cpp over the ranks: Jacobi-Newton sweeps until the distributed factorization certifies
