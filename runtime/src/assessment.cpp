@@ -3,8 +3,8 @@
  * What a returned trajectory is as a stationary point of the discrete action: the inertia of the
  * Hessian from its block LDL^T (minimum, saddle of index k, degenerate) and, at a minimum, its two
  * smallest eigenvalues by inverse subspace iteration against Gershgorin's bound on the largest,
- * which tells a well-posed minimum from a nearly degenerate one. O(N) work: one factorization and
- * at most 2 x 12 solves. Also the check that refuses a degenerate Lagrangian before solving.
+ * which tells a well-posed minimum from a nearly degenerate one. O(N) work: one factorization (or
+ * Newton's last one, at the same point) and at most 2 x 12 solves. Also the check that refuses a degenerate Lagrangian before solving.
  */
 #include <Eigen/Dense>
 #include <cmath>
@@ -26,91 +26,126 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
 /** Pivot eigenvalues below this fraction of their block's size count as zero. */
 constexpr double kZeroPivot = 1e-12;
 
+/** Fixed components are identity rows of the assembled matrix: they add +1 eigenvalues that are
+ *  not the action's; they are taken out of the counts. */
+long fixed_components(const Context& ctx) {
+  const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
+  const std::size_t dz = static_cast<std::size_t>(ctx.dim);
+  long fixed = 0;
+  for (std::size_t i = 0; i < n; ++i) fixed += ctx.is_free[dz + i] ? 0 : 1;
+  return fixed;
+}
+
 template <int D>
 void assess_dim(Context& ctx, PointAssessment& out) {
   BlockTridiagonal<D> H;
   H.resize(ctx.N, ctx.dim);
   H.assemble(ctx, 0.0);
+  if (H.factor_ldlt()) {
+    assess_positive_definite(ctx, H, out);
+    return;
+  }
+  const auto in = H.inertia(kZeroPivot);
+  out.lambda_max = H.gershgorin_bound();
+  out.positive = in.positive - fixed_components(ctx);
+  out.negative = in.negative;
+  out.zero = in.zero;
+  if (!classify_indefinite(out)) {  // a failed Cholesky pivot that the inertia counts positive
+    out.kind = PointKind::degenerate;
+    out.note = "degenerate to working precision: the factorization of the Hessian failed";
+  }
+}
+
+/** The smallest singular value of a d x d row-major block against its largest. */
+double relative_smallest_singular_value(const double* block, int d) {
+  Eigen::MatrixXd A = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(block, d, d);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A);
+  const auto& s = svd.singularValues();
+  if (!(s(0) > 0)) return 0;
+  return s(d - 1) / s(0);
+}
+
+}  // namespace
+
+template <int D>
+void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out) {
+  out = PointAssessment{};
   out.lambda_max = H.gershgorin_bound();
   const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
   const std::size_t dz = static_cast<std::size_t>(ctx.dim);
-  // Fixed components are identity rows of the assembled matrix: they add +1 eigenvalues that are
-  // not the action's; they are taken out of the counts.
-  long fixed = 0;
-  for (std::size_t i = 0; i < n; ++i) fixed += ctx.is_free[dz + i] ? 0 : 1;
-  if (!H.factor_ldlt()) {
-    const auto in = H.inertia(kZeroPivot);
-    out.positive = in.positive - fixed;
-    out.negative = in.negative;
-    out.zero = in.zero;
-    if (!classify_indefinite(out)) {  // a failed Cholesky pivot that the inertia counts positive
-      out.kind = PointKind::degenerate;
-      out.note = "degenerate to working precision: the factorization of the Hessian failed";
-    }
-    return;
-  }
-  out.positive = static_cast<long>(n) - fixed;
+  out.positive = static_cast<long>(n) - fixed_components(ctx);
   out.kind = PointKind::minimum;
   if (out.positive <= 0) {
     out.note = "no unknowns";
     return;
   }
   // Inverse subspace iteration with two vectors and Rayleigh-Ritz on the free components. With
-  // Y = H^-1 X, H Y = X: the Gram-Schmidt steps that orthonormalize Y, applied to X as well, give
-  // H Y without a multiplication by H.
+  // Y = H^-1 X, the Ritz values of H on span(Y) solve Y^T X v = theta Y^T Y v (as H Y = X), and
+  // X <- Y V with V^T (Y^T Y) V = I keeps X orthonormal: per iteration two solves, one pass for
+  // the 2 x 2 Gram matrices and one for the update, no multiplication by H.
   const int m = out.positive >= 2 ? 2 : 1;
   std::vector<double> X(2 * n, 0.0), Y(2 * n, 0.0);
+  double* X0 = X.data();
+  double* X1 = X.data() + n;
+  double* Y0 = Y.data();
+  double* Y1 = Y.data() + n;
+  double norm[2] = {0, 0};
   for (std::size_t i = 0; i < n; ++i) {
     if (!ctx.is_free[dz + i]) continue;
     const double s = static_cast<double>(i / dz + 1) / static_cast<double>(n / dz + 1);
     const double a = static_cast<double>(i % dz);
-    X[i] = std::sin(3.14159265358979 * s) * (1 + 0.1 * a);
-    X[n + i] = std::sin(2 * 3.14159265358979 * s) + 0.05 * a;
+    // Smooth start vectors, even and odd about the middle (the shapes of the lowest modes of a
+    // string), slightly different per component.
+    X0[i] = s * (1 - s) * (1 + 0.1 * a);
+    X1[i] = m == 2 ? s * (1 - s) * (1 - 2 * s) + 0.05 * a * s * (1 - s) : 0.0;
+    norm[0] += X0[i] * X0[i];
+    norm[1] += X1[i] * X1[i];
   }
-  auto dot = [&](const double* a, const double* b) {
-    double s = 0;
-    for (std::size_t i = 0; i < n; ++i) s += a[i] * b[i];
-    return s;
-  };
-  /** Orthonormalizes v0, v1 (Gram-Schmidt) and applies the same steps to w0, w1 when given. */
-  auto orthonormalize = [&](double* v0, double* v1, double* w0, double* w1) {
-    const double n0 = std::sqrt(dot(v0, v0));
-    for (std::size_t i = 0; i < n; ++i) v0[i] /= n0;
-    if (w0)
-      for (std::size_t i = 0; i < n; ++i) w0[i] /= n0;
-    if (m < 2) return;
-    const double c = dot(v0, v1);
-    for (std::size_t i = 0; i < n; ++i) v1[i] -= c * v0[i];
-    if (w1)
-      for (std::size_t i = 0; i < n; ++i) w1[i] -= c * w0[i];
-    const double n1 = std::sqrt(dot(v1, v1));
-    for (std::size_t i = 0; i < n; ++i) v1[i] /= n1;
-    if (w1)
-      for (std::size_t i = 0; i < n; ++i) w1[i] /= n1;
-  };
-  orthonormalize(X.data(), X.data() + n, nullptr, nullptr);
+  for (std::size_t i = 0; i < n; ++i) {
+    X0[i] /= std::sqrt(norm[0]);
+    if (m == 2) X1[i] /= std::sqrt(norm[1]);
+  }
   double theta[2] = {0, 0}, previous[2] = {-1, -1};
   for (int it = 0; it < 12; ++it) {
-    for (int j = 0; j < m; ++j) {
-      H.solve_ldlt(X.data() + j * n, Y.data() + j * n);
-      for (std::size_t i = 0; i < n; ++i)
-        if (!ctx.is_free[dz + i]) Y[j * n + i] = 0;
-    }
-    orthonormalize(Y.data(), Y.data() + n, X.data(), X.data() + n);  // X is now H Y
-    Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
-    A(0, 0) = dot(Y.data(), X.data());
-    if (m == 2) {
-      A(0, 1) = A(1, 0) = 0.5 * (dot(Y.data(), X.data() + n) + dot(Y.data() + n, X.data()));
-      A(1, 1) = dot(Y.data() + n, X.data() + n);
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(A);
-    const Eigen::Matrix2d V = m == 2 ? eig.eigenvectors() : Eigen::Matrix2d::Identity();
-    theta[0] = m == 2 ? eig.eigenvalues()(0) : A(0, 0);
-    theta[1] = m == 2 ? eig.eigenvalues()(1) : 0;
+    if (m == 2)
+      H.solve_ldlt(X0, X1, Y0, Y1);
+    else
+      H.solve_ldlt(X0, Y0);
+    // Y^T X and Y^T Y on the free components (H maps fixed components to themselves, where X is 0).
+    double a00 = 0, a01 = 0, a10 = 0, a11 = 0, b00 = 0, b01 = 0, b11 = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      const double y0 = Y[i], y1 = m == 2 ? Y[n + i] : 0;
-      X[i] = V(0, 0) * y0 + V(1, 0) * y1;
-      if (m == 2) X[n + i] = V(0, 1) * y0 + V(1, 1) * y1;
+      if (!ctx.is_free[dz + i]) {
+        Y0[i] = 0;
+        Y1[i] = 0;
+        continue;
+      }
+      const double y0 = Y0[i], y1 = Y1[i], x0 = X0[i], x1 = X1[i];
+      a00 += y0 * x0;
+      a01 += y0 * x1;
+      a10 += y1 * x0;
+      a11 += y1 * x1;
+      b00 += y0 * y0;
+      b01 += y0 * y1;
+      b11 += y1 * y1;
+    }
+    Eigen::Matrix2d V = Eigen::Matrix2d::Zero();
+    if (m == 2) {
+      Eigen::Matrix2d A, B;
+      A << a00, 0.5 * (a01 + a10), 0.5 * (a01 + a10), a11;
+      B << b00, b01, b01, b11;
+      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d> eig(A, B);
+      if (eig.info() != Eigen::Success) break;
+      theta[0] = eig.eigenvalues()(0);
+      theta[1] = eig.eigenvalues()(1);
+      V = eig.eigenvectors();  // B-orthonormal columns
+    } else {
+      theta[0] = a00 / b00;
+      V(0, 0) = 1 / std::sqrt(b00);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const double y0 = Y0[i], y1 = Y1[i];
+      X0[i] = V(0, 0) * y0 + V(1, 0) * y1;
+      X1[i] = V(0, 1) * y0 + V(1, 1) * y1;
     }
     const bool settled = std::fabs(theta[0] - previous[0]) <= 1e-5 * std::fabs(theta[0]) &&
                          (m < 2 || std::fabs(theta[1] - previous[1]) <= 3e-3 * std::fabs(theta[1]));
@@ -135,16 +170,12 @@ void assess_dim(Context& ctx, PointAssessment& out) {
   }
 }
 
-/** The smallest singular value of a d x d row-major block against its largest. */
-double relative_smallest_singular_value(const double* block, int d) {
-  Eigen::MatrixXd A = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(block, d, d);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A);
-  const auto& s = svd.singularValues();
-  if (!(s(0) > 0)) return 0;
-  return s(d - 1) / s(0);
-}
-
-}  // namespace
+template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&);
+template void assess_positive_definite<2>(Context&, BlockTridiagonal<2>&, PointAssessment&);
+template void assess_positive_definite<4>(Context&, BlockTridiagonal<4>&, PointAssessment&);
+template void assess_positive_definite<6>(Context&, BlockTridiagonal<6>&, PointAssessment&);
+template void assess_positive_definite<Eigen::Dynamic>(Context&, BlockTridiagonal<Eigen::Dynamic>&,
+                                                       PointAssessment&);
 
 bool classify_indefinite(PointAssessment& out) {
   if (out.negative > 0) {

@@ -8,12 +8,19 @@
 
 #include <string>
 
+#include "block_tridiagonal.hpp"
 #include "engine.hpp"
 
 namespace pardel::detail {
 
 /** Assesses ctx.q (evaluating the full kernel there if needed) into `out`. */
 void assess(Context& ctx, PointAssessment& out);
+
+/** Assesses ctx.q given H, the unshifted Hessian there, already factored by block LDL^T (positive
+ *  definite): a minimum, with its smallest eigenvalues. Instantiated for the block sizes of
+ *  dispatch_dim. */
+template <int D>
+void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out);
 
 /** From the inertia in out.positive, negative and zero: a saddle or a degenerate point gets its
  *  kind and note (true); a positive definite Hessian is left to the caller (false). */

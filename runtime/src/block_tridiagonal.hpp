@@ -31,22 +31,22 @@ class BlockTridiagonal {
   using RowMap = Eigen::Map<const Eigen::Matrix<double, D, D, (D == 1 ? Eigen::ColMajor : Eigen::RowMajor)>>;
   using VecMap = Eigen::Map<const Vec>;
 
-  /** Allocates for n = N-1 unknown blocks of size d (the cyclic-reduction levels are allocated by
-   *  reserve_cyclic_reduction(), or on the first solve_cyclic_reduction()). */
-  void resize(int N, int d) {
+  /** Allocates for n = N-1 unknown blocks of size d, in storage for at least `capacity` blocks
+   *  (a later resize up to it reuses the storage). The cyclic-reduction levels are allocated by
+   *  reserve_cyclic_reduction(), or on the first solve_cyclic_reduction(). */
+  void resize(int N, int d, std::size_t capacity = 0) {
     d_ = d;
     n_ = N - 1;
     const std::size_t n = static_cast<std::size_t>(std::max(n_, 0));
-    diag_.assign(n, Mat::Zero(d, d));
-    off_.assign(n, Mat::Zero(d, d));
-    W_.assign(n, Mat::Zero(d, d));
-    y_.assign(n, Vec::Zero(d));
+    assign_within(diag_, n, capacity, Mat::Zero(d, d));
+    assign_within(off_, n, capacity, Mat::Zero(d, d));
+    assign_within(W_, n, capacity, Mat::Zero(d, d));
     if (D == Eigen::Dynamic) {
       emplace_factorizations(llt_, n, d);
       factor_.clear();
     } else {
       llt_.clear();
-      factor_.assign(n, Mat::Zero(d, d));
+      assign_within(factor_, n, capacity, Mat::Zero(d, d));
     }
     levels_.clear();
   }
@@ -149,26 +149,18 @@ class BlockTridiagonal {
     return true;
   }
 
-  /** Solves H x = b after factor_ldlt; b and x in node layout of nodes 1..N-1 (dim each). */
+  /** Solves H x = b after factor_ldlt; b and x in node layout of nodes 1..N-1 (dim each). x may
+   *  be b; the forward substitution's intermediate is kept in x. */
   void solve_ldlt(const double* b, double* x) {
-    const int d = d_;
-    for (int i = 0; i < n_; ++i) {
-      const std::size_t ii = static_cast<std::size_t>(i);
-      y_[ii] = VecMap(b + ii * d, d);
-      if (i > 0) y_[ii].noalias() -= W_[ii - 1].transpose() * y_[ii - 1];
-    }
-    for (int i = n_ - 1; i >= 0; --i) {
-      const std::size_t ii = static_cast<std::size_t>(i);
-      Vec xi;
-      if constexpr (D == Eigen::Dynamic) {
-        xi = llt_[ii].solve(y_[ii]);
-      } else {
-        xi = y_[ii];
-        cholesky_solve(factor_[ii], xi.data());
-      }
-      if (i < n_ - 1) xi.noalias() -= W_[ii] * Eigen::Map<const Vec>(x + (ii + 1) * d, d);
-      Eigen::Map<Vec>(x + ii * d, d) = xi;
-    }
+    const double* bs[1] = {b};
+    double* xs[1] = {x};
+    solve_columns<1>(bs, xs);
+  }
+  /** Two right-hand sides in one pass over the factorization. */
+  void solve_ldlt(const double* b0, const double* b1, double* x0, double* x1) {
+    const double* bs[2] = {b0, b1};
+    double* xs[2] = {x0, x1};
+    solve_columns<2>(bs, xs);
   }
 
   /** Block cyclic reduction (factor and solve together); false if a pivot is not p.d. */
@@ -403,6 +395,32 @@ class BlockTridiagonal {
     for (std::size_t i = 0; i < n; ++i) v.emplace_back(d);
   }
 
+  /** Block forward and back substitution for C columns at once (one read of the factorization). */
+  template <int C>
+  void solve_columns(const double* const (&b)[C], double* const (&x)[C]) {
+    const int d = d_;
+    using VecMapMut = Eigen::Map<Vec>;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      for (int c = 0; c < C; ++c) {
+        VecMapMut yi(x[c] + ii * d, d);
+        if (b[c] != x[c]) yi = VecMap(b[c] + ii * d, d);
+        if (i > 0) yi.noalias() -= W_[ii - 1].transpose() * VecMap(x[c] + (ii - 1) * d, d);
+      }
+    }
+    for (int i = n_ - 1; i >= 0; --i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      for (int c = 0; c < C; ++c) {
+        VecMapMut xi(x[c] + ii * d, d);
+        if constexpr (D == Eigen::Dynamic)
+          llt_[ii].solveInPlace(xi);
+        else
+          cholesky_solve(factor_[ii], xi.data());
+        if (i < n_ - 1) xi.noalias() -= W_[ii] * VecMap(x[c] + (ii + 1) * d, d);
+      }
+    }
+  }
+
   /** In-place Cholesky A = L L^T of a fixed-size block: the strict lower triangle of A becomes that
    *  of L and the diagonal holds 1 / L(j, j) (the solves multiply by it); false unless every pivot
    *  is positive and finite. */
@@ -452,7 +470,6 @@ class BlockTridiagonal {
 
   int n_ = 0, d_ = 0, failed_ = -1;
   std::vector<Mat> diag_, off_, W_;
-  std::vector<Vec> y_;
   std::vector<Eigen::LLT<Mat>> llt_;  ///< pivots' factorizations (dynamic block size)
   std::vector<Mat> factor_;           ///< pivots' Cholesky factors (fixed block sizes)
   mutable Eigen::LLT<Mat> pivot_scratch_;

@@ -42,20 +42,27 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   ctx.t0 = problem.t0;
   ctx.T = problem.T;
   const std::size_t n1 = static_cast<std::size_t>(N) + 1, d = static_cast<std::size_t>(m.dim);
-  ctx.t.assign(n1, 0.0);
-  ctx.hk.assign(static_cast<std::size_t>(N), problem.T / N);
+  auto fit = [&ctx](auto& v, std::size_t n, auto value) { assign_within(v, n, ctx.capacity(n), value); };
+  fit(ctx.t, n1, 0.0);
+  fit(ctx.hk, static_cast<std::size_t>(N), problem.T / N);
   for (int k = 0; k <= N; ++k) ctx.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / N;
   ctx.t[static_cast<std::size_t>(N)] = problem.t0 + problem.T;
-  ctx.is_free.assign(n1 * d, 1);
-  ctx.free_count.assign(n1, m.dim);
-  ctx.q.assign(n1 * d, 0.0);
-  ctx.q_next.assign(n1 * d, 0.0);
-  // Interval arrays: allocated by the first evaluation that needs them (ensure_interval_arrays).
-  for (std::vector<double>* v : {&ctx.Ld, &ctx.D1, &ctx.D2, &ctx.D11, &ctx.D12, &ctx.D22}) std::vector<double>().swap(*v);
-  ctx.res.assign(n1 * d, 0.0);
-  ctx.node_max.assign(n1, 0.0);
-  ctx.node_scale.assign(n1, 0.0);
-  ctx.node_hq.assign(n1, 0.0);
+  fit(ctx.is_free, n1 * d, static_cast<unsigned char>(1));
+  fit(ctx.free_count, n1, m.dim);
+  fit(ctx.q, n1 * d, 0.0);
+  fit(ctx.q_next, n1 * d, 0.0);
+  // Interval arrays: allocated by the first evaluation that needs them (ensure_interval_arrays);
+  // released here unless a finer level will reuse them.
+  for (std::vector<double>* v : {&ctx.Ld, &ctx.D1, &ctx.D2, &ctx.D11, &ctx.D12, &ctx.D22}) {
+    if (ctx.reserve_N > N)
+      v->clear();
+    else
+      std::vector<double>().swap(*v);
+  }
+  fit(ctx.res, n1 * d, 0.0);
+  fit(ctx.node_max, n1, 0.0);
+  fit(ctx.node_scale, n1, 0.0);
+  fit(ctx.node_hq, n1, 0.0);
   ctx.evaluated = Evaluated::nothing;
   ctx.residual = 0;
   ctx.action = 0;
@@ -109,8 +116,8 @@ bool apply_constraints(const Problem& problem, Context& ctx, std::string* messag
 
 void ensure_interval_arrays(Context& ctx, Evaluated kind) {
   const std::size_t N = static_cast<std::size_t>(ctx.N), d = static_cast<std::size_t>(ctx.dim);
-  auto size = [](std::vector<double>& v, std::size_t n) {
-    if (v.size() != n) v.assign(n, 0.0);
+  auto size = [&ctx](std::vector<double>& v, std::size_t n) {
+    if (v.size() != n) assign_within(v, n, ctx.capacity(n), 0.0);
   };
   size(ctx.D1, N * d);
   size(ctx.D2, N * d);

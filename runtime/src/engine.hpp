@@ -28,11 +28,33 @@ constexpr int kParallelMin = 512;
 /** Which kernel filled the interval arrays. */
 enum class Evaluated { nothing, sweep, grad, full };
 
+/** v.assign(n, value) in storage for at least `capacity` elements (allocated only when v has less),
+ *  so that a later assign up to `capacity` reuses it. */
+template <class V, class T>
+void assign_within(V& v, std::size_t n, std::size_t capacity, const T& value) {
+  if (v.capacity() < std::max(n, capacity)) {
+    V fresh;
+    fresh.reserve(std::max(n, capacity));
+    v.swap(fresh);
+  }
+  v.assign(n, value);
+}
+
 struct Context {
   const pardel_model* model = nullptr;
   const pardel_discretization* disc = nullptr;
   int dim = 0, ncoords = 0, order = 1, N = 0;
   int threads = 1;
+  /** The finest N this context will be set up for (nested iteration), 0 if none: its arrays, and
+   *  the methods', are allocated for that size at once (see capacity()), so that each finer level
+   *  reuses the memory, and the pages, of the coarser ones instead of allocating anew. */
+  int reserve_N = 0;
+  /** Capacity for an array of n elements at this N: n itself, or (reserve_N > N) at least the
+   *  same array's size at reserve_N. */
+  std::size_t capacity(std::size_t n) const {
+    if (reserve_N <= N) return n;
+    return (n / static_cast<std::size_t>(std::max(N - 1, 1)) + 1) * static_cast<std::size_t>(reserve_N + 1);
+  }
   std::vector<double> params;
   ClockMode clock = ClockMode::none;
   double t0 = 0, T = 1;
@@ -143,10 +165,20 @@ class Method_ {
   virtual int evaluate(Context& ctx) = 0;
   virtual StepOutcome iterate(Context& ctx, long iteration) = 0;
   /** Called when the residual has reached the tolerance: false refuses to stop there (Newton at a
-   *  saddle of the action, which it then leaves along negative curvature); true by default. */
-  virtual bool accept_stop(Context& ctx) {
+   *  saddle of the action, which it then leaves along negative curvature); true by default.
+   *  `final_level` is false on a coarse level of nested iteration, whose answer only starts the
+   *  next level: a method may then spare checks that the final level repeats. */
+  virtual bool accept_stop(Context& ctx, bool final_level) {
     (void)ctx;
+    (void)final_level;
     return true;
+  }
+  /** The assessment of ctx.q from a factorization the method already holds there (Newton's, made
+   *  when it accepted to stop at a minimum); false, leaving `out` alone, when it holds none. */
+  virtual bool assess(Context& ctx, PointAssessment& out) {
+    (void)ctx;
+    (void)out;
+    return false;
   }
   /** The method's own state between two iterations (checkpoint and resume); none by default. */
   virtual std::vector<double> save_state() const { return {}; }

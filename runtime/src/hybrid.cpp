@@ -37,7 +37,9 @@ class Hybrid : public Method_ {
     return newton_mode_ ? newton_->iterate(ctx, iteration) : sweeps_->iterate(ctx, iteration);
   }
 
-  bool accept_stop(Context& ctx) override { return newton_mode_ ? newton_->accept_stop(ctx) : true; }
+  bool accept_stop(Context& ctx, bool final_level) override {
+    return newton_mode_ ? newton_->accept_stop(ctx, final_level) : true;
+  }
   void times_changed() override { newton_->times_changed(); }
 
   /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. */

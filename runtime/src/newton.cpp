@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "assessment.hpp"
 #include "block_tridiagonal.hpp"
 #include "engine.hpp"
 #include "trust_region.hpp"
@@ -23,7 +24,7 @@ class LocalSpace {
         difference_(o.newton_shift == NewtonShift::difference) {}
 
   void resize(Context& ctx) {
-    H_.resize(ctx.N, ctx.dim);
+    H_.resize(ctx.N, ctx.dim, ctx.capacity(static_cast<std::size_t>(std::max(ctx.N - 1, 0))));
     if (cyclic_) H_.reserve_cyclic_reduction();
     dz_ = static_cast<std::size_t>(ctx.dim);
     n_ = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * dz_;
@@ -97,6 +98,11 @@ class LocalSpace {
     return compute_residual(ctx);
   }
   double action(const Context& ctx) const { return sum_action(ctx); }
+  bool assess_factored(Context& ctx, PointAssessment& out) {
+    if (cyclic_) return false;  // cyclic reduction keeps no factorization to solve with again
+    assess_positive_definite(ctx, H_, out);
+    return true;
+  }
 
  private:
   /** Pivot eigenvalues below this fraction of their block's size count as zero (inertia). */

@@ -81,6 +81,9 @@ class Driver {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
 
+  /** Levels up to N allocate their arrays for N at once (Context::reserve_N). */
+  void reserve(int N) { ctx_.reserve_N = N; }
+
   /** Sets up ctx_ at N from `from`; false (with the summary filled) on bad constraints. */
   bool enter_level(const Trajectory& from, int N) {
     detail::setup_context(problem_, N, s_.threads, ctx_);
@@ -214,7 +217,7 @@ class Driver {
         }
       }
       const double target = target_residual();
-      const bool at_target = r <= target && method_.accept_stop(ctx_);
+      const bool at_target = r <= target && method_.accept_stop(ctx_, last);
       if (last && at_target) {
         finish(Termination::converged, converged_message(r, target));
         return false;
@@ -497,6 +500,7 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
     }
   }
   Driver driver(problem, options, *method, summary);
+  driver.reserve(levels.back());
   // Newton's nested iteration starts a level from the extrapolation of the solutions of the two
   // levels before it (both converged to tol); not under a clock, whose node times differ per level.
   const bool extrapolate = options.method == Method::newton && problem.clock == ClockMode::none;
@@ -536,10 +540,12 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
     driver.capture(summary.state, static_cast<int>(l));
     if (extrapolate) summary.state.previous_level = previous_level;
   }
-  // What the returned point is; the method's storage is released first so that the assessment's
-  // factorization does not add to the solve's peak memory.
-  method.reset();
-  detail::assess(driver.context(), summary.point);
+  // What the returned point is: from Newton's factorization at a minimum where it stopped, else
+  // from a new one, the method's storage released first so as not to add to the peak memory.
+  if (!method->assess(driver.context(), summary.point)) {
+    method.reset();
+    detail::assess(driver.context(), summary.point);
+  }
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary.termination != Termination::converged && trajectory.N != problem.N)
     summary.message += " (stopped at the refinement level N = " + std::to_string(trajectory.N) + ")";

@@ -34,7 +34,8 @@
  *   void apply_metric(const Context&, x, y);  double metric_norm(x);
  *   void trial_point(Context&, step);  (ctx.q_next = ctx.q + step)
  *   int evaluate(Context&, q);  (full evaluation and residual: the first non-finite node or -1)
- *   double action(const Context&).
+ *   double action(const Context&);
+ *   bool assess_factored(Context&, PointAssessment&);  (after factor at lambda = 0 succeeded there; false: cannot)
  */
 #ifndef PARDEL_RUNTIME_TRUST_REGION_HPP
 #define PARDEL_RUNTIME_TRUST_REGION_HPP
@@ -83,13 +84,16 @@ class TrialEvaluation {
  public:
   /** Sized like the context's arrays (which must hold a full evaluation's sizes). */
   void size_like(const Context& ctx) {
-    Ld_ = ctx.Ld;
-    D1_ = ctx.D1;
-    D2_ = ctx.D2;
-    D11_ = ctx.D11;
-    D12_ = ctx.D12;
-    D22_ = ctx.D22;
-    res_ = ctx.res;
+    auto fit = [&ctx](std::vector<double>& mine, const std::vector<double>& theirs) {
+      assign_within(mine, theirs.size(), ctx.capacity(theirs.size()), 0.0);
+    };
+    fit(Ld_, ctx.Ld);
+    fit(D1_, ctx.D1);
+    fit(D2_, ctx.D2);
+    fit(D11_, ctx.D11);
+    fit(D12_, ctx.D12);
+    fit(D22_, ctx.D22);
+    fit(res_, ctx.res);
   }
 
   void swap_with(Context& ctx) {
@@ -122,10 +126,7 @@ class TrustRegionNewton : public Method_ {
   void reset(Context& ctx) override {
     space_.resize(ctx);
     const std::size_t n = space_.size();
-    rhs_.assign(n, 0.0);
-    p_.assign(n, 0.0);
-    u_.assign(n, 0.0);
-    w_.assign(n, 0.0);
+    for (std::vector<double>* v : {&rhs_, &p_, &u_, &w_}) assign_within(*v, n, ctx.capacity(n), 0.0);
     ensure_interval_arrays(ctx, Evaluated::full);
     trial_.size_like(ctx);
     delta_ = 0;
@@ -134,6 +135,8 @@ class TrustRegionNewton : public Method_ {
     best_residual_ = std::numeric_limits<double>::infinity();
     escapes_ = 0;
     escape_ = false;
+    stop_factored_ = false;
+    last_step_newton_ = false;
     watchdog_.active = watchdog_.failed = false;
     watchdog_.q.reserve(ctx.q.size());
   }
@@ -155,15 +158,21 @@ class TrustRegionNewton : public Method_ {
   /** New node times: the watchdog's reference action and the level's best residual belong to the
    *  problem before the change. */
   void times_changed() override {
+    stop_factored_ = false;
+    last_step_newton_ = false;
     watchdog_.active = false;
     watchdog_.failed = false;
     best_residual_ = std::numeric_limits<double>::infinity();
   }
 
   /** At the tolerance: stop at a minimum or a degenerate point, but leave a saddle along negative
-   *  curvature (up to kMaxEscapes times in a level; then the saddle is reported as found). */
-  bool accept_stop(Context& ctx) override {
-    if (!factor(ctx, 0, rhs_, p_)) {
+   *  curvature (up to kMaxEscapes times in a level; then the saddle is reported as found). On a
+   *  coarse level reached by a full Newton step from a positive definite Hessian the check is
+   *  spared: a saddle there would be one Newton left on the next level, where it checks again. */
+  bool accept_stop(Context& ctx, bool final_level) override {
+    if (!final_level && last_step_newton_) return true;
+    stop_factored_ = factor(ctx, 0, rhs_, p_);
+    if (!stop_factored_) {
       assembled_lambda_ = -1;  // the inertia overwrites the factorization
       if (escapes_ < kMaxEscapes && space_.negative_eigenvalues(ctx) > 0) {
         ++escapes_;
@@ -175,7 +184,14 @@ class TrustRegionNewton : public Method_ {
     return true;
   }
 
+  /** At a minimum where accept_stop() factored the Hessian, the assessment reuses that factorization. */
+  bool assess(Context& ctx, PointAssessment& out) override {
+    return stop_factored_ && space_.assess_factored(ctx, out);
+  }
+
   StepOutcome iterate(Context& ctx, long iteration) override {
+    stop_factored_ = false;
+    last_step_newton_ = false;
     const std::size_t n = rhs_.size(), o = space_.offset();
     const double F = ctx.action, r0 = ctx.residual;
     for (std::size_t i = 0; i < n; ++i) rhs_[i] = -ctx.res[o + i];
@@ -235,6 +251,7 @@ class TrustRegionNewton : public Method_ {
         }
         ctx.action = Fn;
         ctx.action_known = true;
+        last_step_newton_ = step.newton && !watchdog_.active;
         StepOutcome done;
         done.next_evaluated = true;
         return done;
@@ -492,6 +509,8 @@ class TrustRegionNewton : public Method_ {
   double best_residual_ = 0;
   int escapes_ = 0;
   bool escape_ = false;
+  bool stop_factored_ = false;  ///< accept_stop() factored the unshifted Hessian at ctx.q
+  bool last_step_newton_ = false;  ///< ctx.q came from a full Newton step of a positive definite Hessian
   bool try_newton_ = true;  ///< the first attempt of an iteration tries the full Newton step
   struct Watchdog {
     bool active = false;  ///< Newton steps are being taken past a refused one

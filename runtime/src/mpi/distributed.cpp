@@ -372,6 +372,7 @@ class DistributedSpace {
     return globalize_residual(local_, pardel::detail::compute_residual(ctx));
   }
   double action(const Context&) const { return global_sum_Ld(local_); }
+  bool assess_factored(Context&, PointAssessment&) { return false; }  // assess_distributed does it over the ranks
 
  private:
   /** The blocks of the owned unknowns (and the coupling from the left separator), as
@@ -495,7 +496,9 @@ class DistributedHybrid : public pardel::detail::Method_ {
     return newton_mode_ ? newton_.iterate(ctx, iteration) : sweeps_->iterate(ctx, iteration);
   }
 
-  bool accept_stop(Context& ctx) override { return newton_mode_ ? newton_.accept_stop(ctx) : true; }
+  bool accept_stop(Context& ctx, bool final_level) override {
+    return newton_mode_ ? newton_.accept_stop(ctx, final_level) : true;
+  }
   void times_changed() override { newton_.times_changed(); }
 
  private:
@@ -551,7 +554,7 @@ class Driver {
         return finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
       }
       const double target = pardel::detail::target_residual(options_, ctx_);
-      if (r <= target && method_.accept_stop(ctx_))
+      if (r <= target && method_.accept_stop(ctx_, true))
         return finish(Termination::converged, format("DEL residual %.3g <= tolerance %.3g", r, target));
       if (r < 0.99 * best_residual_) {
         best_residual_ = r;
