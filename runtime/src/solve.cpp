@@ -150,6 +150,18 @@ class Driver {
     return true;
   }
 
+  /** A warm start: after enter_level from the state's iterate, the iteration count, the history
+   *  and the wall time continue the interrupted solve's. */
+  void continue_count(const SolverState& st) {
+    iteration_ = st.iteration;
+    next_record_ = st.next_record;
+    best_iteration_ = st.iteration;
+    r_initial_ = st.initial_residual;
+    have_initial_ = st.have_initial_residual;
+    s_.history = st.history;
+    start_ -= std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(st.seconds));
+  }
+
   /** Everything resume_level needs, at the current iterate (after an interruption). */
   void capture(SolverState& st, int level) {
     st.valid = true;
@@ -429,26 +441,13 @@ std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, st
   return nullptr;
 }
 
-/** Checks an interrupted solve's state against the problem, the options and the levels. */
-bool check_state(const Problem& problem, const Options& options, const SolverState& st, const std::vector<int>& levels,
-                 std::string* error) {
+/** The state's iterate fits the problem at its N and is finite. */
+bool check_iterate(const Problem& problem, const SolverState& st, std::string* error) {
   auto bad = [&](const std::string& msg) {
     *error = "resume: " + msg;
     return false;
   };
-  if (!st.valid) return bad("the solver state is empty (not captured from an interrupted solve)");
-  if (st.method != options.method)
-    return bad(std::string("the state is of method ") + to_string(st.method) + ", the options ask for " +
-               to_string(options.method));
-  if (st.level < 0 || st.level >= static_cast<int>(levels.size()) || levels[static_cast<std::size_t>(st.level)] != st.N)
-    return bad("refinement level " + std::to_string(st.level) + " with N = " + std::to_string(st.N) +
-               " is not a level of this problem and options (grid.N " + std::to_string(problem.N) + ", " +
-               std::to_string(levels.size()) + " level(s) from N = " + std::to_string(levels.front()) + ")");
-  if (st.iteration < 0 || st.level_iteration < 0 || st.level_iteration > st.iteration || st.since_clock_update < 0 ||
-      st.next_record < 0 || st.best_iteration < 0 || st.best_iteration > st.iteration)
-    return bad("inconsistent iteration counters (iteration " + std::to_string(st.iteration) + ", at this level " +
-               std::to_string(st.level_iteration) + ")");
-  if (!(st.seconds >= 0 && st.seconds < 1e12)) return bad("the recorded wall time is not a duration in seconds");
+  if (st.N < 1) return bad("the saved grid has N = " + std::to_string(st.N));
   Problem at_level = problem;
   at_level.N = st.N;
   std::string why;
@@ -457,6 +456,33 @@ bool check_state(const Problem& problem, const Options& options, const SolverSta
     if (!std::isfinite(v)) return bad("the saved trajectory has a non-finite value");
   for (double v : st.trajectory.t)
     if (!std::isfinite(v)) return bad("the saved node times have a non-finite value");
+  if (st.iteration < 0 || st.next_record < 0) return bad("negative iteration counters");
+  if (!(st.seconds >= 0 && st.seconds < 1e12)) return bad("the recorded wall time is not a duration in seconds");
+  return true;
+}
+
+/** Checks an interrupted solve's state against the problem, the options and the levels. */
+bool check_state(const Problem& problem, const Options& options, const SolverState& st, const std::vector<int>& levels,
+                 std::string* error) {
+  auto bad = [&](const std::string& msg) {
+    *error = "resume: " + msg;
+    return false;
+  };
+  if (!st.valid) return bad("the solver state is empty (not captured from an interrupted solve)");
+  if (options.warm_start) return check_iterate(problem, st, error);
+  if (st.method != options.method)
+    return bad(std::string("the state is of method ") + to_string(st.method) + ", the options ask for " +
+               to_string(options.method) + " (a warm start continues from its iterate with another method)");
+  if (st.level < 0 || st.level >= static_cast<int>(levels.size()) || levels[static_cast<std::size_t>(st.level)] != st.N)
+    return bad("refinement level " + std::to_string(st.level) + " with N = " + std::to_string(st.N) +
+               " is not a level of this problem and options (grid.N " + std::to_string(problem.N) + ", " +
+               std::to_string(levels.size()) + " level(s) from N = " + std::to_string(levels.front()) + ")");
+  if (st.iteration < 0 || st.level_iteration < 0 || st.level_iteration > st.iteration || st.since_clock_update < 0 ||
+      st.next_record < 0 || st.best_iteration < 0 || st.best_iteration > st.iteration)
+    return bad("inconsistent iteration counters (iteration " + std::to_string(st.iteration) + ", at this level " +
+               std::to_string(st.level_iteration) + ")");
+  if (!check_iterate(problem, st, error)) return false;
+  std::string why;
   if (st.previous_level.N > 0) {
     Problem previous = problem;
     previous.N = st.previous_level.N;
@@ -480,7 +506,9 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   summary.threads = detail::resolve_threads(options.threads);
   std::string error;
   const SolverState* resume = options.resume_from;
-  if (!options.is_valid(&error) || (!resume && !validate(problem, trajectory, &error))) {
+  const SolverState* warm = resume && options.warm_start ? resume : nullptr;
+  if (warm) resume = nullptr;
+  if (!options.is_valid(&error) || (!resume && !warm && !validate(problem, trajectory, &error))) {
     summary.termination = Termination::invalid_input;
     summary.message = error;
     return summary;
@@ -492,8 +520,8 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
     return summary;
   }
   const std::vector<int> levels = refinement_levels(problem, options, automatic);
-  if (resume) {
-    if (!check_state(problem, options, *resume, levels, &error)) {
+  if (resume || warm) {
+    if (!check_state(problem, options, resume ? *resume : *warm, levels, &error)) {
       summary.termination = Termination::invalid_input;
       summary.message = error;
       return summary;
@@ -507,11 +535,17 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   Trajectory previous_level, coarser_level;  // solutions of levels l-1 and l-2 (N = 0: none)
   if (resume) previous_level = resume->previous_level;
   std::size_t l = 0;
-  for (l = resume ? static_cast<std::size_t>(resume->level) : 0; l < levels.size(); ++l) {
+  if (warm)  // the first level at or above the state's N
+    while (l + 1 < levels.size() && levels[l] < warm->N) ++l;
+  const std::size_t first_level = l;
+  for (l = resume ? static_cast<std::size_t>(resume->level) : l; l < levels.size(); ++l) {
     const bool last = l + 1 == levels.size();
     bool entered;
     if (resume && l == static_cast<std::size_t>(resume->level)) {
       entered = driver.resume_level(*resume);
+    } else if (warm && l == first_level) {
+      entered = driver.enter_level(warm->trajectory, levels[l]);
+      if (entered) driver.continue_count(*warm);
     } else if (previous_level.N == 0) {
       entered = driver.enter_level(trajectory, levels[l]);
     } else if (extrapolate && coarser_level.N > 0 && previous_level.N > coarser_level.N) {
@@ -549,6 +583,9 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary.termination != Termination::converged && trajectory.N != problem.N)
     summary.message += " (stopped at the refinement level N = " + std::to_string(trajectory.N) + ")";
+  if (warm)
+    summary.message += std::string(" (warm start from iteration ") + std::to_string(warm->iteration) + " of " +
+                       to_string(warm->method) + " at N = " + std::to_string(warm->N) + ")";
   return summary;
 }
 

@@ -283,7 +283,40 @@ TEST_F(CheckpointCli, ResumeWithASceneIsAUsageError) {
   const fs::path out = make_checkpoint("with_scene", 3);
   const Outcome o = run_pardel({"solve", scene_.string(), "--resume", out.string()}, out / "log");
   EXPECT_EQ(o.status, 2);
-  EXPECT_NE(o.output.find("--resume: give no scene and no --set"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("--resume: give no scene;"), std::string::npos) << o.output;
+}
+
+TEST_F(CheckpointCli, WarmStartWithAnotherMethod) {
+  // --resume with --set solver.*: the checkpoint's iterate (jacobi-newton, iteration 25) is the
+  // start of a Newton solve; the history continues and the summary says it was a warm start.
+  const fs::path out = make_checkpoint("warm", 25);
+  const Outcome o = run_pardel({"solve", "--resume", out.string(), "--set", "solver.method=newton", "--set",
+                                "solver.tol=1e-9", "--no-plot", "--quiet", "--threads", "1"},
+                               out / "warm.log");
+  EXPECT_EQ(o.status, 0) << o.output;
+  const std::string summary = read_text(out / "summary.json");
+  EXPECT_NE(summary.find("\"status\": \"converged\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("(warm start from iteration 25 of jacobi-newton at N = 1000)"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"method\": \"newton\""), std::string::npos) << summary;
+  EXPECT_FALSE(fs::exists(out / "checkpoint.json"));
+  // The history starts with the interrupted run's first record, and the first records agree.
+  const std::string history = read_text(out / "convergence.csv");
+  const std::string reference = read_text(dir_ / "reference" / "convergence.csv");
+  const auto second_line = [](const std::string& csv) {
+    const std::size_t a = csv.find('\n') + 1;
+    return without_seconds(csv.substr(a, csv.find('\n', a) - a));
+  };
+  EXPECT_EQ(second_line(history), second_line(reference));
+}
+
+TEST_F(CheckpointCli, ResumeWithAProblemKeyIsAUsageError) {
+  const fs::path out = make_checkpoint("problem_key", 3);
+  const Outcome o = run_pardel({"solve", "--resume", out.string(), "--set", "grid.N=10"}, out / "log");
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("--resume: only --set solver.KEY=VALUE may change a resumed solve"), std::string::npos)
+      << o.output;
+  EXPECT_NE(o.output.find("'grid.N=10' changes the problem"), std::string::npos) << o.output;
+  EXPECT_TRUE(fs::exists(out / "checkpoint.json"));
 }
 
 }  // namespace

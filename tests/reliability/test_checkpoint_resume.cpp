@@ -2,9 +2,12 @@
 // iteration K hands back a SolverState; a solve resumed from it must reach what the uninterrupted
 // solve reaches — the same iterates bit for bit (every method, with coarse-to-fine refinement, with
 // both clocks, after repeated interruptions) — and a state that does not fit the problem or the
-// options is refused with invalid_input and a message naming what is wrong.
+// options is refused with invalid_input and a message naming what is wrong. A warm start
+// (Options::warm_start) continues from the state's iterate with other options, possibly on
+// another grid, with the count and the history continued.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -222,6 +225,77 @@ TEST(CheckpointResume, FixedTotalTimeClockWithNewton) {
   o.tol = 1e-7;
   o.clock_update_every = 5;
   expect_resume_reproduces(spacecraft_sundman(100), o, {7});
+}
+
+// ---- warm starts -------------------------------------------------------------------------------
+
+/** Largest |a_i - b_i|. */
+double max_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = a.size() == b.size() ? 0.0 : INFINITY;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
+  return m;
+}
+
+/** Jacobi-Newton interrupted at iteration 200 of Bratu's problem at N = n_state; the state. */
+pardel::SolverState interrupted_bratu(int n_state) {
+  const SolveRun part = run(bratu(n_state), with(Method::jacobi_newton), 200);
+  EXPECT_EQ(part.summary.termination, Termination::interrupted) << part.summary.message;
+  return part.summary.state;
+}
+
+TEST(WarmStart, NewtonContinuesAJacobiNewtonRun) {
+  ASSERT_NE(bratu(40).model, nullptr);
+  const pardel::SolverState state = interrupted_bratu(40);
+  ASSERT_TRUE(state.valid);
+  Options newton = with(Method::newton);
+  newton.warm_start = true;
+  const SolveRun warm = run(bratu(40), newton, -1, &state);
+  ASSERT_EQ(warm.summary.termination, Termination::converged) << warm.summary.message;
+  EXPECT_NE(warm.summary.message.find("(warm start from iteration " + std::to_string(state.iteration) +
+                                      " of jacobi-newton at N = 40)"),
+            std::string::npos)
+      << warm.summary.message;
+  // The count and the history continue the interrupted run's.
+  EXPECT_GT(warm.summary.iterations, state.iteration);
+  ASSERT_GT(warm.summary.history.size(), state.history.size());
+  for (std::size_t i = 0; i < state.history.size(); ++i) {
+    EXPECT_EQ(warm.summary.history[i].iteration, state.history[i].iteration) << i;
+    EXPECT_EQ(warm.summary.history[i].residual, state.history[i].residual) << i;
+  }
+  for (std::size_t i = 1; i < warm.summary.history.size(); ++i)
+    EXPECT_GT(warm.summary.history[i].iteration, warm.summary.history[i - 1].iteration) << i;
+  // The answer is Newton's from the straight line (Bratu's lower solution).
+  const SolveRun fresh = run(bratu(40), with(Method::newton), -1);
+  ASSERT_EQ(fresh.summary.termination, Termination::converged) << fresh.summary.message;
+  EXPECT_LT(max_difference(warm.trajectory.q, fresh.trajectory.q), 1e-9);
+}
+
+TEST(WarmStart, OnAFinerGridTheIterateIsResampled) {
+  ASSERT_NE(bratu(40).model, nullptr);
+  const pardel::SolverState state = interrupted_bratu(40);
+  ASSERT_TRUE(state.valid);
+  Options newton = with(Method::newton);
+  newton.warm_start = true;
+  const SolveRun warm = run(bratu(80), newton, -1, &state);
+  ASSERT_EQ(warm.summary.termination, Termination::converged) << warm.summary.message;
+  EXPECT_EQ(warm.trajectory.N, 80);
+  EXPECT_EQ(warm.summary.history.back().N, 80);
+  EXPECT_EQ(warm.summary.history.front().N, 40);
+  const SolveRun fresh = run(bratu(80), with(Method::newton), -1);
+  ASSERT_EQ(fresh.summary.termination, Termination::converged) << fresh.summary.message;
+  EXPECT_LT(max_difference(warm.trajectory.q, fresh.trajectory.q), 1e-9);
+}
+
+TEST(WarmStart, AStateThatDoesNotFitIsRefused) {
+  ASSERT_NE(bratu(40).model, nullptr);
+  pardel::SolverState state = interrupted_bratu(40);
+  state.trajectory.q[5] = NAN;
+  Options newton = with(Method::newton);
+  newton.warm_start = true;
+  const SolveRun r = run(bratu(40), newton, -1, &state);
+  EXPECT_EQ(r.summary.termination, Termination::invalid_input);
+  EXPECT_NE(r.summary.message.find("resume: the saved trajectory does not fit the problem: trajectory has a non-finite value at node 5"), std::string::npos)
+      << r.summary.message;
 }
 
 // ---- states that do not fit -----------------------------------------------------------------

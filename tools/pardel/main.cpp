@@ -271,16 +271,25 @@ int run_solve_unguarded(const SolveArgs& args) {
   Checkpoint resumed;
   const bool resume = !args.resume.empty();
   const std::string checkpoint_path = (fs::path(args.resume) / checkpoint_file_name()).string();
+  // --resume with --set solver.KEY=VALUE: a warm start from the checkpoint's iterate with other
+  // solver options (another method, say) instead of the exact continuation.
+  const bool warm = resume && !args.sets.empty();
   if (resume) {
-    if (!args.scene.empty() || !args.sets.empty())
-      throw UsageError("--resume: give no scene and no --set; the solve continues with the scene and overrides "
-                       "recorded in " + checkpoint_path);
+    if (!args.scene.empty())
+      throw UsageError("--resume: give no scene; the solve continues with the scene and overrides recorded in " +
+                       checkpoint_path);
+    for (const std::string& set : args.sets)
+      if (set.rfind("solver.", 0) != 0)
+        throw UsageError("--resume: only --set solver.KEY=VALUE may change a resumed solve (a warm start from its "
+                         "iterate); '" + set + "' changes the problem");
     resumed = read_checkpoint(args.resume);
   } else if (args.scene.empty()) {
     throw UsageError("solve: a scene file is required (or --resume OUTPUT_DIR)");
   }
   const std::string scene_path = resume ? resumed.scene_path : args.scene;
-  Scene scene = load_scene_or_throw(scene_path, resume ? resumed.overrides : args.sets);
+  std::vector<std::string> overrides = resume ? resumed.overrides : args.sets;
+  if (warm) overrides.insert(overrides.end(), args.sets.begin(), args.sets.end());
+  Scene scene = load_scene_or_throw(scene_path, overrides);
   if (resume) {
     const std::string hash = file_hash(scene_path);
     if (hash != resumed.scene_hash)
@@ -305,6 +314,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   }
   Trajectory trajectory = resume ? Trajectory{} : make_initial_guess(scene);
   if (resume) scene.options.resume_from = &resumed.state;
+  scene.options.warm_start = warm;
 
   std::string out_dir = args.out;
   if (out_dir.empty() && resume) out_dir = args.resume;
@@ -348,7 +358,7 @@ int run_solve_unguarded(const SolveArgs& args) {
     Checkpoint checkpoint;
     checkpoint.scene_path = resume ? scene_path : fs::absolute(scene_path, ec).lexically_normal().string();
     checkpoint.scene_hash = file_hash(checkpoint.scene_path);
-    checkpoint.overrides = resume ? resumed.overrides : args.sets;
+    checkpoint.overrides = overrides;
     checkpoint.threads = threads;
     checkpoint.model = model.name;
     checkpoint.dim = model.dim;
@@ -461,7 +471,8 @@ int main(int argc, char** argv) {
                         "interval-by-interval test and the Jacobi spectral radius of pardel check)")
       ->check(CLI::IsMember({"inertia", "full"}));
   solve_cmd->add_option("--resume", s.resume,
-                        "Continue the interrupted solve whose outputs (and checkpoint.json) are in this folder");
+                        "Continue the interrupted solve whose outputs (and checkpoint.json) are in this folder; "
+                        "with --set solver.KEY=VALUE, a warm start from its iterate with those solver options");
   solve_cmd->add_flag("--no-memory-check", s.no_memory_check,
                       "Solve even when the memory estimate exceeds what the machine has");
 
