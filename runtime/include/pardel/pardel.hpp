@@ -157,8 +157,8 @@ struct SolverState {
   double level_checkpoint_residual = 0; ///< residual at the last 50-iteration stagnation check
   double seconds = 0;                   ///< wall time used before the interruption
   Trajectory trajectory;       ///< the iterate at N with its node times
-  std::vector<double> method_state;     ///< the method's own: newton {mu, nu}; hybrid {phase, sweeps
-                                        ///< since the last check, mu, nu}; jacobi methods none
+  std::vector<double> method_state;     ///< the method's own (newton: its trust region; hybrid: its
+                                        ///< phase and Newton's state); jacobi methods none
   std::vector<IterationRecord> history; ///< the history recorded so far
   /** newton with refinement: the solution of the level before `level` (N = 0: none), which with
    *  this level's solution extrapolates the start of the next level. */
@@ -189,6 +189,11 @@ struct Options {
   /** Continue an interrupted solve from this state (Summary::state of that solve) instead of from
    *  the trajectory passed to solve(); problem and options must be those of the interrupted solve. */
   const SolverState* resume_from = nullptr;
+  /** With resume_from: a warm start instead. The solve starts from the state's iterate (resampled
+   *  to the first level of these options at or above its N) with these options, whatever their
+   *  method; the iteration count and the history continue, the method's own state and the
+   *  stopping rules' memory start afresh (not bit for bit), and Summary::message says so. */
+  bool warm_start = false;
   /** Checks the options; on failure writes a message naming the option and value. */
   bool is_valid(std::string* error) const;
 };
