@@ -289,6 +289,15 @@ Summary solve(const Problem& problem, const Options& options, Trajectory& trajec
 double residual_norm(const Problem& problem, const Trajectory& trajectory);
 double discrete_action(const Problem& problem, const Trajectory& trajectory);
 
+/** The discrete momenta at the two ends of a trajectory (the discrete Legendre transforms). */
+struct BoundaryMomenta {
+  std::vector<double> p0;  ///< -D1 Ld(q_0, q_1): dim values (empty when the input was invalid)
+  std::vector<double> pN;  ///< D2 Ld(q_{N-1}, q_N): dim values
+};
+/** The boundary momenta of a trajectory on the problem's grid (its node times as given, the
+ *  step of each interval as the solvers take it); both empty for an invalid problem or trajectory. */
+BoundaryMomenta boundary_momenta(const Problem& problem, const Trajectory& trajectory);
+
 /** The convergence certificate at a trajectory. */
 Certificate certify(const Problem& problem, const Trajectory& trajectory, int threads = 0, double tol = 1e-10);
 
