@@ -1,0 +1,58 @@
+"""Matplotlib pictures of a pardel.Result: the path in the plane of the first two coordinates, each
+coordinate against t, and the convergence history. Each function draws into `ax` when given (else
+a new figure from matplotlib.pyplot, which works under the Agg backend) and returns the axes.
+"""
+import numpy as np
+
+
+def _axes(ax):
+    if ax is not None:
+        return ax
+    import matplotlib.pyplot as plt
+
+    _, ax = plt.subplots(figsize=(6, 5))
+    return ax
+
+
+def path(result, ax=None, label=None):
+    """The path (first coordinate against the second) with its end points marked."""
+    if len(result.coords) < 2:
+        raise ValueError("path: the model has one coordinate; use pardel.plot.coordinates")
+    ax = _axes(ax)
+    x, y = result.q[:, 0], result.q[:, 1]
+    ax.plot(x, y, "-", lw=1.5, label=label or "%s (%s)" % (result.model, result.status))
+    ax.plot([x[0]], [y[0]], "o", color="tab:green")
+    ax.plot([x[-1]], [y[-1]], "s", color="tab:red")
+    ax.set_xlabel(result.coords[0])
+    ax.set_ylabel(result.coords[1])
+    ax.set_aspect("equal", adjustable="datalim")
+    cost = "%s = %.6g" % (result.cost_name.replace("_", " "), result.cost) if result.cost is not None else \
+        "%s not finite" % result.cost_name
+    ax.set_title("%s, N = %d: %s" % (result.model, result.N, cost))
+    ax.legend(loc="best", fontsize="small")
+    return ax
+
+
+def coordinates(result, ax=None):
+    """Each coordinate against the node times."""
+    ax = _axes(ax)
+    for i, name in enumerate(result.coords):
+        ax.plot(result.t, result.q[:, i], "-", lw=1.2, label=name)
+    ax.set_xlabel("t")
+    ax.set_title("%s: coordinates (%s)" % (result.model, result.status))
+    ax.legend(loc="best", fontsize="small")
+    return ax
+
+
+def convergence(result, ax=None):
+    """The DEL residual (infinity norm) of each recorded iteration, on a log scale."""
+    ax = _axes(ax)
+    h = result.history
+    residual = np.asarray(h["residual"], dtype=float)
+    positive = residual > 0
+    ax.semilogy(np.asarray(h["iteration"])[positive], residual[positive], ".-", lw=1)
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("DEL residual")
+    ax.set_title("%s: %s after %d iterations" % (result.model, result.status, result.iterations))
+    ax.grid(True, which="both", alpha=0.3)
+    return ax

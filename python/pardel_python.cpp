@@ -1,0 +1,551 @@
+/**
+ * @file pardel_python.cpp
+ * The compiled part of the Python module `pardel` (pardel._pardel): a translation layer over the
+ * runtime (pardel::runtime), the model loader (pardel::model_loader) and the scene reader
+ * (pardel::scene). Keyword arguments of pardel.solve are written as a scene (a TOML table) and read
+ * by the scene reader, so their checks and messages are those of `pardel solve`; solves run with the
+ * GIL released and stop at Ctrl-C through Options::on_iteration; results come back as NumPy arrays
+ * and summary.json's dictionary (as text).
+ */
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <new>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "memory_estimate.hpp"
+#include "outputs.hpp"
+#include "pardel/model_loader.hpp"
+#include "pardel/pardel.hpp"
+#include "scene.hpp"
+
+namespace py = pybind11;
+using namespace pardel;
+using pardel::cli::Scene;
+using pardel::cli::SceneError;
+
+namespace {
+
+/** Raised for input the runtime or the scene reader refuses (Python: pardel.PardelError). */
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+std::vector<std::string> bundled_names() {
+  std::vector<std::string> names;
+  for (const pardel_model* m : bundled_models()) names.push_back(m->name);
+  return names;
+}
+
+/** A bundled name, or a .lag path compiled on first use (the CLI's resolver). */
+const pardel_model* resolve_spec(const std::string& spec) { return pardel::resolve_model(spec); }
+
+/** A compiled model as Python sees it; the pointer lives as long as the process. */
+struct ModelHandle {
+  const pardel_model* model = nullptr;
+};
+
+ModelHandle load_model(const std::string& spec) {
+  const pardel_model* model = resolve_spec(spec);
+  if (!model) {
+    std::string message = fmt::format("unknown model '{}'", spec);
+    const std::string suggestion = cli::nearest_name(spec, bundled_names());
+    if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+    throw InputError(message);
+  }
+  return {model};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Keyword arguments -> scene
+
+/** The keyword arguments pardel.solve passes on, with the scene key each one becomes ("" when it
+ *  is an option outside the scene schema, set on pardel::Options directly). */
+const std::vector<std::pair<std::string, std::string>> kArguments = {
+    {"discretization", "discretization"},
+    {"params", "params"},
+    {"t0", "grid.t0"},
+    {"T", "grid.T"},
+    {"N", "grid.N"},
+    {"q0", "boundary"},
+    {"qN", "boundary"},
+    {"knots", "knots"},
+    {"polyline", "guess.points"},
+    {"clock", "solver.clock"},
+    {"method", "solver.method"},
+    {"tol", "solver.tol"},
+    {"rtol", "solver.rtol"},
+    {"max_iterations", "solver.max_iterations"},
+    {"damping", "solver.damping"},
+    {"newton_substeps", "solver.newton_substeps"},
+    {"newton_shift", "solver.newton_shift"},
+    {"linear_solver", "solver.linear_solver"},
+    {"threads", "solver.threads"},
+    {"refine_start_N", "solver.refine.start_N"},
+    {"refine_factor", "solver.refine.factor"},
+    {"clock_update_every", "solver.clock_update_every"},
+    {"history_every", ""},
+    {"refine_settle", ""},
+    {"divergence_factor", ""},
+};
+
+std::vector<std::string> argument_names() {
+  std::vector<std::string> names;
+  for (const auto& a : kArguments) names.push_back(a.first);
+  return names;
+}
+
+/** A TOML array from a Python sequence or NumPy array of numbers, strings or sequences
+ *  (booleans refused). */
+/** Whether a Python value is a number (int, float or a NumPy scalar; not a bool). */
+bool is_number(const py::handle& value) {
+  return !py::isinstance<py::bool_>(value) && !py::isinstance<py::str>(value) &&
+         !py::isinstance<py::sequence>(value) && py::hasattr(value, "__float__");
+}
+
+std::string type_name(const py::handle& value) {
+  return py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>();
+}
+
+toml::array to_toml_array(const py::handle& value, const std::string& name) {
+  if (py::isinstance<py::str>(value) || !py::isinstance<py::sequence>(value))
+    throw InputError(fmt::format("{}: a sequence was expected, got {}", name, type_name(value)));
+  toml::array array;
+  const py::sequence seq = py::reinterpret_borrow<py::sequence>(value);
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const py::object item = seq[i];
+    if (is_number(item)) {
+      array.push_back(item.attr("__float__")().cast<double>());
+    } else if (py::isinstance<py::str>(item)) {
+      array.push_back(item.cast<std::string>());
+    } else if (py::isinstance<py::sequence>(item)) {
+      array.push_back(to_toml_array(item, fmt::format("{}[{}]", name, i)));
+    } else {
+      throw InputError(fmt::format("{}[{}]: a number was expected, got {}", name, i, type_name(item)));
+    }
+  }
+  return array;
+}
+
+/** Inserts a Python value under `key`: integers stay integers (grid.N, solver.threads, ...). */
+void insert(toml::table& table, const std::string& key, const py::handle& value, const std::string& name) {
+  if (py::isinstance<py::bool_>(value)) throw InputError(fmt::format("{}: a number was expected, got a bool", name));
+  if (py::isinstance<py::str>(value)) {
+    table.insert_or_assign(key, value.cast<std::string>());
+  } else if (py::isinstance<py::int_>(value) || (is_number(value) && py::hasattr(value, "__index__"))) {
+    table.insert_or_assign(key, value.attr("__index__")().cast<long long>());
+  } else if (is_number(value)) {
+    table.insert_or_assign(key, value.attr("__float__")().cast<double>());
+  } else if (py::isinstance<py::sequence>(value)) {
+    table.insert_or_assign(key, to_toml_array(value, name));
+  } else {
+    throw InputError(fmt::format("{}: cannot use a value of type {}", name, type_name(value)));
+  }
+}
+
+toml::table& subtable(toml::table& root, const std::string& key) {
+  if (!root.contains(key)) root.insert(key, toml::table{});
+  return *root.get_as<toml::table>(key);
+}
+
+/** Splits a boundary vector (dim values: coords, then derivatives) into the scene's keys
+ *  (q0, v0, a0, ...); a vector of another size goes to q0 whole, where the reader reports it. */
+void insert_boundary(toml::table& boundary, const pardel_model& model, const py::handle& value, const char* end,
+                     const std::string& name) {
+  toml::array values = to_toml_array(value, name);
+  const std::size_t nc = static_cast<std::size_t>(model.ncoords);
+  if (values.size() != static_cast<std::size_t>(model.dim) || model.order == 1) {
+    boundary.insert_or_assign(std::string("q") + end, std::move(values));
+    return;
+  }
+  for (int d = 0; d < model.order; ++d) {
+    toml::array part;
+    for (std::size_t i = 0; i < nc; ++i) part.push_back(*values.get(d * nc + i));
+    boundary.insert_or_assign(cli::boundary_prefix(d) + end, std::move(part));
+  }
+}
+
+/** The scene reader's message with the position inside the generated text left out: that text is
+ *  not the user's (the key names the argument). */
+std::string without_generated_position(const std::string& message, const std::string& source) {
+  const std::string prefix = source + ":";
+  if (message.rfind(prefix, 0) != 0) return message;
+  static const std::regex position("^[0-9]+:[0-9]+: ");
+  const std::string rest = message.substr(prefix.size());
+  return source + ": " + std::regex_replace(rest, position, "", std::regex_constants::format_first_only);
+}
+
+/** A scene from pardel.solve's arguments: the model (a bundled name or a .lag path), then the
+ *  keyword arguments of kArguments (None values are left out). */
+Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments) {
+  const std::vector<std::string> names = argument_names();
+  for (const auto& item : arguments) {
+    const std::string key = py::str(item.first).cast<std::string>();
+    bool known = false;
+    for (const auto& n : names) known = known || n == key;
+    if (!known) {
+      std::string message = fmt::format("unknown option '{}'", key);
+      const std::string suggestion = cli::nearest_name(key, names);
+      if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+      message += " (options: " + fmt::format("{}", fmt::join(names, ", ")) + ")";
+      throw InputError(message);
+    }
+  }
+  const ModelHandle handle = load_model(model_spec);
+  const pardel_model& model = *handle.model;
+
+  toml::table root;
+  root.insert("model", model_spec);
+  for (const auto& a : kArguments) {
+    const std::string& name = a.first;
+    if (!arguments.contains(name.c_str())) continue;
+    const py::object value = arguments[name.c_str()];
+    if (value.is_none() || a.second.empty()) continue;
+    if (name == "params") {
+      toml::table& params = subtable(root, "params");
+      if (py::isinstance<py::dict>(value)) {
+        for (const auto& p : py::reinterpret_borrow<py::dict>(value)) {
+          const std::string pname = py::str(p.first).cast<std::string>();
+          insert(params, pname, p.second, "params." + pname);
+        }
+      } else {
+        const toml::array list = to_toml_array(value, "params");
+        if (list.size() != static_cast<std::size_t>(model.nparams))
+          throw InputError(fmt::format("params: {} values given; model {} has {} params (give a dict to name them)",
+                                       list.size(), model.name, model.nparams));
+        for (int i = 0; i < model.nparams; ++i) params.insert_or_assign(model.param_names[i], *list.get(i));
+      }
+    } else if (name == "q0" || name == "qN") {
+      insert_boundary(subtable(root, "boundary"), model, value, name == "q0" ? "0" : "N", name);
+    } else if (name == "knots") {
+      toml::array knots;
+      py::sequence seq = py::reinterpret_borrow<py::sequence>(value);
+      for (std::size_t i = 0; i < seq.size(); ++i) {
+        const std::string kname = fmt::format("knots[{}]", i);
+        py::sequence pair = seq[i];
+        if (pair.size() != 2) throw InputError(fmt::format("{}: a pair (t, q) was expected", kname));
+        toml::table knot;
+        insert(knot, "t", pair[0], kname + ".t");
+        insert(knot, "q", pair[1], kname + ".q");
+        knots.push_back(std::move(knot));
+      }
+      root.insert_or_assign("knots", std::move(knots));
+    } else if (name == "polyline") {
+      toml::table& guess = subtable(root, "guess");
+      guess.insert_or_assign("kind", "polyline");
+      insert(guess, "points", value, "polyline");
+    } else {
+      // a dotted scene key: [grid] T, [solver] tol, [solver.refine] start_N, ...
+      toml::table* table = &root;
+      std::string key = a.second;
+      for (std::size_t dot; (dot = key.find('.')) != std::string::npos; key = key.substr(dot + 1))
+        table = &subtable(*table, key.substr(0, dot));
+      insert(*table, key, value, name);
+    }
+  }
+  std::ostringstream text;
+  text << root;
+  const std::string source = "pardel.solve";
+  Scene scene;
+  try {
+    scene = cli::parse_scene(text.str(), source, {}, resolve_spec, bundled_names());
+  } catch (const SceneError& error) {
+    throw SceneError(without_generated_position(error.what(), source));
+  }
+  // Options outside the scene schema.
+  auto number = [&arguments](const char* name, auto* target) {
+    if (arguments.contains(name) && !arguments[name].is_none())
+      *target = arguments[name].cast<std::remove_pointer_t<decltype(target)>>();
+  };
+  number("history_every", &scene.options.history_every);
+  number("refine_settle", &scene.options.refine_settle);
+  number("divergence_factor", &scene.options.divergence_factor);
+  std::string error;
+  if (!scene.options.is_valid(&error)) throw InputError(error);
+  return scene;
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  return cli::load_scene(path, overrides, resolve_spec, bundled_names());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Solving
+
+py::array_t<double> matrix(const std::vector<double>& values, std::size_t rows, std::size_t cols) {
+  py::array_t<double> out({rows, cols});
+  std::copy(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(rows * cols), out.mutable_data());
+  return out;
+}
+
+py::array_t<double> vector(const std::vector<double>& values) {
+  py::array_t<double> out(values.size());
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
+
+/** The initial trajectory: the scene's guess, or `guess` ((M+1) x dim rows, resampled to the
+ *  scene's N when M differs; node times `guess_t` when given, else uniform). */
+Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t) {
+  if (guess.is_none()) return cli::make_initial_guess(scene);
+  const Problem& problem = scene.problem;
+  const int dim = scene.model->dim;
+  const auto q = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(guess);
+  if (!q) throw InputError("guess: a 2-D array of numbers was expected");
+  if (q.ndim() != 2 || q.shape(1) != dim || q.shape(0) < 2)
+    throw InputError(fmt::format("guess: shape ({}) given; expected (N+1, {}) (model {} has dim {}: {})",
+                                 fmt::join(std::vector<py::ssize_t>(q.shape(), q.shape() + q.ndim()), ", "), dim,
+                                 scene.model->name, dim, scene.model->order == 1 ? "its coords" : "coords, then derivatives"));
+  Trajectory from;
+  from.N = static_cast<int>(q.shape(0) - 1);
+  from.dim = dim;
+  from.q.assign(q.data(), q.data() + q.size());
+  from.t.resize(static_cast<std::size_t>(from.N) + 1);
+  if (!guess_t.is_none()) {
+    const auto t = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(guess_t);
+    if (!t || t.ndim() != 1 || t.shape(0) != from.N + 1)
+      throw InputError(fmt::format("guess_t: {} node times were expected", from.N + 1));
+    from.t.assign(t.data(), t.data() + t.size());
+  } else {
+    for (int k = 0; k <= from.N; ++k) from.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / from.N;
+  }
+  if (from.N == problem.N) return from;
+  return resample(problem, from, problem.N);
+}
+
+/** How often, at most, a solve looks at Python's signals. */
+constexpr std::chrono::milliseconds kSignalCheckPeriod(50);
+
+/**
+ * Solves a scene with the GIL released. Every recorded iteration calls `on_iteration` (with the
+ * GIL) when given, and at most every 50 ms checks Python's signals; a pending exception
+ * (KeyboardInterrupt from Ctrl-C, or one raised by on_iteration) stops the solve, which ends
+ * `interrupted`, and is raised once the result is complete.
+ */
+py::dict solve_scene(Scene scene, const py::object& guess, const py::object& guess_t, const py::object& on_iteration,
+                     const py::object& threads) {
+  if (!threads.is_none()) scene.options.threads = threads.cast<int>();
+  {
+    const cli::MemoryEstimate memory = cli::estimate_solve_memory(scene, false);
+    const std::string refusal = cli::memory_refusal(scene, memory, cli::machine_memory());
+    if (!refusal.empty()) throw InputError(fmt::format("{}: {}", scene.path, refusal));
+  }
+  Trajectory trajectory = initial_trajectory(scene, guess, guess_t);
+
+  std::unique_ptr<py::error_already_set> pending;
+  bool stopped_by_callback = false;
+  auto last_check = std::chrono::steady_clock::now();
+  scene.options.on_iteration = [&](const IterationRecord& record) {
+    const auto now = std::chrono::steady_clock::now();
+    if (on_iteration.is_none() && now - last_check < kSignalCheckPeriod) return true;
+    last_check = now;
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) {
+      pending = std::make_unique<py::error_already_set>();
+      return false;
+    }
+    if (!on_iteration.is_none()) {
+      try {
+        const py::object answer = on_iteration(record.iteration, record.N, record.residual, record.action);
+        if (!answer.is_none() && !answer.cast<bool>()) {
+          stopped_by_callback = true;
+          return false;
+        }
+      } catch (py::error_already_set& error) {
+        pending = std::make_unique<py::error_already_set>(std::move(error));
+        return false;
+      }
+    }
+    return true;
+  };
+  Summary summary;
+  {
+    py::gil_scoped_release release;
+    summary = pardel::solve(scene.problem, scene.options, trajectory);
+  }
+  scene.options.on_iteration = nullptr;
+  if (pending) throw std::move(*pending);
+  if (summary.termination == Termination::invalid_input)
+    throw InputError(fmt::format("{}: error: {}", scene.path, summary.message));
+
+  const bool on_grid = trajectory.N == scene.problem.N && !trajectory.t.empty();
+  py::dict result;
+  const std::string model_source = cli::scene_model_source(scene);
+  result["summary"] = cli::summary_json(scene, summary, trajectory, Certificate{}, model_source).dump();
+  result["stopped_by_callback"] = stopped_by_callback;
+  result["t"] = vector(trajectory.t);
+  result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
+  std::vector<double> p0, pN;
+  if (on_grid) {
+    const BoundaryMomenta momenta = boundary_momenta(scene.problem, trajectory);
+    p0 = momenta.p0;
+    pN = momenta.pN;
+  }
+  result["p0"] = vector(p0);
+  result["pN"] = vector(pN);
+  const std::size_t n = summary.history.size();
+  std::vector<double> it(n), N(n), res(n), act(n), sec(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    it[i] = static_cast<double>(summary.history[i].iteration);
+    N[i] = summary.history[i].N;
+    res[i] = summary.history[i].residual;
+    act[i] = summary.history[i].action;
+    sec[i] = summary.history[i].seconds;
+  }
+  py::dict history;
+  history["iteration"] = vector(it).attr("astype")("int64");
+  history["N"] = vector(N).attr("astype")("int64");
+  history["residual"] = vector(res);
+  history["action"] = vector(act);
+  history["seconds"] = vector(sec);
+  result["history"] = history;
+  return result;
+}
+
+/** `pardel check`: the certificate, residual and action at a trajectory (the scene's guess when
+ *  q is None), as JSON text in the layout of `pardel check --json`. */
+std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
+  Trajectory trajectory = initial_trajectory(scene, q, t);
+  if (!q.is_none()) scene.problem.N = trajectory.N;
+  Certificate certificate;
+  double residual = 0, action = 0;
+  {
+    py::gil_scoped_release release;
+    certificate = certify(scene.problem, trajectory, scene.options.threads);
+    residual = residual_norm(scene.problem, trajectory);
+    action = discrete_action(scene.problem, trajectory);
+  }
+  nlohmann::ordered_json j;
+  j["trajectory"] = q.is_none() ? "initial guess" : "given";
+  j["N"] = trajectory.N;
+  j["residual"] = residual;
+  j["action"] = action;
+  j["certificate"] = cli::certificate_json(certificate, static_cast<std::size_t>(-1));
+  return j.dump();
+}
+
+/** The kernels of a model at one interval (what `pardel kernels` prints). */
+py::dict kernels(const ModelHandle& handle, const std::string& discretization, double h, double t0, double t1,
+                 const std::vector<double>& q0, const std::vector<double>& q1, const std::vector<double>& params) {
+  const pardel_model& model = *handle.model;
+  const pardel_discretization* disc = find_discretization(model, discretization);
+  if (!disc) throw InputError(fmt::format("unknown discretization '{}' for model {}", discretization, model.name));
+  const std::size_t m = static_cast<std::size_t>(model.dim);
+  if (q0.size() != m || q1.size() != m)
+    throw InputError(fmt::format("q0 and q1 need {} values each (model {} has dim {})", m, model.name, m));
+  if (params.size() != static_cast<std::size_t>(model.nparams))
+    throw InputError(fmt::format("params: {} values given; model {} has {}", params.size(), model.name, model.nparams));
+  double Ld = 0;
+  std::vector<double> D1(m), D2(m), D11(m * m), D12(m * m), D22(m * m);
+  disc->full(h, t0, t1, q0.data(), q1.data(), params.data(), &Ld, D1.data(), D2.data(), D11.data(), D12.data(),
+             D22.data());
+  py::dict out;
+  out["Ld"] = Ld;
+  out["D1"] = vector(D1);
+  out["D2"] = vector(D2);
+  out["D11"] = matrix(D11, m, m);
+  out["D12"] = matrix(D12, m, m);
+  out["D22"] = matrix(D22, m, m);
+  return out;
+}
+
+py::dict model_info(const ModelHandle& handle) {
+  const pardel_model& m = *handle.model;
+  py::dict out;
+  out["name"] = m.name;
+  out["source"] = m.source ? m.source : "";
+  out["order"] = m.order;
+  out["ncoords"] = m.ncoords;
+  out["dim"] = m.dim;
+  out["coords"] = std::vector<std::string>(m.coords, m.coords + m.ncoords);
+  py::dict params;
+  for (int i = 0; i < m.nparams; ++i) params[py::str(m.param_names[i])] = m.param_defaults[i];
+  out["params"] = params;
+  std::vector<std::string> discs;
+  for (int i = 0; i < m.ndiscretizations; ++i) discs.push_back(m.discretizations[i].name);
+  out["discretizations"] = discs;
+  out["has_clock"] = m.clock != nullptr;
+  out["time_dependent"] = m.time_dependent != 0;
+  return out;
+}
+
+py::dict scene_info(const Scene& s) {
+  py::dict out;
+  out["path"] = s.path;
+  out["model"] = ModelHandle{s.model};
+  out["model_spec"] = s.model_spec;
+  out["discretization"] = s.discretization;
+  std::vector<double> params = s.problem.params;
+  py::dict named;
+  for (int i = 0; i < s.model->nparams && static_cast<std::size_t>(i) < params.size(); ++i)
+    named[py::str(s.model->param_names[i])] = params[static_cast<std::size_t>(i)];
+  out["params"] = named;
+  out["t0"] = s.problem.t0;
+  out["T"] = s.problem.T;
+  out["N"] = s.problem.N;
+  out["q0"] = vector(s.problem.q0);
+  out["qN"] = vector(s.problem.qN);
+  py::list knots;
+  for (const Knot& k : s.problem.knots) knots.append(py::make_tuple(k.t, vector(k.q)));
+  out["knots"] = knots;
+  out["clock"] = cli::to_string(s.problem.clock);
+  out["method"] = to_string(s.options.method);
+  out["tol"] = s.options.tol;
+  out["rtol"] = s.options.rtol;
+  out["max_iterations"] = s.options.max_iterations;
+  out["threads"] = s.options.threads;
+  out["output_dir"] = s.output_dir;
+  return out;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_pardel, m) {
+  m.doc() = "pardel's compiled core: models, scenes and solves (use the package `pardel`)";
+
+  static py::exception<InputError> input_error(m, "PardelError", PyExc_ValueError);
+  static py::exception<SceneError> scene_error(m, "SceneError", input_error.ptr());
+  static py::exception<ModelLoadError> model_error(m, "ModelError", input_error.ptr());
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const SceneError& e) {
+      scene_error(e.what());
+    } catch (const ModelLoadError& e) {
+      model_error(e.what());
+    } catch (const InputError& e) {
+      input_error(e.what());
+    }
+  });
+
+  py::class_<ModelHandle>(m, "Model")
+      .def_property_readonly("name", [](const ModelHandle& h) { return std::string(h.model->name); })
+      .def("info", &model_info)
+      .def("__eq__", [](const ModelHandle& a, const ModelHandle& b) { return a.model == b.model; })
+      .def("__hash__", [](const ModelHandle& h) { return std::hash<const void*>()(h.model); });
+
+  py::class_<Scene>(m, "Scene").def("info", &scene_info);
+
+  m.def("bundled_models", &bundled_names, "The names of the models compiled into this module.");
+  m.def("can_compile_lag_files", &pardel::can_compile_lag_files);
+  m.def("load_model", &load_model, py::arg("spec"));
+  m.def("scene_from_arguments", &scene_from_arguments, py::arg("model"), py::arg("arguments"));
+  m.def("load_scene", &load_scene, py::arg("path"), py::arg("overrides"));
+  m.def("solve_scene", &solve_scene, py::arg("scene"), py::arg("guess"), py::arg("guess_t"), py::arg("on_iteration"),
+        py::arg("threads"));
+  m.def("check_scene", &check_scene, py::arg("scene"), py::arg("q"), py::arg("t"));
+  m.def("kernels", &kernels, py::arg("model"), py::arg("discretization"), py::arg("h"), py::arg("t0"), py::arg("t1"),
+        py::arg("q0"), py::arg("q1"), py::arg("params"));
+}

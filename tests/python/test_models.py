@@ -1,0 +1,71 @@
+"""Models from Python: bundled names, .lag files and .lag text (compiled through the model loader),
+their description, kernels checked against finite differences of Ld, and .lag errors raised with
+FILE:LINE:COL as the command line prints them."""
+import numpy as np
+import pytest
+
+import pardel
+
+
+def test_bundled_names():
+    names = pardel.models()
+    assert "fuel_nav" in names
+    m = pardel.model("fuel_nav")
+    assert m.coords == ["x", "y"] and m.order == 1 and m.dim == 2
+
+
+def test_lag_text_and_file_give_the_same_model(spring_lag, tmp_path):
+    from_text = pardel.model(spring_lag)
+    path = tmp_path / "spring.lag"
+    path.write_text(spring_lag)
+    from_file = pardel.model(str(path))
+    assert from_text.name == from_file.name == "aniso_spring"
+    assert from_text.params == {"a": 1.5, "b": 0.7}
+    assert from_text.discretizations == ["trapezoid", "midpoint"]
+    r1 = pardel.solve(from_text, q0=[0, 0], qN=[1, 2], T=1, N=10)
+    r2 = pardel.solve(path, q0=[0, 0], qN=[1, 2], T=1, N=10)
+    np.testing.assert_array_equal(r1.q, r2.q)
+
+
+def test_kernels_match_finite_differences(spring_lag):
+    q0, q1, h = [0.3, -0.2], [0.5, 0.1], 0.1
+    k = pardel.kernels(spring_lag, "midpoint", h, 0.0, h, q0, q1, params={"a": 2.0})
+
+    def Ld(a, b):
+        return pardel.kernels(spring_lag, "midpoint", h, 0.0, h, a, b, params={"a": 2.0})["Ld"]
+
+    eps = 1e-6
+    for i in range(2):
+        d = np.zeros(2)
+        d[i] = eps
+        D1 = (Ld(q0 + d, q1) - Ld(q0 - d, q1)) / (2 * eps)
+        D2 = (Ld(q0, q1 + d) - Ld(q0, q1 - d)) / (2 * eps)
+        assert k["D1"][i] == pytest.approx(D1, rel=1e-6, abs=1e-8)
+        assert k["D2"][i] == pytest.approx(D2, rel=1e-6, abs=1e-8)
+    # midpoint of L: Ld = |q1 - q0|^2/(2h) - h (a^2 xm^2 + b^2 ym^2)/2
+    xm, ym = (q0[0] + q1[0]) / 2, (q0[1] + q1[1]) / 2
+    expected = ((q1[0] - q0[0]) ** 2 + (q1[1] - q0[1]) ** 2) / (2 * h) - h * (4 * xm ** 2 + 0.49 * ym ** 2) / 2
+    assert k["Ld"] == pytest.approx(expected, rel=1e-13)
+    assert k["D11"].shape == (2, 2)
+
+
+def test_invalid_lag_text_names_file_line_and_column(tmp_path):
+    bad = "model broken\norder 1\ncoords x\nL = 1/2*x'^2 +* x\n"
+    with pytest.raises(pardel.ModelError) as info:
+        pardel.model(bad)
+    message = str(info.value)
+    assert message.splitlines()[0].startswith(pardel.lag_cache_dir())
+    assert ".lag:4:" in message and "error:" in message
+
+
+def test_invalid_lag_file_in_solve_is_a_scene_error(tmp_path):
+    path = tmp_path / "typo.lag"
+    path.write_text("model typo\norder 1\ncoords x\nL = 1/2*x'^2 - sinn(x)\n")
+    with pytest.raises(pardel.PardelError) as info:
+        pardel.solve(str(path), q0=[0], qN=[1], T=1, N=10)
+    assert "%s:4:" % path in str(info.value)
+
+
+def test_unknown_model_lists_the_compiled_ones():
+    with pytest.raises(pardel.ModelError, match=r"unknown model 'fuel_nab' \(compiled models: .*fuel_nav"):
+        pardel.model("fuel_nab")

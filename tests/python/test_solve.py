@@ -1,0 +1,104 @@
+"""pardel.solve on .lag text: the answer is the exact solution of the discrete Euler-Lagrange
+recursion, approaches the continuous one at second order, has the documented shapes, and reports
+momenta, the point's inertia and smallest Hessian eigenvalues, the cost and the history."""
+import math
+
+import numpy as np
+import pytest
+
+import pardel
+
+A, B, T = 1.5, 0.7, 2.0
+
+
+@pytest.mark.parametrize("discretization", ["trapezoid", "midpoint"])
+def test_exact_discrete_solution(spring_lag, exact, discretization):
+    N = 40
+    r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=N, discretization=discretization)
+    assert r.status == "converged"
+    assert r.q.shape == (N + 1, 2)
+    assert r.t.shape == (N + 1,)
+    np.testing.assert_allclose(r.t, np.linspace(0, T, N + 1), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(r.q[:, 0], exact(A, T, N, 1.0, discretization), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(r.q[:, 1], exact(B, T, N, 2.0, discretization), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(r.coordinate("y"), r.q[:, 1])
+
+
+def test_second_order_convergence_to_the_continuous_solution(spring_lag):
+    def error(N):
+        r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=N)
+        x = np.sin(A * r.t) / math.sin(A * T)
+        return np.abs(r.q[:, 0] - x).max()
+
+    e = [error(N) for N in (20, 40, 80)]
+    assert e[0] < 0.2
+    for coarse, fine in zip(e, e[1:]):
+        assert 3.5 < coarse / fine < 4.5
+
+
+def test_params_by_name_and_by_position(spring_lag, exact):
+    N = 30
+    by_name = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 1], T=T, N=N, params={"b": 1.1})
+    by_position = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 1], T=T, N=N, params=[1.5, 1.1])
+    np.testing.assert_allclose(by_name.q[:, 1], exact(1.1, T, N, 1.0, "trapezoid"), atol=1e-10)
+    np.testing.assert_array_equal(by_name.q, by_position.q)
+    np.testing.assert_allclose(by_name.q[:, 0], exact(A, T, N, 1.0, "trapezoid"), atol=1e-10)
+
+
+def test_boundary_momenta_approach_the_continuous_velocities(spring_lag):
+    r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=200)
+    assert r.p0.shape == (2,) and r.pN.shape == (2,)
+    v0 = np.array([A / math.sin(A * T), 2 * B / math.sin(B * T)])
+    vT = np.array([A * math.cos(A * T) / math.sin(A * T), 2 * B * math.cos(B * T) / math.sin(B * T)])
+    np.testing.assert_allclose(r.p0, v0, rtol=1e-3)
+    np.testing.assert_allclose(r.pN, vT, rtol=1e-3)
+
+
+def test_summary_fields(spring_lag):
+    N = 50
+    r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=N)
+    # A T = 3 < pi and B T < pi: the Hessian of the action is positive definite, N - 1 free nodes.
+    assert r.point["kind"] == "minimum"
+    assert r.point["inertia"] == {"positive": 2 * (N - 1), "negative": 0, "zero": 0}
+    assert r.cost_name == "action"
+    assert r.cost == pytest.approx(r.action)
+    assert r.iterations >= 1 and r.residual <= r.summary["tolerance"]
+    assert set(r.history) == {"iteration", "N", "residual", "action", "seconds"}
+    assert len(r.history["residual"]) >= 1 and r.history["N"][-1] == N
+    assert r.summary["model"] == "aniso_spring"
+
+
+def test_smallest_eigenvalues_of_the_hessian(spring_lag):
+    # Trapezoid: the Hessian is diagonal per coordinate, tridiag(-1/h, 2/h - h w^2, -1/h), with
+    # eigenvalues (2 - 2 cos(pi j / N)) / h - h w^2, j = 1..N-1, for w = a and w = b.
+    N = 50
+    h = T / N
+    r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=N)
+    exact = sorted((2 - 2 * math.cos(math.pi * j / N)) / h - h * w * w for j in range(1, N) for w in (A, B))
+    assert r.point["lambda_min"] == pytest.approx(exact[0], rel=1e-8)
+    assert r.point["lambda_next"] == pytest.approx(exact[1], rel=1e-3)
+    assert r.point["lambda_next"] >= exact[1] * (1 - 1e-12)
+
+
+def test_guess_array_and_previous_result(spring_lag):
+    coarse = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=20)
+    fine = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=40, guess=coarse)
+    direct = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=40)
+    np.testing.assert_allclose(fine.q, direct.q, atol=1e-10)
+    with pytest.raises(pardel.PardelError, match=r"guess: shape \(41, 3\)"):
+        pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=40, guess=np.zeros((41, 3)))
+
+
+def test_on_iteration_can_stop_the_solve(spring_lag):
+    seen = []
+
+    def stop_after_five(iteration, N, residual, action):
+        seen.append(iteration)
+        return len(seen) < 5
+
+    r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=200, method="jacobi-newton",
+                     on_iteration=stop_after_five)
+    assert r.status == "interrupted"
+    assert r.stopped_by_callback
+    assert len(seen) == 5
+    assert r.q.shape == (201, 2)
