@@ -13,6 +13,7 @@
 
 #include "assessment.hpp"
 #include "engine.hpp"
+#include "iteration.hpp"
 
 namespace pardel {
 namespace {
@@ -71,15 +72,18 @@ std::vector<int> refinement_levels(const Problem& problem, const Options& option
   return levels;
 }
 
-class Driver {
+/** Owns the context of a one-process solve (a base, so that it exists before Iteration's). */
+struct OwnedContext {
+  Context owned_ctx;
+  detail::OneProcess one_process;
+};
+
+/** A solve in one process: the levels of refinement, resume, capture and the result around the
+ *  iteration at each level (iteration.hpp). */
+class Driver : private OwnedContext, public detail::Iteration {
  public:
   Driver(const Problem& problem, const Options& options, detail::Method_& method, Summary& summary)
-      : problem_(problem), options_(options), method_(method), s_(summary),
-        start_(std::chrono::steady_clock::now()) {}
-
-  double seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
+      : detail::Iteration(options, method, one_process, owned_ctx, summary), problem_(problem) {}
 
   /** Levels up to N allocate their arrays for N at once (Context::reserve_N). */
   void reserve(int N) { ctx_.reserve_N = N; }
@@ -141,7 +145,7 @@ class Driver {
     best_residual_ = st.best_residual;
     best_iteration_ = st.best_iteration;
     have_initial_ = st.have_initial_residual;
-    level_ = LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
+    level_ = detail::LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
                            st.level_checkpoint_residual};
     resumed_level_ = true;
     checked_regular_ = true;
@@ -188,181 +192,6 @@ class Driver {
     st.history = s_.history;
   }
 
-  /** Iterates at the current level. Returns true when an intermediate level has settled; on the
-   *  last level (or on any failure) fills the summary's termination and returns false. */
-  bool run_level(bool last) {
-    if (!resumed_level_) level_ = LevelCounters{};
-    resumed_level_ = false;
-    long& level_it = level_.level_it;
-    long& since_clock = level_.since_clock;
-    double& r_level0 = level_.r_level0;
-    double& r_checkpoint = level_.r_checkpoint;
-    const bool clocked = problem_.clock != ClockMode::none;
-    for (;;) {
-      if (clocked && since_clock >= options_.clock_update_every) {
-        detail::update_times(ctx_, ctx_.q);
-        method_.times_changed();
-        since_clock = 0;
-      }
-      int bad = method_.evaluate(ctx_);
-      if (bad >= 0) return non_finite_residual(bad);
-      double r = ctx_.residual;
-      if (clocked && r <= target_residual() && since_clock > 0) {
-        // Declare convergence only with node times consistent with this trajectory.
-        detail::update_times(ctx_, ctx_.q);
-        method_.times_changed();
-        since_clock = 0;
-        bad = method_.evaluate(ctx_);
-        if (bad >= 0) return non_finite_residual(bad);
-        r = ctx_.residual;
-      }
-      if (level_it == 0) r_level0 = r;
-      if (!have_initial_) {
-        r_initial_ = r;
-        have_initial_ = true;
-      }
-      last_good_residual_ = r;
-      if (should_record()) {
-        if (!record()) {
-          finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
-          return false;
-        }
-      }
-      const double target = target_residual();
-      const bool at_target = r <= target && method_.accept_stop(ctx_, last);
-      if (last && at_target) {
-        finish(Termination::converged, converged_message(r, target));
-        return false;
-      }
-      if (!last && options_.method == Method::newton) {
-        // Nested iteration: a coarse level is solved to the tolerance (quadratic convergence makes
-        // the last digits cheap), so that the next level can start from a solution.
-        if (at_target) return true;
-      } else if (!last) {
-        if (r <= std::max(target, options_.refine_settle * r_level0)) return true;
-        if (level_it > 0 && level_it % 50 == 0) {
-          if (r > 0.99 * r_checkpoint) return true;  // stagnating: less than 1% over 50 iterations
-          r_checkpoint = r;
-        }
-      }
-      // Stalled: at the round-off level of the residual and no 1% improvement in 200 iterations.
-      if (r < 0.99 * best_residual_) {
-        best_residual_ = r;
-        best_iteration_ = iteration_;
-      }
-      // At the tolerance, but the method would not stop (a saddle it tried to leave) and has found
-      // nothing better in 200 iterations: this point is the answer.
-      if (r <= target && iteration_ - best_iteration_ >= 200) return answer_at_tolerance(last, r, target);
-      if (r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200) {
-        finish(Termination::stalled,
-               format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has not "
-                      "improved in 200 iterations; tol %.3g cannot be reached in double precision",
-                      r, ctx_.residual_floor, target));
-        return false;
-      }
-      if (iteration_ >= options_.max_iterations) {
-        finish(Termination::max_iterations,
-               format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
-                      static_cast<double>(options_.max_iterations), r, target));
-        return false;
-      }
-      if (iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_) {
-        finish(Termination::diverged, format("DEL residual %.3g grew beyond divergence_factor x initial residual "
-                                             "%.3g at iteration %.0f",
-                                             r, r_initial_, static_cast<double>(iteration_)));
-        return false;
-      }
-      const detail::StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
-      if (!outcome.ok()) {
-        // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer.
-        if (outcome.failure == Termination::stalled && r <= target) return answer_at_tolerance(last, r, target);
-        finish(outcome.failure, outcome.message);
-        return false;
-      }
-      const int node = outcome.next_checked ? outcome.next_non_finite_node
-                                            : detail::first_non_finite_node(ctx_, ctx_.q_next);
-      if (node >= 0) {
-        finish(Termination::non_finite,
-               "non-finite value at node " + std::to_string(node) + " in iteration " +
-                   std::to_string(iteration_ + 1) + "; the last finite iterate is returned");
-        return false;
-      }
-      double qmax = outcome.next_max_abs;
-      if (!outcome.next_checked)
-        for (double v : ctx_.q_next) qmax = std::max(qmax, std::fabs(v));
-      if (qmax > 1e150) {
-        finish(Termination::diverged, format("iterates exploded (max |q| = %.3g) in iteration %.0f", qmax,
-                                             static_cast<double>(iteration_ + 1)));
-        return false;
-      }
-      std::swap(ctx_.q, ctx_.q_next);
-      if (!outcome.next_evaluated) ctx_.evaluated = detail::Evaluated::nothing;
-      ++iteration_;
-      ++level_it;
-      ++since_clock;
-    }
-  }
-
-  /** The iterate at the tolerance is this level's answer (the point assessment says what it is):
-   *  on to the next level (true), or the solve has converged (false). */
-  bool answer_at_tolerance(bool last, double r, double target) {
-    if (!last) return true;
-    finish(Termination::converged, converged_message(r, target));
-    return false;
-  }
-
-  /** The residual that counts as converged at the current iterate (Options::rtol or tol). */
-  double target_residual() const { return detail::target_residual(options_, ctx_); }
-
-  std::string converged_message(double r, double target) const {
-    if (options_.tol > 0) return format("DEL residual %.3g <= tol %.3g", r, target);
-    return format("DEL residual %.3g <= %.3g = max(rtol x scale of the DEL terms %.3g, 10 x round-off level)", r,
-                  target, ctx_.residual_scale);
-  }
-
-  bool non_finite_residual(int node) {
-    std::string msg = "non-finite DEL residual at node " + std::to_string(node) + " in iteration " +
-                      std::to_string(iteration_);
-    if (iteration_ > 0) {
-      std::swap(ctx_.q, ctx_.q_next);  // back to the last finite iterate
-      ctx_.evaluated = detail::Evaluated::nothing;
-      ctx_.residual = last_good_residual_;
-      msg += "; the last finite iterate (iteration " + std::to_string(iteration_ - 1) + ") is returned";
-      --iteration_;
-    } else {
-      msg += " (the initial guess)";
-    }
-    finish(Termination::non_finite, msg);
-    return false;
-  }
-
-  bool should_record() {
-    if (iteration_ < next_record_) return false;
-    next_record_ = detail::next_history_record(iteration_, options_.history_every, s_.history.size());
-    return true;
-  }
-
-  bool record() {
-    IterationRecord rec;
-    rec.iteration = iteration_;
-    rec.N = ctx_.N;
-    rec.residual = ctx_.residual;
-    if (!ctx_.action_known) {
-      ctx_.action = detail::action_at(ctx_, ctx_.q);
-      ctx_.action_known = true;
-    }
-    rec.action = ctx_.action;
-    rec.seconds = seconds();
-    s_.history.push_back(rec);
-    if (options_.on_iteration) return options_.on_iteration(rec);
-    return true;
-  }
-
-  void finish(Termination termination, std::string message) {
-    s_.termination = termination;
-    s_.message = std::move(message);
-  }
-
   void write_result(Trajectory& out) {
     out.N = ctx_.N;
     out.dim = ctx_.dim;
@@ -387,29 +216,10 @@ class Driver {
     s_.wall_seconds = seconds();
   }
 
-  Context& context() { return ctx_; }
-
  private:
   const Problem& problem_;
-  const Options& options_;
-  detail::Method_& method_;
-  Summary& s_;
-  std::chrono::steady_clock::time_point start_;
-  Context ctx_;
   Trajectory resampled_;
-  /** Counters of the current level (members so that an interruption can capture them). */
-  struct LevelCounters {
-    long level_it = 0, since_clock = 0;
-    double r_level0 = 0, r_checkpoint = std::numeric_limits<double>::infinity();
-  };
-  LevelCounters level_;
-  bool resumed_level_ = false;
   bool checked_regular_ = false;
-  long iteration_ = 0, next_record_ = 0;
-  double r_initial_ = 0, last_good_residual_ = 0;
-  double best_residual_ = std::numeric_limits<double>::infinity();
-  long best_iteration_ = 0;
-  bool have_initial_ = false;
 };
 
 /**

@@ -2,8 +2,8 @@
  * @file distributed.cpp
  * The domain-decomposed solve (distributed.hpp): each rank builds a solve context over its own
  * nodes plus one halo node per neighbour (the halos are fixed in that context, so the seed's
- * Jacobi methods run on it unchanged), and a driver that mirrors the one-process driver of
- * solve.cpp step for step while taking every decision from values reduced over all ranks:
+ * Jacobi methods run on it unchanged), and runs the iteration of iteration.hpp, the one-process
+ * solve's, over a partition that takes every decision from values reduced over all ranks:
  * the residual and its round-off level by max (order-independent), the action by a sum in node
  * order, failures by the lowest failing node or rank. Node times under a clock are prefix sums
  * carried from rank to rank; Newton's block-tridiagonal solves (also those of hybrid) are
@@ -29,6 +29,7 @@
 
 #include "../assessment.hpp"
 #include "../engine.hpp"
+#include "../iteration.hpp"
 #include "../trust_region.hpp"
 #include "decomposition.hpp"
 #include "schur_solver.hpp"
@@ -512,103 +513,67 @@ class DistributedHybrid : public pardel::detail::Method_ {
 
 /** The one-process driver of solve.cpp on one level without a clock, every decision taken from
  *  values reduced over all ranks (so all ranks take the same branch). */
-class Driver {
+/** The nodes of this rank: reductions, agreement on failures and the halo exchange over all ranks. */
+class RankPartition final : public pardel::detail::Partition {
  public:
-  Driver(const Options& options, pardel::detail::Method_& method, Local& local, Summary& summary)
-      : options_(options), method_(method), local_(local), ctx_(local.ctx), s_(summary),
-        start_(std::chrono::steady_clock::now()) {}
-
-  double seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
-
-  void run() {
+  explicit RankPartition(Local& local) : local_(local) {}
+  void update_times(Context&) override { update_times_distributed(local_); }
+  int agree_on_residual(Context&, int local_bad) override { return globalize_residual(local_, local_bad); }
+  /** Whether no rank's iterate failed; otherwise `outcome` becomes the failure of the lowest failing rank. */
+  bool agree_on_outcome(StepOutcome& outcome) override {
     const Layout& L = local_.layout;
-    const MPI_Comm comm = local_.comm;
-    const bool clocked = ctx_.clock != ClockMode::none;
-    long since_clock = 0;
-    for (;;) {
-      if (clocked && since_clock >= options_.clock_update_every) {
-        update_times_distributed(local_);
-        method_.times_changed();
-        since_clock = 0;
-      }
-      int bad = globalize_residual(local_, method_.evaluate(ctx_));
-      if (bad >= 0) return non_finite_residual(bad);
-      double r = ctx_.residual;
-      if (clocked && r <= pardel::detail::target_residual(options_, ctx_) && since_clock > 0) {
-        // Declare convergence only with node times consistent with this trajectory.
-        update_times_distributed(local_);
-        method_.times_changed();
-        since_clock = 0;
-        bad = globalize_residual(local_, method_.evaluate(ctx_));
-        if (bad >= 0) return non_finite_residual(bad);
-        r = ctx_.residual;
-      }
-      if (!have_initial_) {
-        r_initial_ = r;
-        have_initial_ = true;
-      }
-      last_good_residual_ = r;
-      if (should_record() && !record()) {
-        return finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
-      }
-      const double target = pardel::detail::target_residual(options_, ctx_);
-      if (r <= target && method_.accept_stop(ctx_, true))
-        return finish(Termination::converged, format("DEL residual %.3g <= tolerance %.3g", r, target));
-      if (r < 0.99 * best_residual_) {
-        best_residual_ = r;
-        best_iteration_ = iteration_;
-      }
-      if (r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200) {
-        return finish(Termination::stalled,
-                      format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has "
-                             "not improved in 200 iterations; tol %.3g cannot be reached in double precision",
-                             r, ctx_.residual_floor, target));
-      }
-      if (iteration_ >= options_.max_iterations) {
-        return finish(Termination::max_iterations,
-                      format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
-                             static_cast<double>(options_.max_iterations), r, target));
-      }
-      if (iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_) {
-        return finish(Termination::diverged, format("DEL residual %.3g grew beyond divergence_factor x initial "
-                                                    "residual %.3g at iteration %.0f",
-                                                    r, r_initial_, static_cast<double>(iteration_)));
-      }
-      StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
-      if (!agree_on_outcome(outcome)) return finish(outcome.failure, outcome.message);
-      // Non-finite or exploding values anywhere end every rank.
-      const std::size_t d = static_cast<std::size_t>(ctx_.dim);
-      int node = INT_MAX;
-      double qmax = 0;
-      for (int g = L.first; g <= L.last; ++g) {
-        const double* v = ctx_.q_next.data() + static_cast<std::size_t>(L.local(g)) * d;
-        for (std::size_t i = 0; i < d; ++i) {
-          if (!std::isfinite(v[i]) && node == INT_MAX) node = g;
-          qmax = std::max(qmax, std::fabs(v[i]));
-        }
-      }
-      double in[2] = {-static_cast<double>(node), qmax}, out[2] = {0, 0};
-      MPI_Allreduce(in, out, 2, MPI_DOUBLE, MPI_MAX, comm);
-      node = static_cast<int>(-out[0]);
-      qmax = out[1];
-      if (node != INT_MAX) {
-        return finish(Termination::non_finite, "non-finite value at node " + std::to_string(node) + " in iteration " +
-                                                   std::to_string(iteration_ + 1) +
-                                                   "; the last finite iterate is returned");
-      }
-      if (qmax > 1e150) {
-        return finish(Termination::diverged, format("iterates exploded (max |q| = %.3g) in iteration %.0f", qmax,
-                                                    static_cast<double>(iteration_ + 1)));
-      }
-      std::swap(ctx_.q, ctx_.q_next);
-      detail::exchange_halos(L, ctx_.q.data(), ctx_.dim, comm);
-      if (!outcome.next_evaluated) ctx_.evaluated = Evaluated::nothing;
-      ++iteration_;
-      ++since_clock;
-    }
+    const int failing = detail::min_all(outcome.ok() ? L.ranks : L.rank, local_.comm);
+    if (failing == L.ranks) return true;
+    int code = static_cast<int>(outcome.failure);
+    MPI_Bcast(&code, 1, MPI_INT, failing, local_.comm);
+    std::string message = outcome.message;
+    if (L.rank == failing && L.has_left())
+      message += " (node numbers of rank " + std::to_string(L.rank) + ", whose local node 0 is node " +
+                 std::to_string(L.lo) + ")";
+    int length = static_cast<int>(message.size());
+    MPI_Bcast(&length, 1, MPI_INT, failing, local_.comm);
+    message.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(message.data(), length, MPI_CHAR, failing, local_.comm);
+    outcome.failure = static_cast<Termination>(code);
+    outcome.message = message;
+    return false;
   }
+
+  void check_next(const Context& ctx, const StepOutcome&, int* node, double* qmax) override {
+    const Layout& L = local_.layout;
+    const std::size_t d = static_cast<std::size_t>(ctx.dim);
+    int first = INT_MAX;
+    double m = 0;
+    for (int g = L.first; g <= L.last; ++g) {
+      const double* v = ctx.q_next.data() + static_cast<std::size_t>(L.local(g)) * d;
+      for (std::size_t i = 0; i < d; ++i) {
+        if (!std::isfinite(v[i]) && first == INT_MAX) first = g;
+        m = std::max(m, std::fabs(v[i]));
+      }
+    }
+    double in[2] = {-static_cast<double>(first), m}, out[2] = {0, 0};
+    MPI_Allreduce(in, out, 2, MPI_DOUBLE, MPI_MAX, local_.comm);
+    first = static_cast<int>(-out[0]);
+    *node = first == INT_MAX ? -1 : first;
+    *qmax = out[1];
+  }
+  void iterate_changed(Context& ctx) override {
+    detail::exchange_halos(local_.layout, ctx.q.data(), ctx.dim, local_.comm);
+  }
+  double action(Context& ctx) override { return global_action(local_, ctx.q); }
+  bool all(bool yes) override { return detail::all_true(yes, local_.comm); }
+  int global_N(const Context&) const override { return local_.layout.N; }
+
+ private:
+  Local& local_;
+};
+
+/** The distributed solve: one level (no refinement) of the shared iteration over this rank's nodes. */
+class Driver : public pardel::detail::Iteration {
+ public:
+  Driver(const Options& options, pardel::detail::Method_& method, RankPartition& partition, Local& local,
+         Summary& summary)
+      : pardel::detail::Iteration(options, method, partition, local.ctx, summary), local_(local) {}
 
   /** Fills the summary's numbers (the same on every rank) and gathers the iterate on rank 0. */
   void write_result(const Problem& problem, Trajectory& out) {
@@ -661,79 +626,7 @@ class Driver {
   }
 
  private:
-  /** Whether no rank's iterate failed; otherwise `outcome` becomes the failure of the lowest failing rank. */
-  bool agree_on_outcome(StepOutcome& outcome) {
-    const Layout& L = local_.layout;
-    const int failing = detail::min_all(outcome.ok() ? L.ranks : L.rank, local_.comm);
-    if (failing == L.ranks) return true;
-    int code = static_cast<int>(outcome.failure);
-    MPI_Bcast(&code, 1, MPI_INT, failing, local_.comm);
-    std::string message = outcome.message;
-    if (L.rank == failing && L.has_left())
-      message += " (node numbers of rank " + std::to_string(L.rank) + ", whose local node 0 is node " +
-                 std::to_string(L.lo) + ")";
-    int length = static_cast<int>(message.size());
-    MPI_Bcast(&length, 1, MPI_INT, failing, local_.comm);
-    message.resize(static_cast<std::size_t>(length));
-    MPI_Bcast(message.data(), length, MPI_CHAR, failing, local_.comm);
-    outcome.failure = static_cast<Termination>(code);
-    outcome.message = message;
-    return false;
-  }
-
-  void non_finite_residual(int node) {
-    std::string msg = "non-finite DEL residual at node " + std::to_string(node) + " in iteration " +
-                      std::to_string(iteration_);
-    if (iteration_ > 0) {
-      std::swap(ctx_.q, ctx_.q_next);
-      ctx_.evaluated = Evaluated::nothing;
-      ctx_.residual = last_good_residual_;
-      msg += "; the last finite iterate (iteration " + std::to_string(iteration_ - 1) + ") is returned";
-      --iteration_;
-    } else {
-      msg += " (the initial guess)";
-    }
-    finish(Termination::non_finite, msg);
-  }
-
-  bool should_record() {
-    if (iteration_ < next_record_) return false;
-    next_record_ = pardel::detail::next_history_record(iteration_, options_.history_every, s_.history.size());
-    return true;
-  }
-
-  bool record() {
-    IterationRecord rec;
-    rec.iteration = iteration_;
-    rec.N = local_.layout.N;
-    rec.residual = ctx_.residual;
-    if (!ctx_.action_known) {
-      ctx_.action = global_action(local_, ctx_.q);
-      ctx_.action_known = true;
-    }
-    rec.action = ctx_.action;
-    rec.seconds = seconds();
-    s_.history.push_back(rec);
-    const bool go_on = options_.on_iteration ? options_.on_iteration(rec) : true;
-    return detail::all_true(go_on, local_.comm);
-  }
-
-  void finish(Termination termination, std::string message) {
-    s_.termination = termination;
-    s_.message = std::move(message);
-  }
-
-  const Options& options_;
-  pardel::detail::Method_& method_;
   Local& local_;
-  Context& ctx_;
-  Summary& s_;
-  std::chrono::steady_clock::time_point start_;
-  long iteration_ = 0, next_record_ = 0;
-  double r_initial_ = 0, last_good_residual_ = 0;
-  double best_residual_ = std::numeric_limits<double>::infinity();
-  long best_iteration_ = 0;
-  bool have_initial_ = false;
 };
 
 std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, Local& local) {
@@ -792,8 +685,9 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
   std::unique_ptr<pardel::detail::Method_> method = make_method(options, local);
   if (problem.clock != ClockMode::none) update_times_distributed(local);
   method->reset(local.ctx);
-  Driver driver(options, *method, local, summary);
-  driver.run();
+  RankPartition partition(local);
+  Driver driver(options, *method, partition, local, summary);
+  driver.run_level(true);
   driver.write_result(problem, trajectory);
   // What the returned point is; the method's storage is released first, as in one process.
   method.reset();

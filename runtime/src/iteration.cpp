@@ -1,0 +1,234 @@
+/**
+ * @file iteration.cpp
+ * The iteration at one grid level shared by the one-process and the MPI solve: node-time updates
+ * under a clock, the history, and the stopping rules (converged, level settled, answer at the
+ * tolerance, stalled, max_iterations, diverged, non-finite, interrupted), each with its message.
+ */
+#include "iteration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+namespace pardel::detail {
+namespace {
+
+std::string format(const char* fmt, double a, double b = 0, double c = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+
+}  // namespace
+
+bool Iteration::run_level(bool last) {
+  if (!resumed_level_) level_ = LevelCounters{};
+  resumed_level_ = false;
+  const bool clocked = ctx_.clock != ClockMode::none;
+  for (;;) {
+    if (clocked && level_.since_clock >= options_.clock_update_every) {
+      partition_.update_times(ctx_);
+      method_.times_changed();
+      level_.since_clock = 0;
+    }
+    int bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
+    if (bad >= 0) return non_finite_residual(bad);
+    double r = ctx_.residual;
+    if (clocked && r <= target_residual() && level_.since_clock > 0) {
+      // Declare convergence only with node times consistent with this trajectory.
+      partition_.update_times(ctx_);
+      method_.times_changed();
+      level_.since_clock = 0;
+      bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
+      if (bad >= 0) return non_finite_residual(bad);
+      r = ctx_.residual;
+    }
+    if (level_.level_it == 0) level_.r_level0 = r;
+    if (!have_initial_) {
+      r_initial_ = r;
+      have_initial_ = true;
+    }
+    last_good_residual_ = r;
+    if (should_record() && !record()) {
+      finish(Termination::interrupted, "interrupted by on_iteration at iteration " + std::to_string(iteration_));
+      return false;
+    }
+    const double target = target_residual();
+    bool settled = false;
+    if (converged_at_tolerance(last, r, target, &settled) || intermediate_level_settled(last, r, target, &settled))
+      return settled;
+    if (r < 0.99 * best_residual_) {
+      best_residual_ = r;
+      best_iteration_ = iteration_;
+    }
+    if (answer_at_tolerance(last, r, target, &settled)) return settled;
+    if (stalled_at_round_off(r, target) || reached_max_iterations(r, target) || diverged(r)) return false;
+    StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
+    if (step_failed(outcome, last, r, target, &settled)) return settled;
+    std::swap(ctx_.q, ctx_.q_next);
+    partition_.iterate_changed(ctx_);
+    if (!outcome.next_evaluated) ctx_.evaluated = Evaluated::nothing;
+    ++iteration_;
+    ++level_.level_it;
+    ++level_.since_clock;
+  }
+}
+
+/** At the tolerance where the method accepts to stop (Newton not at a saddle): the last level
+ *  has converged; an intermediate level of Newton's nested iteration is solved. */
+bool Iteration::converged_at_tolerance(bool last, double r, double target, bool* settled) {
+  const bool at_target = r <= target && method_.accept_stop(ctx_, last);
+  if (!at_target) return false;
+  if (last) {
+    finish(Termination::converged, converged_message(r, target));
+    *settled = false;
+    return true;
+  }
+  // Nested iteration: a coarse level is solved to the tolerance (quadratic convergence makes the
+  // last digits cheap), so that the next level can start from a solution.
+  if (options_.method != Method::newton) return false;
+  *settled = true;
+  return true;
+}
+
+/** A coarse level of the other methods' refinement: its residual fell by refine_settle, or it
+ *  stagnates (less than 1% over 50 iterations). */
+bool Iteration::intermediate_level_settled(bool last, double r, double target, bool* settled) {
+  if (last || options_.method == Method::newton) return false;
+  *settled = true;
+  if (r <= std::max(target, options_.refine_settle * level_.r_level0)) return true;
+  if (level_.level_it > 0 && level_.level_it % 50 == 0) {
+    if (r > 0.99 * level_.r_checkpoint) return true;
+    level_.r_checkpoint = r;
+  }
+  *settled = false;
+  return false;
+}
+
+/** At the tolerance, but the method would not stop (a saddle it tried to leave) and has found
+ *  nothing better in 200 iterations: this point is the answer (the point assessment says what
+ *  it is). */
+bool Iteration::answer_at_tolerance(bool last, double r, double target, bool* settled) {
+  if (!(r <= target && iteration_ - best_iteration_ >= 200)) return false;
+  *settled = !last;
+  if (last) finish(Termination::converged, converged_message(r, target));
+  return true;
+}
+
+/** At the round-off level of the residual and no 1% improvement in 200 iterations. */
+bool Iteration::stalled_at_round_off(double r, double target) {
+  if (!(r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200)) return false;
+  finish(Termination::stalled,
+         format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has not "
+                "improved in 200 iterations; tol %.3g cannot be reached in double precision",
+                r, ctx_.residual_floor, target));
+  return true;
+}
+
+bool Iteration::reached_max_iterations(double r, double target) {
+  if (iteration_ < options_.max_iterations) return false;
+  finish(Termination::max_iterations, format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
+                                             static_cast<double>(options_.max_iterations), r, target));
+  return true;
+}
+
+bool Iteration::diverged(double r) {
+  if (!(iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_)) return false;
+  finish(Termination::diverged, format("DEL residual %.3g grew beyond divergence_factor x initial residual %.3g at "
+                                       "iteration %.0f",
+                                       r, r_initial_, static_cast<double>(iteration_)));
+  return true;
+}
+
+bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double target, bool* settled) {
+  StepOutcome outcome = step;
+  *settled = false;
+  if (!partition_.agree_on_outcome(outcome)) {
+    // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer.
+    if (outcome.failure == Termination::stalled && r <= target) {
+      *settled = !last;
+      if (last) finish(Termination::converged, converged_message(r, target));
+      return true;
+    }
+    finish(outcome.failure, outcome.message);
+    return true;
+  }
+  int node = -1;
+  double qmax = 0;
+  partition_.check_next(ctx_, outcome, &node, &qmax);
+  if (node >= 0) {
+    finish(Termination::non_finite, "non-finite value at node " + std::to_string(node) + " in iteration " +
+                                        std::to_string(iteration_ + 1) + "; the last finite iterate is returned");
+    return true;
+  }
+  if (qmax > 1e150) {
+    finish(Termination::diverged, format("iterates exploded (max |q| = %.3g) in iteration %.0f", qmax,
+                                         static_cast<double>(iteration_ + 1)));
+    return true;
+  }
+  return false;
+}
+
+bool Iteration::non_finite_residual(int node) {
+  std::string msg =
+      "non-finite DEL residual at node " + std::to_string(node) + " in iteration " + std::to_string(iteration_);
+  if (iteration_ > 0) {
+    std::swap(ctx_.q, ctx_.q_next);  // back to the last finite iterate
+    partition_.iterate_changed(ctx_);
+    ctx_.evaluated = Evaluated::nothing;
+    ctx_.residual = last_good_residual_;
+    msg += "; the last finite iterate (iteration " + std::to_string(iteration_ - 1) + ") is returned";
+    --iteration_;
+  } else {
+    msg += " (the initial guess)";
+  }
+  finish(Termination::non_finite, msg);
+  return false;
+}
+
+std::string Iteration::converged_message(double r, double target) const {
+  if (options_.tol > 0) return format("DEL residual %.3g <= tol %.3g", r, target);
+  return format("DEL residual %.3g <= %.3g = max(rtol x scale of the DEL terms %.3g, 10 x round-off level)", r, target,
+                ctx_.residual_scale);
+}
+
+bool Iteration::should_record() {
+  if (iteration_ < next_record_) return false;
+  next_record_ = next_history_record(iteration_, options_.history_every, s_.history.size());
+  return true;
+}
+
+bool Iteration::record() {
+  IterationRecord rec;
+  rec.iteration = iteration_;
+  rec.N = partition_.global_N(ctx_);
+  rec.residual = ctx_.residual;
+  if (!ctx_.action_known) {
+    ctx_.action = partition_.action(ctx_);
+    ctx_.action_known = true;
+  }
+  rec.action = ctx_.action;
+  rec.seconds = seconds();
+  s_.history.push_back(rec);
+  const bool go_on = options_.on_iteration ? options_.on_iteration(rec) : true;
+  return partition_.all(go_on);
+}
+
+void Iteration::finish(Termination termination, std::string message) {
+  s_.termination = termination;
+  s_.message = std::move(message);
+}
+
+void OneProcess::update_times(Context& ctx) { detail::update_times(ctx, ctx.q); }
+
+void OneProcess::check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) {
+  *node = outcome.next_checked ? outcome.next_non_finite_node : first_non_finite_node(ctx, ctx.q_next);
+  *qmax = outcome.next_max_abs;
+  if (!outcome.next_checked)
+    for (double v : ctx.q_next) *qmax = std::max(*qmax, std::fabs(v));
+}
+
+double OneProcess::action(Context& ctx) { return action_at(ctx, ctx.q); }
+
+}  // namespace pardel::detail

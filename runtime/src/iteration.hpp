@@ -1,0 +1,118 @@
+/**
+ * @file iteration.hpp
+ * Internal: the iteration at one grid, written once for a solve in one process and for one over
+ * MPI ranks. A Partition says where the unknowns live (the trivial one: all here; the MPI one
+ * supplies reductions, agreement on failures and the halo exchange); Iteration runs a Method_ on
+ * it and ends it by named stopping rules, each setting the summary's status and message.
+ */
+#ifndef PARDEL_RUNTIME_ITERATION_HPP
+#define PARDEL_RUNTIME_ITERATION_HPP
+
+#include <chrono>
+#include <limits>
+#include <string>
+
+#include "engine.hpp"
+
+namespace pardel::detail {
+
+/** What the iteration needs from where the unknowns live. The defaults are those of one process. */
+class Partition {
+ public:
+  virtual ~Partition() = default;
+  /** Recomputes the node times of ctx from the clock at ctx.q. */
+  virtual void update_times(Context& ctx) = 0;
+  /** From this process's first node with a non-finite residual (-1: none) after an evaluation:
+   *  the lowest over all processes, with ctx.residual made the global one. */
+  virtual int agree_on_residual(Context& ctx, int local_bad) {
+    (void)ctx;
+    return local_bad;
+  }
+  /** Whether every process's step succeeded; if not, `outcome` becomes the failure of the lowest
+   *  failing one. */
+  virtual bool agree_on_outcome(StepOutcome& outcome) { return outcome.ok(); }
+  /** The first node with a non-finite value in ctx.q_next over all processes (-1: none) and the
+   *  largest |value| there. */
+  virtual void check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) = 0;
+  /** After ctx.q became the next iterate (the MPI partition exchanges halos). */
+  virtual void iterate_changed(Context& ctx) { (void)ctx; }
+  /** The discrete action at ctx.q over all processes. */
+  virtual double action(Context& ctx) = 0;
+  /** Whether every process answers yes. */
+  virtual bool all(bool yes) { return yes; }
+  /** The number of intervals of the whole grid (ctx.N is this process's). */
+  virtual int global_N(const Context& ctx) const { return ctx.N; }
+};
+
+/** The counters of one grid level (members so that an interruption can capture them). */
+struct LevelCounters {
+  long level_it = 0, since_clock = 0;
+  double r_level0 = 0, r_checkpoint = std::numeric_limits<double>::infinity();
+};
+
+/**
+ * Runs a method on one grid level until a stopping rule ends it. The counters are protected
+ * members: the drivers that derive from it set up levels, resume, capture and write results.
+ */
+class Iteration {
+ public:
+  Iteration(const Options& options, Method_& method, Partition& partition, Context& ctx, Summary& summary)
+      : options_(options), method_(method), partition_(partition), ctx_(ctx), s_(summary),
+        start_(std::chrono::steady_clock::now()) {}
+  virtual ~Iteration() = default;
+
+  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+  /** Iterates at the current level. Returns true when an intermediate level has settled; on the
+   *  last level (or on any failure) fills the summary's termination and returns false. */
+  bool run_level(bool last);
+
+  Context& context() { return ctx_; }
+  long iterations() const { return iteration_; }
+
+ protected:
+  // The stopping rules, in the order they are tried; each returns true when it ends the level
+  // (having set the summary or, on an intermediate level, settled it).
+  bool converged_at_tolerance(bool last, double r, double target, bool* settled);
+  bool intermediate_level_settled(bool last, double r, double target, bool* settled);
+  bool answer_at_tolerance(bool last, double r, double target, bool* settled);
+  bool stalled_at_round_off(double r, double target);
+  bool reached_max_iterations(double r, double target);
+  bool diverged(double r);
+  /** Ends the level on a method's failed step or a non-finite or exploding next iterate. */
+  bool step_failed(const StepOutcome& outcome, bool last, double r, double target, bool* settled);
+  bool non_finite_residual(int node);
+
+  /** The residual that counts as converged at the current iterate (Options::rtol or tol). */
+  double target_residual() const { return detail::target_residual(options_, ctx_); }
+  std::string converged_message(double r, double target) const;
+  bool should_record();
+  bool record();
+  void finish(Termination termination, std::string message);
+
+  const Options& options_;
+  Method_& method_;
+  Partition& partition_;
+  Context& ctx_;
+  Summary& s_;
+  std::chrono::steady_clock::time_point start_;
+  LevelCounters level_;
+  bool resumed_level_ = false;
+  long iteration_ = 0, next_record_ = 0;
+  double r_initial_ = 0, last_good_residual_ = 0;
+  double best_residual_ = std::numeric_limits<double>::infinity();
+  long best_iteration_ = 0;
+  bool have_initial_ = false;
+};
+
+/** The partition of a solve in one process: every node here. */
+class OneProcess final : public Partition {
+ public:
+  void update_times(Context& ctx) override;
+  void check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) override;
+  double action(Context& ctx) override;
+};
+
+}  // namespace pardel::detail
+
+#endif  // PARDEL_RUNTIME_ITERATION_HPP
