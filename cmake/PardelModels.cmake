@@ -1,7 +1,9 @@
-# pardel_add_model(<target> <file.lag> [DISCRETIZATIONS ...ignored...])
+# pardel_add_model(<target> <file.lag> [KERNELS_ONLY])
 #
 # Generates the kernels of a .lag model at build time (pardel-gen, then the Jinja2 render step)
-# and compiles them into <target>. The generated header <model>.hpp is put on <target>'s include
+# and compiles them into <target>, which is linked to pardel::runtime (pardel::solve and the rest of
+# pardel/pardel.hpp); KERNELS_ONLY links only the kernel ABI (the bundled-model library uses it).
+# The generated header <model>.hpp is put on <target>'s include
 # path; the model's descriptor is the C symbol `<model>_model` (see pardel/kernel_abi.h).
 # Editing the .lag, the generator or its templates regenerates exactly that model.
 #
@@ -35,6 +37,7 @@ function(pardel_source_name file out_var)
 endfunction()
 
 function(pardel_add_model target lag)
+  cmake_parse_arguments(PARSE_ARGV 2 _arg "KERNELS_ONLY" "" "")
   get_filename_component(lag "${lag}" ABSOLUTE)
   if(NOT EXISTS "${lag}")
     message(FATAL_ERROR "pardel_add_model: no such file: ${lag}")
@@ -64,6 +67,9 @@ function(pardel_add_model target lag)
   target_sources(${target} PRIVATE "${out_dir}/${model}.cpp")
   target_include_directories(${target} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
   target_link_libraries(${target} PUBLIC pardel::kernel_abi)
+  if(NOT _arg_KERNELS_ONLY)
+    target_link_libraries(${target} PUBLIC pardel::runtime)
+  endif()
   set_property(TARGET ${target} APPEND PROPERTY PARDEL_MODELS "${model}")
   set_property(TARGET ${target} APPEND PROPERTY PARDEL_GENERATED_FILES
                "${out_dir}/${model}.hpp" "${out_dir}/${model}.cpp")
