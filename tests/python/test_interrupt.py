@@ -10,6 +10,7 @@ import pardel
 
 def test_sigint_raises_keyboard_interrupt(spring_lag):
     seen = {"after": 0}
+    spring_lag = pardel.model(spring_lag)  # compiled before the timer starts
     timer = threading.Timer(0.3, lambda: signal.pthread_kill(threading.main_thread().ident, signal.SIGINT))
     timer.start()
     try:
@@ -28,6 +29,7 @@ def test_sigint_raises_keyboard_interrupt(spring_lag):
 def test_interrupt_main_raises_keyboard_interrupt(spring_lag):
     import _thread
 
+    spring_lag = pardel.model(spring_lag)  # compiled before the timer starts
     timer = threading.Timer(0.3, _thread.interrupt_main)
     timer.start()
     try:
