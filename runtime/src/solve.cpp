@@ -1,8 +1,9 @@
 /**
  * @file solve.cpp
- * The solve driver shared by every method: validation, coarse-to-fine refinement, node-time
- * updates under a clock, convergence and failure detection (non-finite values, divergence,
- * interruption), bounded history and the Summary. A method only supplies evaluate/iterate.
+ * The solve in one process, for every method: validation, coarse-to-fine refinement (levels,
+ * nested iteration's extrapolated starts), resume and warm starts, the result and the point
+ * assessment, around the iteration at each level (iteration.hpp: node-time updates, stopping
+ * rules, history). A method only supplies evaluate/iterate.
  */
 #include <algorithm>
 #include <chrono>
@@ -19,12 +20,6 @@ namespace pardel {
 namespace {
 
 using detail::Context;
-
-std::string format(const char* fmt, double a, double b = 0, double c = 0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c);
-  return buf;
-}
 
 /** Whether every knot lies on an interior node of the uniform grid with n intervals. */
 bool knots_on_grid(const Problem& problem, int n) {

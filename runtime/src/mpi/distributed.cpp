@@ -81,12 +81,6 @@ using pardel::detail::Evaluated;
 using pardel::detail::StepOutcome;
 using detail::Layout;
 
-std::string format(const char* fmt, double a, double b = 0, double c = 0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c);
-  return buf;
-}
-
 /** Everything a rank holds: its layout, its local context and the true constraint pattern of its
  *  nodes (the context marks the halo nodes fixed; `global_free` says which of their components are
  *  unknowns of the whole problem). */
