@@ -11,11 +11,13 @@
 #include <cstring>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 namespace pardel_codegen {
 namespace {
@@ -225,7 +227,11 @@ Line Reader::tokenize(int number) const {
       fail(number, t.col, "a prime (') must follow a coordinate name");
     } else {
       std::ostringstream msg;
-      if (c >= 0x20 && c < 0x7f) {
+      if (s.compare(i, 3, "\xef\xbb\xbf") == 0) {
+        msg << "unexpected byte-order mark (U+FEFF; only allowed as the first bytes of the file)";
+      } else if (c == '\r') {
+        msg << "carriage return without a line feed (lines must end with LF or CR LF)";
+      } else if (c >= 0x20 && c < 0x7f) {
         msg << "unexpected character '" << static_cast<char>(c) << "'";
       } else {
         msg << "unexpected byte 0x" << std::hex << static_cast<int>(c);
@@ -801,11 +807,24 @@ std::string lag_diagnostic(const std::string& filename, const std::string& sourc
 }
 
 LagModel parse_lag(const std::string& text, const std::string& filename) {
-  Reader reader(text, filename);
+  // Editors on some systems start UTF-8 files with a byte-order mark: skipped (columns count
+  // from the byte after it). A UTF-16 or UTF-32 file is refused by name rather than byte by byte.
+  const std::string_view bom = "\xef\xbb\xbf";
+  const bool has_bom = text.compare(0, bom.size(), bom) == 0;
+  if (text.compare(0, 2, "\xff\xfe") == 0 || text.compare(0, 2, "\xfe\xff") == 0 ||
+      text.compare(0, 4, std::string("\0\0\xfe\xff", 4)) == 0) {
+    const std::string first_line = text.substr(0, text.find('\n'));
+    const std::string message = "the file is UTF-16 or UTF-32 (it starts with a byte-order mark); save it as UTF-8";
+    throw LagError(lag_diagnostic(filename, first_line, 1, 1, message), 1, 1, message);
+  }
+  Reader reader(has_bom ? text.substr(bom.size()) : text, filename);
   return reader.read();
 }
 
 LagModel parse_lag_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw LagError(path + ":1:1: error: is a directory, not a .lag file", 1, 1, "is a directory, not a .lag file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw LagError(path + ":1:1: error: cannot read the file", 1, 1, "cannot read the file");
   std::ostringstream text;

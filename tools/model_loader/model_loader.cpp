@@ -3,10 +3,12 @@
 
 #include <dlfcn.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -32,6 +34,8 @@ bool looks_like_path(const std::string& s) {
 }
 
 std::string read_file(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw ModelLoadError("'" + path.string() + "' is a directory, not a .lag file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ModelLoadError("cannot read model file '" + path.string() + "'");
   std::ostringstream buf;
@@ -86,6 +90,19 @@ std::string trim(std::string s) {
 // temporary sibling folder and renamed into place.
 void build_into(const fs::path& lag, const fs::path& dir) {
   fs::create_directories(dir.parent_path());
+  // Temporary folders of this entry left by compiles that were killed (their process is gone).
+  const std::string prefix = dir.filename().string() + ".tmp.";
+  std::error_code listing;
+  for (fs::directory_iterator it(dir.parent_path(), listing); !listing && it != fs::directory_iterator();
+       it.increment(listing)) {
+    const std::string name = it->path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const long pid = std::atol(name.c_str() + prefix.size());
+    if (pid > 0 && pid != getpid() && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      std::error_code ignored;
+      fs::remove_all(it->path(), ignored);
+    }
+  }
   fs::path tmp = dir.parent_path() /
                  (dir.filename().string() + ".tmp." + std::to_string(getpid()) + "." +
                   std::to_string(reinterpret_cast<std::uintptr_t>(&dir) & 0xffff));
@@ -93,15 +110,18 @@ void build_into(const fs::path& lag, const fs::path& dir) {
   fs::create_directories(tmp);
   const fs::path log = tmp / "log.txt";
   const fs::path ir = tmp / "model.ir.json";
-  auto fail = [&](const std::string& what) {
+  // `what` heads the message, followed by the tool's output; a refusal of the generator is its
+  // FILE:LINE:COL diagnostic alone.
+  auto fail = [&](const std::string& what, bool details_only = false) {
     std::string details = fs::exists(log) ? trim(read_file(log)) : std::string();
     fs::remove_all(tmp);
-    throw ModelLoadError(details.empty() ? what : details);
+    if (details.empty()) throw ModelLoadError(what);
+    throw ModelLoadError(details_only ? details : what + ":\n" + details);
   };
   if (run_program({PARDEL_LOADER_GEN, lag.string(), "-o", ir.string(), "--source-name",
                    lag.filename().string()},
                   log) != 0)
-    fail("pardel-gen failed on " + lag.string());
+    fail("pardel-gen failed on " + lag.string(), true);
   if (run_program({PARDEL_LOADER_PYTHON, PARDEL_LOADER_RENDER, ir.string(), "--out-dir", tmp.string()},
                   log) != 0)
     fail("rendering the kernels of " + lag.string() + " failed");
@@ -114,7 +134,7 @@ void build_into(const fs::path& lag, const fs::path& dir) {
                    "-I" PARDEL_LOADER_ABI_INCLUDE, (tmp / (model + ".cpp")).string(), "-o",
                    (tmp / "model.so").string()},
                   log) != 0)
-    fail("compiling the kernels of " + lag.string() + " failed");
+    fail("compiling the kernels of " + lag.string() + " failed (" PARDEL_LOADER_CXX ")");
   std::ofstream(tmp / "model_name.txt") << model;
   std::error_code ec;
   fs::rename(tmp, dir, ec);
@@ -161,13 +181,43 @@ const pardel_model* resolve_model(const std::string& name_or_path) {
   const fs::path dir = cache_root() / hex;
   if (!fs::exists(dir / "model.so")) build_into(lag, dir);
 
-  const std::string model = trim(read_file(dir / "model_name.txt"));
-  void* handle = dlopen((dir / "model.so").c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (!handle) throw ModelLoadError(std::string("cannot load the compiled model: ") + dlerror());
-  auto* descriptor = static_cast<const pardel_model*>(dlsym(handle, (model + "_model").c_str()));
-  if (!descriptor) throw ModelLoadError("the compiled model has no symbol " + model + "_model");
-  if (descriptor->abi_version != PARDEL_KERNEL_ABI_VERSION)
-    throw ModelLoadError("the compiled model was built for another kernel ABI version");
+  // Loads the cache entry; on failure returns nullptr and says why.
+  auto load = [&dir](std::string* why) -> const pardel_model* {
+    std::ifstream name_file(dir / "model_name.txt");
+    std::string model;
+    std::getline(name_file, model);
+    model = trim(model);
+    if (model.empty()) {
+      *why = "the cache entry " + dir.string() + " has no model name";
+      return nullptr;
+    }
+    void* handle = dlopen((dir / "model.so").c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      *why = std::string("cannot load the compiled model: ") + dlerror();
+      return nullptr;
+    }
+    auto* descriptor = static_cast<const pardel_model*>(dlsym(handle, (model + "_model").c_str()));
+    if (!descriptor) {
+      *why = "the compiled model " + (dir / "model.so").string() + " has no symbol " + model + "_model";
+      return nullptr;
+    }
+    if (descriptor->abi_version != PARDEL_KERNEL_ABI_VERSION) {
+      *why = "the compiled model " + (dir / "model.so").string() + " was built for another kernel ABI version";
+      return nullptr;
+    }
+    return descriptor;
+  };
+  std::string why;
+  const pardel_model* descriptor = load(&why);
+  if (!descriptor) {
+    // A damaged entry (a truncated or deleted file, edited by hand or left by a full disk) is
+    // compiled again once rather than failing until the cache is cleared.
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+    build_into(lag, dir);
+    descriptor = load(&why);
+    if (!descriptor) throw ModelLoadError(why);
+  }
   loaded.emplace(key, descriptor);
   return descriptor;
 #endif

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -154,8 +155,37 @@ std::string checkpoint_json(const Checkpoint& checkpoint) {
                      Checkpoint::kVersion, fnv1a_hex(body), body);
 }
 
+namespace {
+
+/** The deepest nesting of arrays and objects in JSON text (brackets inside strings not counted). */
+std::size_t json_nesting(const std::string& text) {
+  std::size_t depth = 0, deepest = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      deepest = std::max(deepest, ++depth);
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return deepest;
+}
+
+}  // namespace
+
 Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
   const Reader rd(path);
+  // A checkpoint nests 5 levels deep; far deeper text would exhaust the stack when the body is
+  // dumped again for its checksum (200 000 levels crashed pardel), so it is refused before parsing.
+  constexpr std::size_t kMaxNesting = 64;
+  if (json_nesting(text) > kMaxNesting)
+    rd.fail(fmt::format("not a pardel checkpoint (JSON nested more than {} levels deep)", kMaxNesting));
   json file;
   try {
     file = json::parse(text);
@@ -266,6 +296,13 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
 
 Checkpoint read_checkpoint(const std::string& dir) {
   const std::string path = (std::filesystem::path(dir) / checkpoint_file_name()).string();
+  // Only a regular file: a directory would read as empty, a FIFO would block forever.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw CheckpointError(fmt::format("{}: error: not a regular file (a {}); a checkpoint is a file written by "
+                                      "pardel solve",
+                                      path, std::filesystem::is_directory(status) ? "directory" : "special file"));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw CheckpointError(fmt::format("{}: error: cannot open checkpoint: {}", path, std::strerror(errno)));
   std::ostringstream text;

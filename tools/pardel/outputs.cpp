@@ -2,8 +2,11 @@
 #include "outputs.hpp"
 
 #include <fmt/format.h>
+#include <fcntl.h>
 #include <spawn.h>
+#include <sys/file.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
@@ -11,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <utility>
 #include <vector>
 
 #include "pardel_cli/config.hpp"
@@ -19,6 +23,28 @@
 extern char** environ;
 
 namespace pardel::cli {
+namespace {
+
+/** An exclusive flock(2) on a folder for the lifetime of the object (best effort: where the
+ *  folder cannot be opened or the file system has no locks, nothing is locked). */
+class FolderLock {
+ public:
+  explicit FolderLock(const std::string& dir) : fd_(::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC)) {
+    if (fd_ < 0) return;
+    while (::flock(fd_, LOCK_EX) != 0 && errno == EINTR) {
+    }
+  }
+  ~FolderLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_;
+};
+
+}  // namespace
 
 double summed_clock(const Problem& problem, const Trajectory& trajectory) {
   const pardel_model& model = *problem.model;
@@ -190,11 +216,46 @@ SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, con
   nlohmann::ordered_json summary_doc =
       summary_json(scene, summary, trajectory, outputs.certificate, scene_model_source(scene));
   for (const auto& [key, value] : extra.items()) summary_doc[key] = value;
-  write_file_atomic((fs::path(out_dir) / "summary.json").string(), summary_doc.dump(2) + "\n");
-  if (outputs.have_trajectory) {
-    write_file_atomic((fs::path(out_dir) / "trajectory.csv").string(), trajectory_csv(*scene.model, trajectory));
+
+  // The three files are committed as a set. Each is first written to a temporary file beside it
+  // (a failure there leaves the previous outputs as they were); then, holding a lock on the folder
+  // so that two solves into one folder commit one after the other, summary.json is removed, the
+  // others are renamed into place and summary.json comes last. Whenever summary.json exists, the
+  // trajectory.csv and convergence.csv beside it are the ones it describes, even if the process
+  // is killed between two renames.
+  const std::string summary_path = (fs::path(out_dir) / "summary.json").string();
+  const std::string trajectory_path = (fs::path(out_dir) / "trajectory.csv").string();
+  const std::string convergence_path = (fs::path(out_dir) / "convergence.csv").string();
+  for (const std::string& path : {summary_path, trajectory_path, convergence_path}) remove_stale_temporaries(path);
+  std::vector<std::pair<std::string, std::string>> staged;  // temporary file, final name
+  auto discard = [&staged](std::size_t from) {
+    for (std::size_t i = from; i < staged.size(); ++i) std::remove(staged[i].first.c_str());
+  };
+  try {
+    if (outputs.have_trajectory)
+      staged.emplace_back(write_temporary(trajectory_path, trajectory_csv(*scene.model, trajectory)), trajectory_path);
+    staged.emplace_back(write_temporary(convergence_path, convergence_csv(summary)), convergence_path);
+    staged.emplace_back(write_temporary(summary_path, summary_doc.dump(2) + "\n"), summary_path);
+  } catch (...) {
+    discard(0);
+    throw;
   }
-  write_file_atomic((fs::path(out_dir) / "convergence.csv").string(), convergence_csv(summary));
+  const FolderLock lock(out_dir);
+  if (::unlink(summary_path.c_str()) != 0 && errno != ENOENT) {
+    const int err = errno;
+    discard(0);
+    throw std::runtime_error(fmt::format("{}: cannot replace: {}", summary_path, std::strerror(err)));
+  }
+  // Without a trajectory, an older trajectory.csv would not belong to the new summary.
+  if (!outputs.have_trajectory) ::unlink(trajectory_path.c_str());
+  for (std::size_t i = 0; i < staged.size(); ++i) {
+    try {
+      rename_into_place(staged[i].first, staged[i].second);
+    } catch (...) {
+      discard(i + 1);
+      throw;
+    }
+  }
   return outputs;
 }
 

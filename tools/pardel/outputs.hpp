@@ -62,7 +62,9 @@ struct SolveOutputs {
 /**
  * With `full_certificate`, certifies the returned trajectory (when there is one: a solve refused as
  * invalid input returns none; the summary's point assessment is always there), and writes summary.json (with the fields of `extra` appended), trajectory.csv and
- * convergence.csv into out_dir, each atomically.
+ * convergence.csv into out_dir as a set: written to temporary files first, then renamed into place
+ * under a lock on the folder, summary.json removed first and renamed last, so that a summary.json
+ * always describes the trajectory.csv and convergence.csv beside it.
  */
 SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                                  const std::string& out_dir, const nlohmann::ordered_json& extra = {},

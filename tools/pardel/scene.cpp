@@ -124,7 +124,8 @@ class SceneReader {
     if (source.begin.line > 0 && source.path && source.path->rfind("--set", 0) != 0) {
       return fmt::format("{}:{}:{}", file_, source.begin.line, source.begin.column);
     }
-    std::string prefix = dotted;
+    // An element (boundary.q0[1]) comes from wherever its array came from.
+    std::string prefix = dotted.substr(0, dotted.find('['));
     for (;;) {
       auto it = origins_.find(prefix);
       if (it != origins_.end()) return it->second;
@@ -391,6 +392,9 @@ void check_ascii_outside_strings(std::string_view text, const std::string& sourc
 
 Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
                   const ModelResolver& resolve, const std::vector<std::string>& model_names) {
+  // A UTF-8 byte-order mark, which some editors write, is skipped (the ASCII filter below would
+  // refuse it); columns then count from the byte after it.
+  if (text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3);
   check_ascii_outside_strings(text, source_name);
   toml::table root;
   try {
@@ -762,6 +766,9 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides, const ModelResolver& resolve,
                  const std::vector<std::string>& model_names) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw SceneError(fmt::format("{}: error: is a directory, not a scene file", path));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(fmt::format("{}: error: cannot open scene file", path));
   std::ostringstream text;

@@ -34,6 +34,18 @@ Trajectory read_trajectory_csv(const std::string& path, const pardel_model& mode
  *  readers never see a half-written file. Throws std::runtime_error naming the path on failure. */
 void write_file_atomic(const std::string& path, const std::string& content);
 
+/** The first half of write_file_atomic: writes `content` to PATH.tmp.PID beside `path`, flushed to
+ *  disk, and returns that name. Throws std::runtime_error naming the file on failure. */
+std::string write_temporary(const std::string& path, const std::string& content);
+
+/** The second half: renames the temporary file over `path` (removing it on failure, and throwing
+ *  std::runtime_error naming `path`). */
+void rename_into_place(const std::string& temporary, const std::string& path);
+
+/** Removes the temporary files PATH.tmp.PID of `path` whose process no longer runs (left behind by
+ *  a write that was killed, e.g. with SIGKILL, before its rename). */
+void remove_stale_temporaries(const std::string& path);
+
 /** Formats a double with 17 significant digits ("nan", "inf" and "-inf" when not finite). */
 std::string format_double(double value);
 
