@@ -44,11 +44,12 @@ struct Outcome {
   std::string output;      ///< stdout and stderr together
 };
 
-/** Starts pardel with `args`; `env` entries are NAME=VALUE to set or -NAME to remove. */
-inline pid_t start_pardel(const std::vector<std::string>& args, const fs::path& log,
-                          const std::vector<std::string>& env = {}) {
+/** Starts `program` with `args`; `env` entries are NAME=VALUE to set or -NAME to remove. */
+inline pid_t start_program(const std::string& program, const std::vector<std::string>& args, const fs::path& log,
+                           const std::vector<std::string>& env = {}) {
   const pid_t pid = ::fork();
   if (pid != 0) return pid;
+  ::setpgid(0, 0);  // its own process group, so that a hang is ended with everything it started
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (fd < 0) ::_exit(126);
   ::dup2(fd, 1);
@@ -65,14 +66,20 @@ inline pid_t start_pardel(const std::vector<std::string>& args, const fs::path& 
     }
   }
   std::vector<char*> argv;
-  argv.push_back(const_cast<char*>(PARDEL_CLI_PATH));
+  argv.push_back(const_cast<char*>(program.c_str()));
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  ::execv(PARDEL_CLI_PATH, argv.data());
+  ::execv(program.c_str(), argv.data());
   ::_exit(127);
 }
 
-/** Waits for a started pardel, killing it (SIGKILL) after `limit_s` seconds. */
+/** Starts pardel with `args`; `env` entries are NAME=VALUE to set or -NAME to remove. */
+inline pid_t start_pardel(const std::vector<std::string>& args, const fs::path& log,
+                          const std::vector<std::string>& env = {}) {
+  return start_program(PARDEL_CLI_PATH, args, log, env);
+}
+
+/** Waits for a started program, killing it and its process group (SIGKILL) after `limit_s` seconds. */
 inline Outcome finish_pardel(pid_t pid, const fs::path& log, int limit_s = 60) {
   Outcome o;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(limit_s);
@@ -82,7 +89,7 @@ inline Outcome finish_pardel(pid_t pid, const fs::path& log, int limit_s = 60) {
     if (r == pid) break;
     if (r < 0) return o;
     if (std::chrono::steady_clock::now() > deadline) {
-      ::kill(pid, SIGKILL);
+      ::kill(-pid, SIGKILL);
       ::waitpid(pid, &wstatus, 0);
       o.timed_out = true;
       break;

@@ -37,6 +37,12 @@ int run_distributed_solve(Scene& scene, Trajectory& trajectory, const Distribute
   std::signal(SIGTERM, previous_term);
   progress.finish();
   scene.options.on_iteration = nullptr;
+  // Input the solve refused (e.g. fewer nodes than ranks need): an error on rank 0, no outputs,
+  // as in the one-process solve.
+  if (summary.termination == Termination::invalid_input) {
+    if (root) std::fprintf(stderr, "%s: error: %s\n", scene.path.c_str(), summary.message.c_str());
+    return exit_code(summary.termination);
+  }
   if (!root) return exit_code(summary.termination);
 
   const SolveOutputs outputs = write_solve_outputs(scene, summary, trajectory, output.out_dir, {{"ranks", ranks}});
