@@ -1,6 +1,6 @@
-// `mpirun pardel solve` with hostile input: more ranks than the grid has room for, and a scene
-// that every rank refuses. Each must end within the time limit with exit status 2 and the
-// message (no hang of the ranks, no outputs written).
+// `mpirun pardel solve` with hostile input: more ranks than the grid has room for, a scene that
+// every rank refuses, and a scene that one rank only refuses. Each must end within the time limit
+// with a non-zero exit status and the message (no hang of the ranks, no outputs written).
 #include <gtest/gtest.h>
 
 #include <string>
@@ -50,6 +50,25 @@ TEST_F(HostileMpi, SceneRefusedOnEveryRank) {
             std::string::npos)
       << o.output;
   EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(HostileMpi, SceneRefusedOnOneRankOnly) {
+  write_text(dir_ / "good.toml", "model = \"fuel_nav\"\n[grid]\nT = 30\nN = 200\n[boundary]\nq0 = [0, 0]\nqN = [6, 5]\n"
+                                 "[solver]\nmethod = \"newton\"\n");
+  write_text(dir_ / "bad.toml", "model = \"fuel_nav\"\n[grid]\nT = 30\nN = 200\n[boundary]\nq0 = [0, nan]\nqN = [6, 5]\n");
+  // Rank 1 reads bad.toml, rank 0 good.toml: rank 0 waits for rank 1 in the distributed solve.
+  const std::string command = std::string("if [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then s=bad; else s=good; fi; exec '") +
+                              PARDEL_CLI_PATH + "' solve '" + dir_.string() + "'/$s.toml --out '" +
+                              (dir_ / "out").string() + "' --no-plot --quiet";
+  const Outcome o = finish_pardel(
+      start_program(PARDEL_MPIEXEC_PATH, {"-np", "2", "--oversubscribe", "/bin/sh", "-c", command}, dir_ / "log", kMpiEnv),
+      dir_ / "log", 60);
+  EXPECT_FALSE(o.timed_out) << "mpirun hangs:\n" << o.output;
+  EXPECT_NE(o.status, 0) << o.output;
+  EXPECT_NE(o.output.find((dir_ / "bad.toml").string() + ":6:10: error: boundary.q0[1] must be a finite number"),
+            std::string::npos)
+      << o.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "summary.json")) << "outputs written for a refused solve";
 }
 
 }  // namespace

@@ -485,11 +485,17 @@ int main(int argc, char** argv) {
 
   const SweepCommand sweep_cmd(app);
 
+  // Under mpirun with more than one rank, an error seen by some ranks only would leave the others
+  // waiting for them: every error ends the whole job (the message is printed first).
+  const auto fail = [](int code) {
+    if (pardel::mpi::world_size() > 1) pardel::mpi::abort_job(code);
+    return code;
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     const int code = app.exit(error);
-    return code == 0 ? 0 : kExitUsage;
+    return code == 0 ? 0 : fail(kExitUsage);
   }
 
   try {
@@ -500,19 +506,19 @@ int main(int argc, char** argv) {
     if (sweep_cmd.parsed()) return sweep_cmd.run(resolve_model_spec, bundled_names());
   } catch (const UsageError& error) {
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
-    return kExitUsage;
+    return fail(kExitUsage);
   } catch (const SceneError& error) {
     std::fprintf(stderr, "%s\n", error.what());
-    return kExitUsage;
+    return fail(kExitUsage);
   } catch (const CheckpointError& error) {
     std::fprintf(stderr, "%s\n", error.what());
-    return kExitUsage;
+    return fail(kExitUsage);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "pardel: error: out of memory (std::bad_alloc)\n");
-    return kExitInternal;
+    return fail(kExitInternal);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
-    return kExitInternal;
+    return fail(kExitInternal);
   }
-  return kExitUsage;
+  return fail(kExitUsage);
 }

@@ -44,6 +44,13 @@ class Session {
 int world_rank();
 int world_size();
 
+/**
+ * Ends the whole job with exit status `code`: MPI_Abort on every rank when a session is active
+ * with more than one rank (a rank that returned from main alone would leave the others waiting in
+ * a collective call forever), std::exit otherwise. Output written to stderr before is kept.
+ */
+[[noreturn]] void abort_job(int code);
+
 }  // namespace pardel::mpi
 
 #endif  // PARDEL_MPI_SESSION_HPP

@@ -1,6 +1,7 @@
 // The process's MPI session: initializes MPI only under an MPI launcher, and only in MPI builds.
 #include "pardel/mpi_session.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -65,5 +66,14 @@ const Session* Session::current() { return g_current; }
 
 int world_rank() { return g_current ? g_current->rank() : 0; }
 int world_size() { return g_current ? g_current->size() : 1; }
+
+void abort_job(int code) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+#ifdef PARDEL_HAVE_MPI
+  if (g_current != nullptr && g_current->active() && g_current->size() > 1) MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+  std::exit(code);
+}
 
 }  // namespace pardel::mpi
