@@ -2,10 +2,12 @@
  * @file discretize.cpp
  * The discrete Lagrangians: substitution of interpolated stage values into the continuous L
  * and quadrature. Order 1: trapezoid and midpoint; order 2: the seed's trapezoid(alpha) family
- * and 2-stage Gauss on the cubic Hermite interpolant of (q0, v0, q1, v1).
+ * and 2-stage Gauss on the cubic Hermite interpolant of (q0, v0, q1, v1); any order: s-point
+ * Gauss-Legendre on the Hermite interpolant of degree 2 order - 1 of the two nodes' jets.
  */
 #include "pardel_codegen/discretize.hpp"
 
+#include <cmath>
 #include <string>
 
 namespace pardel_codegen {
@@ -30,7 +32,88 @@ std::vector<ex> block(const std::vector<GiNaC::symbol>& q, std::size_t k, std::s
   return out;
 }
 
+/** Legendre polynomial P_s and its derivative at x (three-term recurrence). */
+void legendre(int s, const GiNaC::numeric& x, GiNaC::numeric* p, GiNaC::numeric* dp) {
+  GiNaC::numeric p0 = 1, p1 = x;
+  for (int k = 2; k <= s; ++k) {
+    GiNaC::numeric p2 = (GiNaC::numeric(2 * k - 1) * x * p1 - GiNaC::numeric(k - 1) * p0) / GiNaC::numeric(k);
+    p0 = p1;
+    p1 = p2;
+  }
+  *p = s == 0 ? GiNaC::numeric(1) : p1;
+  *dp = GiNaC::numeric(s) * (x * p1 - p0) / (x * x - 1);
+}
+
 }  // namespace
+
+Quadrature gauss_legendre(int s) {
+  using GiNaC::numeric;
+  // Nodes x and weights w on [-1, 1] for x >= 0 (mirrored below), then mapped to [0, 1].
+  std::vector<ex> x, w;
+  switch (s) {
+    case 1: x = {0}; w = {2}; break;
+    case 2: x = {GiNaC::sqrt(ex(3)) / 3}; w = {1}; break;
+    case 3: x = {0, GiNaC::sqrt(numeric(3, 5))}; w = {numeric(8, 9), numeric(5, 9)}; break;
+    case 4: {
+      const ex r = 2 * GiNaC::sqrt(numeric(6, 5)) / 7;
+      x = {GiNaC::sqrt(numeric(3, 7) - r), GiNaC::sqrt(numeric(3, 7) + r)};
+      w = {(18 + GiNaC::sqrt(ex(30))) / 36, (18 - GiNaC::sqrt(ex(30))) / 36};
+      break;
+    }
+    case 5: {
+      const ex r = 2 * GiNaC::sqrt(numeric(10, 7));
+      x = {0, GiNaC::sqrt(5 - r) / 3, GiNaC::sqrt(5 + r) / 3};
+      w = {numeric(128, 225), (322 + 13 * GiNaC::sqrt(ex(70))) / 900, (322 - 13 * GiNaC::sqrt(ex(70))) / 900};
+      break;
+    }
+    default: {
+      // Newton's method on P_s from Chebyshev-like starting points, at 60 digits.
+      const long saved = GiNaC::Digits;
+      GiNaC::Digits = std::max<long>(saved, 60);
+      const numeric eps = GiNaC::ex_to<numeric>(GiNaC::pow(numeric(10), -55).evalf());
+      for (int i = (s + 1) / 2; i >= 1; --i) {
+        numeric xi = GiNaC::ex_to<numeric>(ex(std::cos(M_PI * (i - 0.25) / (s + 0.5))).evalf());
+        numeric p, dp;
+        for (int it = 0; it < 100; ++it) {
+          legendre(s, xi, &p, &dp);
+          const numeric step = p / dp;
+          xi -= step;
+          if (GiNaC::abs(step) < eps) break;
+        }
+        legendre(s, xi, &p, &dp);
+        if (s % 2 == 1 && i == (s + 1) / 2) xi = 0;
+        x.push_back(xi);
+        w.push_back(2 / ((1 - xi * xi) * dp * dp));
+      }
+      GiNaC::Digits = saved;
+      break;
+    }
+  }
+  Quadrature q;
+  for (std::size_t i = x.size(); i-- > 0;) {  // negative nodes, ascending
+    if (x[i].is_zero()) continue;
+    q.nodes.push_back((1 - x[i]) / 2);
+    q.weights.push_back(w[i] / 2);
+  }
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    q.nodes.push_back((1 + x[i]) / 2);
+    q.weights.push_back(w[i] / 2);
+  }
+  return q;
+}
+
+HermiteBasis hermite_basis(int order, const GiNaC::symbol& u) {
+  // at[k] = u^k / k! (1 - u)^order sum_{m < order - k} binom(order - 1 + m, m) u^m, bt[k] = (-1)^k at[k](1 - u).
+  HermiteBasis b;
+  for (int k = 0; k < order; ++k) {
+    ex sum = 0;
+    for (int m = 0; m < order - k; ++m) sum += GiNaC::binomial(GiNaC::numeric(order - 1 + m), GiNaC::numeric(m)) * GiNaC::pow(u, m);
+    const ex a = GiNaC::pow(u, k) / GiNaC::factorial(k) * GiNaC::pow(1 - u, order) * sum;
+    b.at.push_back(a.expand());
+    b.bt.push_back((GiNaC::pow(-1, k) * a.subs(u == 1 - u)).expand());
+  }
+  return b;
+}
 
 KernelSymbols::KernelSymbols(const LagModel& model) {
   for (int i = 0; i < model.dim(); ++i) {
@@ -95,6 +178,33 @@ ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, co
         total += evaluate_at(model, L, t0 + c * (t1 - t0), {Q, V, A});
       }
       return h / 2 * total;
+    }
+    case DiscretizationKind::hermite_gauss: {
+      // The interpolant x(t0 + u h) = sum_k h^k (at[k](u) x0^(k) + bt[k](u) x1^(k)); its j-th time
+      // derivative at a stage c is sum_k h^(k-j) (at[k]^(j)(c) x0^(k) + bt[k]^(j)(c) x1^(k)).
+      const int g = model.order;
+      const GiNaC::symbol u("u");
+      const HermiteBasis basis = hermite_basis(g, u);
+      const Quadrature quad = gauss_legendre(spec.stages);
+      ex total = 0;
+      for (std::size_t stage = 0; stage < quad.nodes.size(); ++stage) {
+        const ex c = quad.nodes[stage];
+        std::vector<std::vector<ex>> values(static_cast<std::size_t>(g) + 1, std::vector<ex>(n, 0));
+        for (int k = 0; k < g; ++k) {
+          const std::vector<ex> x0 = block(s.q0, static_cast<std::size_t>(k), n);
+          const std::vector<ex> x1 = block(s.q1, static_cast<std::size_t>(k), n);
+          ex da = basis.at[static_cast<std::size_t>(k)], db = basis.bt[static_cast<std::size_t>(k)];
+          for (int j = 0; j <= g; ++j) {
+            const ex ca = da.subs(u == c).expand(), cb = db.subs(u == c).expand();
+            const ex scale = GiNaC::pow(h, k - j);
+            for (std::size_t i = 0; i < n; ++i) values[static_cast<std::size_t>(j)][i] += scale * (ca * x0[i] + cb * x1[i]);
+            da = da.diff(u);
+            db = db.diff(u);
+          }
+        }
+        total += quad.weights[stage] * evaluate_at(model, L, t0 + c * (t1 - t0), values);
+      }
+      return h * total;
     }
   }
   return 0;

@@ -382,6 +382,20 @@ std::string rational_text(const GiNaC::numeric& n) {
   return s.str();
 }
 
+/** The largest number of Gauss points hermite_gauss accepts. */
+constexpr int kMaxGaussPoints = 16;
+
+/** hermite_gauss(s=S) for an order-`order` model: consistency order min(2 order, 2 S). */
+DiscretizationSpec hermite_gauss_spec(int order, int stages) {
+  DiscretizationSpec spec;
+  spec.kind = DiscretizationKind::hermite_gauss;
+  spec.stages = stages;
+  spec.name = "hermite_gauss(s=" + std::to_string(stages) + ")";
+  spec.ident = "hermite_gauss_s_" + std::to_string(stages);
+  spec.consistency_order = 2 * std::min(order, stages);
+  return spec;
+}
+
 std::string rational_ident(const GiNaC::numeric& n) {
   std::string out;
   for (char c : rational_text(n)) {
@@ -395,7 +409,9 @@ std::string rational_ident(const GiNaC::numeric& n) {
 void Reader::read_discretizations(const Line& line) {
   const std::vector<Token>& toks = line.tokens;
   std::map<std::string, int> seen;
-  const char* available = model_.order == 1 ? "trapezoid, midpoint" : "trapezoid(alpha=A), gauss2";
+  const std::string available = model_.order == 1   ? "trapezoid, midpoint, hermite_gauss(s=S)"
+                                : model_.order == 2 ? "trapezoid(alpha=A), gauss2, hermite_gauss(s=S)"
+                                                    : "hermite_gauss(s=S)";
   std::size_t i = 1;
   while (toks[i].kind != Tok::end) {
     if (toks[i].kind == Tok::op && toks[i].text == ",") {
@@ -407,55 +423,62 @@ void Reader::read_discretizations(const Line& line) {
       fail(line, name, "expected a discretization name, found " + name.shown());
     }
     ++i;
-    bool has_alpha = false;
-    GiNaC::numeric alpha = 1;
-    int alpha_col = name.col;
+    bool has_value = false;
+    GiNaC::numeric value = 1;
+    int value_col = name.col;
     if (toks[i].kind == Tok::op && toks[i].text == "(") {
       ++i;
       const Token& key = toks[i];
       if (key.kind != Tok::ident || key.primes > 0) {
         fail(line, key, "expected a parameter name such as alpha, found " + key.shown());
       }
-      if (key.text != "alpha" || name.text != "trapezoid") {
-        if (name.text == "trapezoid") fail(line, key, "unknown parameter '" + key.text + "' of trapezoid (expected alpha)");
+      const bool trapezoid = name.text == "trapezoid", hermite = name.text == "hermite_gauss";
+      if (!(trapezoid && key.text == "alpha") && !(hermite && key.text == "s")) {
+        if (trapezoid) fail(line, key, "unknown parameter '" + key.text + "' of trapezoid (expected alpha)");
+        if (hermite) fail(line, key, "unknown parameter '" + key.text + "' of hermite_gauss (expected s, the number of Gauss points)");
         fail(line, key, "'" + name.text + "' takes no parameters");
       }
       ++i;
       if (!(toks[i].kind == Tok::op && toks[i].text == "=")) {
-        fail(line, toks[i], "expected '=' after alpha, found " + toks[i].shown());
+        fail(line, toks[i], "expected '=' after " + key.text + ", found " + toks[i].shown());
       }
       ++i;
-      alpha_col = toks[i].col;
-      // alpha: an optionally signed rational number, up to the closing parenthesis.
+      value_col = toks[i].col;
+      // The value: an optionally signed rational number, up to the closing parenthesis.
       Cursor c{&line, i};
       ExprContext ctx;
       ctx.scope = Scope::constant;
-      GiNaC::ex value = parse_sum(c, ctx);
-      if (!c.at_op(')')) fail(line, c.peek(), "expected ')' after the value of alpha, found " + c.peek().shown());
+      GiNaC::ex parsed = parse_sum(c, ctx);
+      if (!c.at_op(')')) fail(line, c.peek(), "expected ')' after the value of " + key.text + ", found " + c.peek().shown());
       i = c.pos + 1;
-      if (!GiNaC::is_a<GiNaC::numeric>(value) || !GiNaC::ex_to<GiNaC::numeric>(value).is_rational()) {
-        fail(line.number, alpha_col, "alpha must be a rational number such as 1, 1/2 or 0.25");
+      if (!GiNaC::is_a<GiNaC::numeric>(parsed) || !GiNaC::ex_to<GiNaC::numeric>(parsed).is_rational()) {
+        if (trapezoid) fail(line.number, value_col, "alpha must be a rational number such as 1, 1/2 or 0.25");
       }
-      alpha = GiNaC::ex_to<GiNaC::numeric>(value);
-      has_alpha = true;
-    }
-    if (model_.order >= 3) {
-      fail(line, name, "no discretization is available for order-" + std::to_string(model_.order) +
-                           " models (only orders 1 and 2)");
+      if (hermite && (!GiNaC::is_a<GiNaC::numeric>(parsed) || !GiNaC::ex_to<GiNaC::numeric>(parsed).is_integer() ||
+                      GiNaC::ex_to<GiNaC::numeric>(parsed) < 1 || GiNaC::ex_to<GiNaC::numeric>(parsed) > kMaxGaussPoints)) {
+        fail(line.number, value_col,
+             "s (the number of Gauss points) must be an integer from 1 to " + std::to_string(kMaxGaussPoints));
+      }
+      value = GiNaC::ex_to<GiNaC::numeric>(parsed);
+      has_value = true;
     }
     DiscretizationSpec spec;
-    if (model_.order == 1 && (name.text == "trapezoid" || name.text == "midpoint")) {
-      if (has_alpha) {
-        fail(line.number, alpha_col, "'trapezoid' takes no parameters for order-1 models (alpha is for order 2)");
+    if (name.text == "hermite_gauss") {
+      spec.kind = DiscretizationKind::hermite_gauss;
+      spec.stages = has_value ? value.to_int() : model_.order;
+      spec = hermite_gauss_spec(model_.order, spec.stages);
+    } else if (model_.order == 1 && (name.text == "trapezoid" || name.text == "midpoint")) {
+      if (has_value) {
+        fail(line.number, value_col, "'trapezoid' takes no parameters for order-1 models (alpha is for order 2)");
       }
       spec.kind = name.text == "trapezoid" ? DiscretizationKind::trapezoid : DiscretizationKind::midpoint;
       spec.name = spec.ident = name.text;
       spec.consistency_order = 2;
     } else if (model_.order == 2 && name.text == "trapezoid") {
       spec.kind = DiscretizationKind::trapezoid_alpha;
-      spec.alpha = alpha;
-      spec.name = "trapezoid(alpha=" + rational_text(alpha) + ")";
-      spec.ident = "trapezoid_alpha_" + rational_ident(alpha);
+      spec.alpha = value;
+      spec.name = "trapezoid(alpha=" + rational_text(value) + ")";
+      spec.ident = "trapezoid_alpha_" + rational_ident(value);
       spec.consistency_order = 2;
     } else if (model_.order == 2 && name.text == "gauss2") {
       spec.kind = DiscretizationKind::gauss2;
@@ -765,9 +788,11 @@ LagModel Reader::read() {
   }
   if (discretization_line_) {
     read_discretizations(*discretization_line_);
-  } else if (model_.order <= 2) {
+  } else {
     DiscretizationSpec spec;
-    if (model_.order == 1) {
+    if (model_.order >= 3) {
+      spec = hermite_gauss_spec(model_.order, model_.order);
+    } else if (model_.order == 1) {
       spec.kind = DiscretizationKind::trapezoid;
       spec.name = spec.ident = "trapezoid";
     } else {

@@ -32,14 +32,100 @@ std::string compact(std::string_view s) {
   return out;
 }
 
+long long gcd(long long a, long long b) {
+  while (b != 0) {
+    const long long r = a % b;
+    a = b;
+    b = r;
+  }
+  return a < 0 ? -a : a;
+}
+
+/**
+ * A number written as pardel-gen reads it, "0.7", "7/10", "-1/3", "2.5e-1", "+1", as the exact
+ * reduced fraction pardel-gen prints ("7/10", "-1/3", "1/4", "1"); empty if it is not such a
+ * number or does not fit in 64-bit integers.
+ */
+std::string rational_text(std::string_view text) {
+  std::size_t i = 0;
+  bool negative = false;
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) negative = text[i++] == '-';
+  constexpr long long kLimit = 100000000000000000LL;  // 1e17: products below stay in range
+  long long num = 0, den = 1;
+  bool digits = false;
+  for (; i < text.size() && text[i] >= '0' && text[i] <= '9'; ++i, digits = true) {
+    if (num > kLimit) return {};
+    num = num * 10 + (text[i] - '0');
+  }
+  if (i < text.size() && text[i] == '.') {
+    for (++i; i < text.size() && text[i] >= '0' && text[i] <= '9'; ++i, digits = true) {
+      if (num > kLimit || den > kLimit) return {};
+      num = num * 10 + (text[i] - '0');
+      den *= 10;
+    }
+  }
+  if (!digits) return {};
+  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    bool negative_exponent = false;
+    if (i < text.size() && (text[i] == '+' || text[i] == '-')) negative_exponent = text[i++] == '-';
+    int exponent = 0;
+    bool exponent_digits = false;
+    for (; i < text.size() && text[i] >= '0' && text[i] <= '9'; ++i, exponent_digits = true) {
+      if (exponent > 40) return {};
+      exponent = exponent * 10 + (text[i] - '0');
+    }
+    if (!exponent_digits) return {};
+    for (int k = 0; k < exponent; ++k) {
+      long long& target = negative_exponent ? den : num;
+      if (target > kLimit) return {};
+      target *= 10;
+    }
+  } else if (i < text.size() && text[i] == '/') {
+    long long d = 0;
+    bool d_digits = false;
+    for (++i; i < text.size() && text[i] >= '0' && text[i] <= '9'; ++i, d_digits = true) {
+      if (d > kLimit) return {};
+      d = d * 10 + (text[i] - '0');
+    }
+    if (!d_digits || d == 0 || den != 1) return {};
+    den = d;
+  }
+  if (i != text.size()) return {};
+  const long long g = num == 0 ? den : gcd(num, den);
+  num /= g;
+  den /= g;
+  std::string out = (negative && num != 0 ? "-" : "") + std::to_string(num);
+  if (den != 1) out += "/" + std::to_string(den);
+  return out;
+}
+
+/**
+ * The canonical spelling of a discretization name for `model`, as pardel-gen writes it: spaces
+ * removed, a parameter's value as an exact reduced fraction ("trapezoid(alpha=0.7)" is
+ * "trapezoid(alpha=7/10)"), and the defaults of a bare name filled in ("trapezoid" of an
+ * order >= 2 model is "trapezoid(alpha=1)", "hermite_gauss" is "hermite_gauss(s=ORDER)").
+ */
+std::string canonical_discretization(const pardel_model& model, std::string_view name) {
+  std::string key = compact(name);
+  if (model.order >= 2 && key == "trapezoid") return "trapezoid(alpha=1)";
+  if (key == "hermite_gauss") return "hermite_gauss(s=" + std::to_string(model.order) + ")";
+  const std::size_t open = key.find('('), eq = key.find('=');
+  if (open != std::string::npos && eq != std::string::npos && open < eq && key.back() == ')') {
+    const std::string value = rational_text(std::string_view(key).substr(eq + 1, key.size() - eq - 2));
+    if (!value.empty()) key = key.substr(0, eq + 1) + value + ")";
+  }
+  return key;
+}
+
 }  // namespace
 
 const pardel_discretization* find_discretization(const pardel_model& model, std::string_view name) {
   for (int i = 0; i < model.ndiscretizations; ++i)
     if (model.discretizations[i].name && name == model.discretizations[i].name) return &model.discretizations[i];
-  const std::string key = compact(name);
+  const std::string key = canonical_discretization(model, name);
   for (int i = 0; i < model.ndiscretizations; ++i)
-    if (model.discretizations[i].name && key == compact(model.discretizations[i].name))
+    if (model.discretizations[i].name && key == canonical_discretization(model, model.discretizations[i].name))
       return &model.discretizations[i];
   return nullptr;
 }

@@ -3,10 +3,15 @@
 // range of h gives r + 1. Exact discrete Lagrangians come from closed forms (harmonic oscillator,
 // x'''' = x) or from GiNaC's exact integration of polynomial solutions (time-dependent cases).
 // Everything is evaluated by GiNaC with 40 digits, so rounding does not touch the slopes.
+// The hermite_gauss family is also checked piece by piece: its Hermite basis and Gauss-Legendre
+// rules, and its equality with gauss2 at order 2 with two points.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -188,6 +193,169 @@ TEST(DiscretizationOrder, Gauss2WithTheSeedsStagePositions) {
   // Order 4 on the forced problem; on the linear x'''' = x the error even falls like h^7.
   EXPECT_NEAR(forced_slope, 5.0, kSlopeTolerance);
   EXPECT_GE(slope, 5.0 - kSlopeTolerance);
+}
+
+// ---- hermite_gauss(s=S): the Hermite interpolant of degree 2 order - 1 and S-point Gauss-Legendre.
+
+TEST(HermiteGauss, HermiteBasisMatchesTheJetsAtBothEnds) {
+  GiNaC::symbol u("u");
+  for (int order = 1; order <= 6; ++order) {
+    const pardel_codegen::HermiteBasis b = pardel_codegen::hermite_basis(order, u);
+    for (int k = 0; k < order; ++k) {
+      EXPECT_EQ(b.at[k].degree(u), 2 * order - 1);
+      for (int j = 0; j < order; ++j) {
+        const ex da = b.at[k].diff(u, j), db = b.bt[k].diff(u, j);
+        EXPECT_EQ(da.subs(u == 0), ex(j == k ? 1 : 0)) << "order " << order << " k " << k << " j " << j;
+        EXPECT_EQ(da.subs(u == 1), ex(0)) << "order " << order << " k " << k << " j " << j;
+        EXPECT_EQ(db.subs(u == 0), ex(0)) << "order " << order << " k " << k << " j " << j;
+        EXPECT_EQ(db.subs(u == 1), ex(j == k ? 1 : 0)) << "order " << order << " k " << k << " j " << j;
+      }
+    }
+  }
+}
+
+TEST(HermiteGauss, GaussLegendreIsExactUpToDegreeTwoSMinusOne) {
+  GiNaC::Digits = 40;
+  for (int s = 1; s <= 9; ++s) {
+    const pardel_codegen::Quadrature q = pardel_codegen::gauss_legendre(s);
+    ASSERT_EQ(static_cast<int>(q.nodes.size()), s);
+    for (int i = 1; i < s; ++i) EXPECT_LT(evaluate(q.nodes[i - 1]), evaluate(q.nodes[i])) << "s = " << s;
+    for (int d = 0; d <= 2 * s; ++d) {
+      ex sum = 0;
+      for (int i = 0; i < s; ++i) sum += q.weights[i] * GiNaC::pow(q.nodes[i], d);
+      const double err = std::fabs(evaluate(sum - numeric(1, d + 1)));
+      if (d < 2 * s) EXPECT_LT(err, 1e-35) << "s = " << s << ", degree " << d;
+      else EXPECT_GT(err, 1e-30) << "s = " << s << " integrates degree " << d << " exactly";
+    }
+  }
+}
+
+// At order 2 with two points the family is gauss2: both discrete Lagrangians of a nonlinear,
+// time-dependent L with two coordinates agree at random arguments (seeded).
+TEST(HermiteGauss, AtOrderTwoWithTwoPointsItIsGauss2) {
+  GiNaC::Digits = 40;
+  const LagModel m = pardel_codegen::parse_lag(
+      "model g\norder 2\ncoords x y\nparam k = 3/2\n"
+      "L = 1/2*(x''^2 + y''^2) + k*sin(x)*y'*t + x''*y''*cos(y) - exp(x'/3) + x*y*y''^2\n"
+      "discretizations gauss2 hermite_gauss(s=2)\n",
+      "g.lag");
+  ASSERT_EQ(m.discretizations[1].name, "hermite_gauss(s=2)");
+  EXPECT_EQ(m.discretizations[1].consistency_order, m.discretizations[0].consistency_order);
+  KernelSymbols s(m);
+  const ex a = pardel_codegen::discrete_lagrangian(m, m.discretizations[0], s);
+  const ex b = pardel_codegen::discrete_lagrangian(m, m.discretizations[1], s);
+  std::mt19937 rng(20240601);
+  std::uniform_real_distribution<double> value(-1.5, 1.5), step(0.05, 0.8);
+  for (int trial = 0; trial < 20; ++trial) {
+    GiNaC::exmap at;
+    const double h = step(rng), t0 = value(rng);
+    at[s.h] = h;
+    at[s.t0] = t0;
+    at[s.t1] = t0 + 1.3 * h;
+    for (std::size_t i = 0; i < s.q0.size(); ++i) {
+      at[s.q0[i]] = value(rng);
+      at[s.q1[i]] = value(rng);
+    }
+    at[s.p[0]] = value(rng);
+    const double va = evaluate(a.subs(at, GiNaC::subs_options::no_pattern));
+    const double vb = evaluate(b.subs(at, GiNaC::subs_options::no_pattern));
+    EXPECT_LE(std::fabs(va - vb), 1e-13 * std::max(1.0, std::fabs(va))) << "trial " << trial << ": " << va << " vs " << vb;
+  }
+}
+
+/** The measured r + 1 of every discretization of `model` equals its consistency_order + 1. */
+template <class Exact>
+void expect_reported_orders(const LagModel& model, Exact exact) {
+  for (std::size_t d = 0; d < model.discretizations.size(); ++d) {
+    const double slope = measured_slope(model, d, exact);
+    std::printf("%s, %s: slope %.3f\n", model.name.c_str(), model.discretizations[d].name.c_str(), slope);
+    EXPECT_NEAR(slope, model.discretizations[d].consistency_order + 1.0, kSlopeTolerance)
+        << model.name << ", " << model.discretizations[d].name;
+  }
+}
+
+/** The jet [x, x', ..., x^(order-1)] of x(t) at t = at. */
+std::vector<ex> jet(const ex& x, const GiNaC::symbol& t, int order, const ex& at) {
+  std::vector<ex> out;
+  for (int k = 0; k < order; ++k) out.push_back(x.diff(t, k).subs(t == at));
+  return out;
+}
+
+// ---- Order 1: hermite_gauss(s=1) is the midpoint rule; s = 2 keeps order 2 (linear interpolation).
+TEST(HermiteGauss, OrderOneOnTheHarmonicOscillator) {
+  const LagModel m = pardel_codegen::parse_lag(
+      "model osc\ncoords x\nL = 1/2*(x'^2 - x^2)\ndiscretizations hermite_gauss hermite_gauss(s=2)\n", "osc.lag");
+  EXPECT_EQ(m.discretizations[0].name, "hermite_gauss(s=1)");
+  expect_reported_orders(m, harmonic_exact);
+}
+
+// ---- Order 2: hermite_gauss(s=2) and (s=3) on x'''' = t (both order 4: the interpolant limits s = 3).
+TEST(HermiteGauss, OrderTwoOnTheForcedBeam) {
+  const LagModel m = pardel_codegen::parse_lag(
+      "model forced4\norder 2\ncoords x\nL = 1/2*x''^2 - t*x\ndiscretizations hermite_gauss(s=2) hermite_gauss(s=3)\n",
+      "forced4.lag");
+  expect_reported_orders(m, forced_fourth_order_exact);
+}
+
+// ---- Order 3: L = x'''^2/2 - t x, x'''''' = -t, x = -t^7/5040 + t^5/120 - t on [0.7, 0.7 + h]
+// (order 6).
+ExactInterval forced_sixth_order_exact(const ex& h) {
+  GiNaC::symbol t("t");
+  const ex x = -GiNaC::pow(t, 7) / 5040 + GiNaC::pow(t, 5) / 120 - t;
+  const ex L = GiNaC::pow(x.diff(t, 3), 2) / 2 - t * x;
+  const ex t0 = numeric(7, 10), t1 = t0 + h;
+  return {t0, jet(x, t, 3, t0), jet(x, t, 3, t1), GiNaC::integral(t, t0, t1, L).eval_integ()};
+}
+
+TEST(HermiteGauss, OrderThreeTimeDependent) {
+  const LagModel m = pardel_codegen::parse_lag(
+      "model forced6\norder 3\ncoords x\nL = 1/2*x'''^2 - t*x\ndiscretizations hermite_gauss\n",
+      "forced6.lag");
+  EXPECT_EQ(m.discretizations[0].name, "hermite_gauss(s=3)");
+  EXPECT_EQ(m.discretizations[0].consistency_order, 6);
+  expect_reported_orders(m, forced_sixth_order_exact);
+}
+
+// ---- Order 3, not polynomial: L = (x'''^2 + x^2)/2, x'''''' = x, x = e^t, action (e^(2h) - 1)/2 on [0, h]
+// (s = 3 and s = 4: order 6, the interpolant limits s = 4; s = 2: order 4, the quadrature limits).
+TEST(HermiteGauss, OrderThreeExponential) {
+  const LagModel m = pardel_codegen::parse_lag(
+      "model exp6\norder 3\ncoords x\nL = 1/2*(x'''^2 + x^2)\ndiscretizations hermite_gauss(s=3) hermite_gauss(s=4) hermite_gauss(s=2)\n",
+      "exp6.lag");
+  EXPECT_EQ(m.discretizations[1].consistency_order, 6);
+  EXPECT_EQ(m.discretizations[2].consistency_order, 4);
+  expect_reported_orders(m, [](const ex& h) {
+    const ex e = GiNaC::exp(h);
+    return ExactInterval{0, {1, 1, 1}, {e, e, e}, (GiNaC::exp(2 * h) - 1) / 2};
+  });
+}
+
+// ---- Order 4: L = x''''^2/2 - t x, x^(8) = t, x = t^9/362880 - t^6/720 + t^3 on [0.7, 0.7 + h]
+// (order 8), and L = (x''''^2 - x^2)/2 along x = e^t, whose action vanishes.
+ExactInterval forced_eighth_order_exact(const ex& h) {
+  GiNaC::symbol t("t");
+  const ex x = GiNaC::pow(t, 9) / 362880 - GiNaC::pow(t, 6) / 720 + GiNaC::pow(t, 3);
+  const ex L = GiNaC::pow(x.diff(t, 4), 2) / 2 - t * x;
+  const ex t0 = numeric(7, 10), t1 = t0 + h;
+  return {t0, jet(x, t, 4, t0), jet(x, t, 4, t1), GiNaC::integral(t, t0, t1, L).eval_integ()};
+}
+
+TEST(HermiteGauss, OrderFourTimeDependent) {
+  const LagModel m = pardel_codegen::parse_lag("model forced8\norder 4\ncoords x\nL = 1/2*x''''^2 - t*x\n", "forced8.lag");
+  ASSERT_EQ(m.discretizations.size(), 1u);  // the default of an order-4 model
+  EXPECT_EQ(m.discretizations[0].name, "hermite_gauss(s=4)");
+  EXPECT_EQ(m.discretizations[0].consistency_order, 8);
+  expect_reported_orders(m, forced_eighth_order_exact);
+}
+
+TEST(HermiteGauss, OrderFourExponential) {
+  const LagModel m = pardel_codegen::parse_lag(
+      "model exp8\norder 4\ncoords x\nL = 1/2*(x''''^2 - x^2)\ndiscretizations hermite_gauss(s=4) hermite_gauss(s=3)\n",
+      "exp8.lag");
+  expect_reported_orders(m, [](const ex& h) {
+    const ex e = GiNaC::exp(h);
+    return ExactInterval{0, {1, 1, 1, 1}, {e, e, e, e}, 0};
+  });
 }
 
 }  // namespace

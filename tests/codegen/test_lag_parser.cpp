@@ -158,11 +158,27 @@ TEST(LagParser, TimeDependenceIsDetected) {
   EXPECT_TRUE(parse_lag("model a\ncoords x\nL = x'^2\nclock = 1 + t\n", "a.lag").time_dependent());
 }
 
-TEST(LagParser, OrderThreeModelWithoutDiscretizationsIsAccepted) {
+TEST(LagParser, OrderThreeModelWithoutDiscretizationsGetsHermiteGauss) {
   LagModel m = parse_lag("model o\norder 3\ncoords x\nL = x'''^2\nclock = 1 + x''^2\n", "o.lag");
   EXPECT_EQ(m.order, 3);
-  EXPECT_TRUE(m.discretizations.empty());
+  ASSERT_EQ(m.discretizations.size(), 1u);
+  EXPECT_EQ(m.discretizations[0].name, "hermite_gauss(s=3)");
+  EXPECT_EQ(m.discretizations[0].ident, "hermite_gauss_s_3");
+  EXPECT_EQ(m.discretizations[0].consistency_order, 6);
   EXPECT_TRUE(m.has_clock);
+}
+
+TEST(LagParser, HermiteGaussTakesItsNumberOfPoints) {
+  LagModel m = parse_lag("model o\norder 4\ncoords x y\nL = x''''^2 + y''''^2\n"
+                         "discretizations hermite_gauss(s = 2), hermite_gauss hermite_gauss(s=5)\n",
+                         "o.lag");
+  ASSERT_EQ(m.discretizations.size(), 3u);
+  EXPECT_EQ(m.discretizations[0].name, "hermite_gauss(s=2)");
+  EXPECT_EQ(m.discretizations[0].consistency_order, 4);
+  EXPECT_EQ(m.discretizations[1].name, "hermite_gauss(s=4)");
+  EXPECT_EQ(m.discretizations[1].consistency_order, 8);
+  EXPECT_EQ(m.discretizations[2].stages, 5);
+  EXPECT_EQ(m.discretizations[2].consistency_order, 8);
 }
 
 TEST(LagParser, ReportsAMissingFile) {

@@ -142,6 +142,35 @@ TEST(Api, FindDiscretizationByName) {
   EXPECT_EQ(pardel::find_discretization(hand::spline, "trapezoid( alpha )"), &hand::spline.discretizations[0]);
 }
 
+// A name is found in any spelling pardel-gen accepts in a .lag: the generated names are canonical
+// (exact reduced fractions, defaults filled in).
+TEST(Api, FindDiscretizationByAnySpellingOfItsParameter) {
+  const pardel_discretization discs[] = {{"trapezoid(alpha=7/10)", 2, nullptr, nullptr, nullptr, nullptr},
+                                         {"trapezoid(alpha=1)", 2, nullptr, nullptr, nullptr, nullptr},
+                                         {"trapezoid(alpha=-1/3)", 2, nullptr, nullptr, nullptr, nullptr},
+                                         {"hermite_gauss(s=2)", 4, nullptr, nullptr, nullptr, nullptr}};
+  pardel_model m{};
+  m.name = "spellings";
+  m.order = 2;
+  m.ncoords = 1;
+  m.dim = 2;
+  m.ndiscretizations = 4;
+  m.discretizations = discs;
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=0.7)"), &discs[0]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha = 0.70)"), &discs[0]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=14/20)"), &discs[0]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=7e-1)"), &discs[0]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=7/10)"), &discs[0]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid"), &discs[1]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=1.0)"), &discs[1]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=-2/6)"), &discs[2]);
+  EXPECT_EQ(pardel::find_discretization(m, "hermite_gauss"), &discs[3]);
+  EXPECT_EQ(pardel::find_discretization(m, "hermite_gauss(s = 2)"), &discs[3]);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=0.71)"), nullptr);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=7/0)"), nullptr);
+  EXPECT_EQ(pardel::find_discretization(m, "hermite_gauss(s=3)"), nullptr);
+}
+
 TEST(Api, SummaryReportsHowTheSolveEnded) {
   auto p = good_problem();
   auto traj = pardel::linear_guess(p);

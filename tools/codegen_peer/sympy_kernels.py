@@ -21,6 +21,7 @@ import sys
 
 import mpmath
 import sympy
+from sympy.integrals.quadrature import gauss_legendre
 
 PROJECT_ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -325,6 +326,38 @@ class DiscreteLagrangian:
                     acc = (ddb[0] * x0[i] + ddb[1] * h * v0[i] + ddb[2] * x1[i] + ddb[3] * h * v1[i]) / h**2
                     jets.append([pos, vel, acc])
                 stages.append((half, t0 + tau * (t1 - t0), jets))
+            return stages
+        if name == "hermite_gauss" and set(options) <= {"s"}:
+            # The Hermite interpolant of degree 2*order - 1 of both nodes' jets, its basis found
+            # by solving the end conditions; s-point Gauss-Legendre nodes from SymPy (numbers of
+            # 2*DECIMALS digits mapped from [-1, 1] to [0, 1]).
+            s = int(options.get("s", order))
+            tau = sympy.Symbol("tau")
+            coeffs = sympy.symbols("c0:%d" % (2 * order))
+            poly = sum(c * tau**k for k, c in enumerate(coeffs))
+            basis = []  # basis[end][k]: k-th derivative 1 at end (0: tau = 0, 1: tau = 1)
+            for end in (0, 1):
+                row = []
+                for k in range(order):
+                    eqs = [sympy.diff(poly, tau, j).subs(tau, e) - (1 if (e == end and j == k) else 0)
+                           for e in (0, 1) for j in range(order)]
+                    row.append(sympy.expand(poly.subs(sympy.solve(eqs, coeffs))))
+                basis.append(row)
+            xs, ws = gauss_legendre(s, 2 * DECIMALS)
+            stages = []
+            for x, w in zip(xs, ws):
+                c = (1 + x) / 2
+                jets = []
+                for i in range(n):
+                    jet = []
+                    for j in range(order + 1):
+                        value = 0
+                        for k in range(order):
+                            value += h**(k - j) * (sympy.diff(basis[0][k], tau, j).subs(tau, c) * q0[k * n + i] +
+                                                   sympy.diff(basis[1][k], tau, j).subs(tau, c) * q1[k * n + i])
+                        jet.append(value)
+                    jets.append(jet)
+                stages.append((w / 2, t0 + c * (t1 - t0), jets))
             return stages
         raise LagError("discretization '%s' is not defined for an order-%d model" % (disc, order))
 

@@ -191,7 +191,6 @@ int run_kernels(const KernelArgs& args) {
                                  suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion)));
   }
   const pardel_discretization* disc = find_discretization(*model, args.disc);
-  if (!disc && model->order >= 2 && args.disc == "trapezoid") disc = find_discretization(*model, "trapezoid(alpha=1)");
   if (!disc) {
     std::vector<std::string> names;
     for (int i = 0; i < model->ndiscretizations; ++i) names.push_back(model->discretizations[i].name);

@@ -453,9 +453,6 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
   for (int i = 0; i < model.ndiscretizations; ++i) disc_names.push_back(model.discretizations[i].name);
   if (const auto disc = r.string(&root, "discretization", "discretization")) {
     problem.discretization = find_discretization(model, *disc);
-    if (!problem.discretization && model.order >= 2 && *disc == "trapezoid") {
-      problem.discretization = find_discretization(model, "trapezoid(alpha=1)");
-    }
     if (!problem.discretization) {
       const std::string suggestion = nearest_name(*disc, disc_names);
       std::string message = fmt::format("unknown discretization '{}' for model {}", *disc, model.name);

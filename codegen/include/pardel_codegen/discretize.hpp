@@ -29,6 +29,23 @@ enum class Gauss2Positions {
   seed,     ///< the seed's printed Q_i = linear interpolation - h/12 (v1 - v0)
 };
 
+/** Gauss-Legendre nodes and weights on [0, 1]: exact radicals for s <= 5, numbers of at least
+ *  50 digits for larger s. Nodes ascending; the weights sum to 1. @pre 1 <= s */
+struct Quadrature {
+  std::vector<GiNaC::ex> nodes, weights;
+};
+Quadrature gauss_legendre(int s);
+
+/**
+ * The two-point Hermite basis of degree 2*order - 1 on [0, 1] in the variable `u`: at[k] and
+ * bt[k] (k < order) have k-th derivative 1 at u = 0 and at u = 1 respectively, and every other
+ * derivative below `order` zero at both ends, so x(t0 + u h) = sum_k h^k (at[k] x0^(k) + bt[k] x1^(k)).
+ */
+struct HermiteBasis {
+  std::vector<GiNaC::ex> at, bt;
+};
+HermiteBasis hermite_basis(int order, const GiNaC::symbol& u);
+
 /** The discrete Lagrangian L_d(h, t0, t1, q0, q1, p) of `spec` for `model`. */
 GiNaC::ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
                               Gauss2Positions positions = Gauss2Positions::hermite);

@@ -19,14 +19,16 @@ enum class DiscretizationKind {
   midpoint,         ///< order 1: h L((t0+t1)/2, (q0+q1)/2, v)
   trapezoid_alpha,  ///< order 2: the seed's L_d^alpha family
   gauss2,           ///< order 2: 2-stage Gauss on the cubic Hermite interpolant
+  hermite_gauss,    ///< any order: s-point Gauss-Legendre on the Hermite interpolant of degree 2*order-1
 };
 
 /** One requested discretization with its canonical names. */
 struct DiscretizationSpec {
   DiscretizationKind kind = DiscretizationKind::trapezoid;
   GiNaC::numeric alpha = 1;   ///< the parameter of trapezoid_alpha (exact rational)
-  std::string name;           ///< canonical name: "trapezoid", "trapezoid(alpha=1)", "gauss2", ...
-  std::string ident;          ///< C-identifier form: "trapezoid", "trapezoid_alpha_1", ...
+  int stages = 0;             ///< the number s of Gauss points of hermite_gauss
+  std::string name;           ///< canonical name: "trapezoid", "trapezoid(alpha=1)", "hermite_gauss(s=3)", ...
+  std::string ident;          ///< C-identifier form: "trapezoid", "trapezoid_alpha_1", "hermite_gauss_s_3", ...
   int consistency_order = 2;  ///< order of the discrete Lagrangian
 };
 

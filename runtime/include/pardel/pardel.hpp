@@ -24,7 +24,13 @@ namespace pardel {
 const std::vector<const pardel_model*>& bundled_models();
 /** The bundled model of that name, or nullptr. */
 const pardel_model* find_model(std::string_view name);
-/** The discretization of that name ("trapezoid", "trapezoid(alpha=1)", ...), or nullptr. */
+/**
+ * The discretization of that name ("trapezoid", "trapezoid(alpha=1)", "hermite_gauss(s=3)", ...),
+ * or nullptr. Names are compared in canonical form, so any spelling pardel-gen accepts in a .lag
+ * finds the discretization it generated: spaces do not matter, a parameter may be written as a
+ * decimal or a fraction ("trapezoid(alpha=0.7)" finds "trapezoid(alpha=7/10)"), and a bare
+ * "trapezoid" (order >= 2) or "hermite_gauss" means its default parameter.
+ */
 const pardel_discretization* find_discretization(const pardel_model& model, std::string_view name);
 
 // ---------------------------------------------------------------------------------------------
