@@ -9,6 +9,7 @@
 #define PARDEL_PARDEL_HPP
 
 #include <functional>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -63,6 +64,16 @@ struct Problem {
   std::vector<Knot> knots;
   ClockMode clock = ClockMode::none;
 };
+
+/** The index of the model's param of that name (declaration order, as Problem::params), or -1. */
+int find_param(const pardel_model& model, std::string_view name);
+/**
+ * Params by name: the model's defaults in declaration order, with those named in `values`
+ * replaced, written to *params (for Problem::params). A name the model does not declare is an
+ * error: returns false, *params untouched and *error (when given) naming it and the model's params.
+ */
+bool params_by_name(const pardel_model& model, const std::map<std::string, double>& values,
+                    std::vector<double>* params, std::string* error = nullptr);
 
 /** A discrete trajectory: node times and points of T^(order-1)Q, row-major (N+1) x dim. */
 struct Trajectory {
