@@ -385,7 +385,7 @@ std::string rational_text(const GiNaC::numeric& n) {
 /** The largest number of Gauss points hermite_gauss accepts. */
 constexpr int kMaxGaussPoints = 16;
 
-/** hermite_gauss(s=S) for an order-`order` model: consistency order min(2 order, 2 S). */
+/** hermite_gauss(s=S) for an order-`order` model (S >= order): consistency order min(2 order, 2 S). */
 DiscretizationSpec hermite_gauss_spec(int order, int stages) {
   DiscretizationSpec spec;
   spec.kind = DiscretizationKind::hermite_gauss;
@@ -466,6 +466,14 @@ void Reader::read_discretizations(const Line& line) {
     if (name.text == "hermite_gauss") {
       spec.kind = DiscretizationKind::hermite_gauss;
       spec.stages = has_value ? value.to_int() : model_.order;
+      if (spec.stages < model_.order) {
+        fail(line.number, value_col,
+             "hermite_gauss(s=" + std::to_string(spec.stages) + ") is not regular for an order-" +
+                 std::to_string(model_.order) + " model: the interpolant's derivative of order " +
+                 std::to_string(model_.order) + " is a polynomial of degree " + std::to_string(model_.order - 1) +
+                 " that can vanish at all " + std::to_string(spec.stages) + " Gauss points (s must be at least " +
+                 std::to_string(model_.order) + ")");
+      }
       spec = hermite_gauss_spec(model_.order, spec.stages);
     } else if (model_.order == 1 && (name.text == "trapezoid" || name.text == "midpoint")) {
       if (has_value) {

@@ -170,11 +170,11 @@ TEST(LagParser, OrderThreeModelWithoutDiscretizationsGetsHermiteGauss) {
 
 TEST(LagParser, HermiteGaussTakesItsNumberOfPoints) {
   LagModel m = parse_lag("model o\norder 4\ncoords x y\nL = x''''^2 + y''''^2\n"
-                         "discretizations hermite_gauss(s = 2), hermite_gauss hermite_gauss(s=5)\n",
+                         "discretizations hermite_gauss(s = 6), hermite_gauss hermite_gauss(s=5)\n",
                          "o.lag");
   ASSERT_EQ(m.discretizations.size(), 3u);
-  EXPECT_EQ(m.discretizations[0].name, "hermite_gauss(s=2)");
-  EXPECT_EQ(m.discretizations[0].consistency_order, 4);
+  EXPECT_EQ(m.discretizations[0].name, "hermite_gauss(s=6)");
+  EXPECT_EQ(m.discretizations[0].consistency_order, 8);
   EXPECT_EQ(m.discretizations[1].name, "hermite_gauss(s=4)");
   EXPECT_EQ(m.discretizations[1].consistency_order, 8);
   EXPECT_EQ(m.discretizations[2].stages, 5);
