@@ -9,10 +9,21 @@
 #
 # Without GiNaC (PARDEL_REGENERATE=OFF) the committed copy under generated/ is compiled instead;
 # that works only for the bundled models.
+#
+# The same file serves pardel's own build (and add_subdirectory(pardel)) and an installed pardel
+# (find_package(pardel), through pardel-config.cmake). Either way the generator is the executable
+# target pardel::pardel-gen, and PARDEL_RENDER_SCRIPT, PARDEL_TEMPLATES, PARDEL_PYTHON,
+# PARDEL_GENERATED_DIR and PARDEL_REGENERATE say where the rest is; an installed pardel sets them
+# to its installed copies before including this file.
 include_guard(GLOBAL)
 
-set(PARDEL_GENERATED_DIR "${PROJECT_SOURCE_DIR}/generated" CACHE INTERNAL
-    "Committed generated kernels of the bundled models")
+if(TARGET pardel-gen AND NOT TARGET pardel::pardel-gen)
+  add_executable(pardel::pardel-gen ALIAS pardel-gen)
+endif()
+if(NOT DEFINED PARDEL_GENERATED_DIR)
+  set(PARDEL_GENERATED_DIR "${PROJECT_SOURCE_DIR}/generated" CACHE INTERNAL
+      "Committed generated kernels of the bundled models")
+endif()
 
 # Reads the model name from the .lag's `model NAME` line (the file's stem if there is none: the
 # generator then reports the missing line at build time).
@@ -46,22 +57,28 @@ function(pardel_add_model target lag)
   pardel_lag_model_name("${lag}" model)
   pardel_source_name("${lag}" source_name)
 
-  if(PARDEL_REGENERATE AND TARGET pardel-gen)
+  if(PARDEL_REGENERATE AND TARGET pardel::pardel-gen)
+    # The generator as a dependency: the target itself in pardel's build (built first), the
+    # installed executable (a file) otherwise.
+    get_target_property(gen pardel::pardel-gen ALIASED_TARGET)
+    if(NOT gen)
+      set(gen pardel::pardel-gen)
+    endif()
     set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/pardel_generated")
     set(ir "${out_dir}/${model}.ir.json")
     add_custom_command(
       OUTPUT "${out_dir}/${model}.hpp" "${out_dir}/${model}.cpp"
       COMMAND ${CMAKE_COMMAND} -E make_directory "${out_dir}"
-      COMMAND $<TARGET_FILE:pardel-gen> "${lag}" -o "${ir}" --source-name "${source_name}"
+      COMMAND $<TARGET_FILE:pardel::pardel-gen> "${lag}" -o "${ir}" --source-name "${source_name}"
       COMMAND "${PARDEL_PYTHON}" "${PARDEL_RENDER_SCRIPT}" "${ir}" --out-dir "${out_dir}"
-      DEPENDS "${lag}" pardel-gen "${PARDEL_RENDER_SCRIPT}" ${PARDEL_TEMPLATES}
+      DEPENDS "${lag}" ${gen} "${PARDEL_RENDER_SCRIPT}" ${PARDEL_TEMPLATES}
       COMMENT "pardel-gen: ${source_name} -> ${model}.hpp, ${model}.cpp"
       VERBATIM)
   else()
     set(out_dir "${PARDEL_GENERATED_DIR}")
     if(NOT EXISTS "${out_dir}/${model}.cpp")
       message(FATAL_ERROR "pardel_add_model: ${source_name} needs pardel-gen (GiNaC was not found, "
-                          "or PARDEL_REGENERATE is OFF) and has no committed copy under generated/.")
+                          "or PARDEL_REGENERATE is OFF) and has no committed copy in ${out_dir}.")
     endif()
   endif()
   target_sources(${target} PRIVATE "${out_dir}/${model}.cpp")

@@ -380,7 +380,6 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
   if (summary.termination == Termination::invalid_input)
     throw InputError(fmt::format("{}: error: {}", scene.path, summary.message));
 
-  const bool on_grid = trajectory.N == scene.problem.N && !trajectory.t.empty();
   py::dict result;
   const std::string model_source = cli::scene_model_source(scene);
   result["summary"] = cli::summary_json(scene, summary, trajectory, Certificate{}, model_source).dump();
@@ -388,8 +387,10 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
   result["t"] = vector(trajectory.t);
   result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
   std::vector<double> p0, pN;
-  if (on_grid) {
-    const BoundaryMomenta momenta = boundary_momenta(scene.problem, trajectory);
+  if (!trajectory.t.empty()) {
+    Problem on_grid = scene.problem;  // the trajectory's grid (coarser when interrupted on a coarse level)
+    on_grid.N = trajectory.N;
+    const BoundaryMomenta momenta = boundary_momenta(on_grid, trajectory);
     p0 = momenta.p0;
     pN = momenta.pN;
   }
@@ -540,6 +541,24 @@ PYBIND11_MODULE(_pardel, m) {
 
   m.def("bundled_models", &bundled_names, "The names of the models compiled into this module.");
   m.def("can_compile_lag_files", &pardel::can_compile_lag_files);
+  m.def("loader_toolchain", [] {
+    const LoaderToolchain t = loader_toolchain();
+    py::dict out;
+    out["generator"] = t.generator;
+    out["python"] = t.python;
+    out["render_script"] = t.render_script;
+    out["compiler"] = t.compiler;
+    out["abi_include"] = t.abi_include;
+    return out;
+  });
+  m.def(
+      "set_loader_toolchain",
+      [](std::string generator, std::string python, std::string render_script, std::string compiler,
+         std::string abi_include) {
+        set_loader_toolchain({std::move(generator), std::move(python), std::move(render_script), std::move(compiler),
+                              std::move(abi_include)});
+      },
+      py::arg("generator"), py::arg("python"), py::arg("render_script"), py::arg("compiler"), py::arg("abi_include"));
   m.def("load_model", &load_model, py::arg("spec"));
   m.def("scene_from_arguments", &scene_from_arguments, py::arg("model"), py::arg("arguments"));
   m.def("load_scene", &load_scene, py::arg("path"), py::arg("overrides"));

@@ -18,6 +18,15 @@ import numpy as np
 from . import _pardel
 from ._pardel import ModelError, PardelError, SceneError
 
+# An installed package compiles .lag files with the installed pardel-gen and render script, which
+# `cmake --install` names in _installed.py; the build tree's package uses the build tree's.
+try:
+    from ._installed import LOADER_TOOLCHAIN as _INSTALLED_TOOLCHAIN
+except ImportError:
+    _INSTALLED_TOOLCHAIN = None
+if _INSTALLED_TOOLCHAIN:
+    _pardel.set_loader_toolchain(**_INSTALLED_TOOLCHAIN)
+
 __all__ = [
     "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError",
     "model", "models", "solve", "load_scene", "solve_scene", "check", "kernels", "lag_cache_dir",

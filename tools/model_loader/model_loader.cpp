@@ -86,9 +86,17 @@ std::string trim(std::string s) {
 }
 
 #ifdef PARDEL_LOADER_GEN
+// The toolchain in use (guarded by its mutex; read once per compile).
+std::mutex toolchain_mutex;
+LoaderToolchain& current_toolchain() {
+  static LoaderToolchain toolchain{PARDEL_LOADER_GEN, PARDEL_LOADER_PYTHON, PARDEL_LOADER_RENDER, PARDEL_LOADER_CXX,
+                                   PARDEL_LOADER_ABI_INCLUDE};
+  return toolchain;
+}
+
 // Generates, renders and compiles `lag` into the cache folder `dir`; atomic: built in a
 // temporary sibling folder and renamed into place.
-void build_into(const fs::path& lag, const fs::path& dir) {
+void build_into(const fs::path& lag, const fs::path& dir, const LoaderToolchain& tools) {
   fs::create_directories(dir.parent_path());
   // Temporary folders of this entry left by compiles that were killed (their process is gone).
   const std::string prefix = dir.filename().string() + ".tmp.";
@@ -118,11 +126,11 @@ void build_into(const fs::path& lag, const fs::path& dir) {
     if (details.empty()) throw ModelLoadError(what);
     throw ModelLoadError(details_only ? details : what + ":\n" + details);
   };
-  if (run_program({PARDEL_LOADER_GEN, lag.string(), "-o", ir.string(), "--source-name",
+  if (run_program({tools.generator, lag.string(), "-o", ir.string(), "--source-name",
                    lag.filename().string()},
                   log) != 0)
     fail("pardel-gen failed on " + lag.string(), true);
-  if (run_program({PARDEL_LOADER_PYTHON, PARDEL_LOADER_RENDER, ir.string(), "--out-dir", tmp.string()},
+  if (run_program({tools.python, tools.render_script, ir.string(), "--out-dir", tmp.string()},
                   log) != 0)
     fail("rendering the kernels of " + lag.string() + " failed");
   std::string model;
@@ -130,11 +138,10 @@ void build_into(const fs::path& lag, const fs::path& dir) {
     if (entry.path().extension() == ".cpp") model = entry.path().stem().string();
   }
   if (model.empty()) fail("the generator wrote no kernels for " + lag.string());
-  if (run_program({PARDEL_LOADER_CXX, "-std=c++17", "-O2", "-fPIC", "-shared", "-Wl,-Bsymbolic",
-                   "-I" PARDEL_LOADER_ABI_INCLUDE, (tmp / (model + ".cpp")).string(), "-o",
-                   (tmp / "model.so").string()},
+  if (run_program({tools.compiler, "-std=c++17", "-O2", "-fPIC", "-shared", "-Wl,-Bsymbolic",
+                   "-I" + tools.abi_include, (tmp / (model + ".cpp")).string(), "-o", (tmp / "model.so").string()},
                   log) != 0)
-    fail("compiling the kernels of " + lag.string() + " failed (" PARDEL_LOADER_CXX ")");
+    fail("compiling the kernels of " + lag.string() + " failed (" + tools.compiler + ")");
   std::ofstream(tmp / "model_name.txt") << model;
   std::error_code ec;
   fs::rename(tmp, dir, ec);
@@ -144,9 +151,28 @@ void build_into(const fs::path& lag, const fs::path& dir) {
 
 }  // namespace
 
+LoaderToolchain loader_toolchain() {
+#ifdef PARDEL_LOADER_GEN
+  std::lock_guard<std::mutex> lock(toolchain_mutex);
+  return current_toolchain();
+#else
+  return {};
+#endif
+}
+
+void set_loader_toolchain(const LoaderToolchain& toolchain) {
+#ifdef PARDEL_LOADER_GEN
+  std::lock_guard<std::mutex> lock(toolchain_mutex);
+  current_toolchain() = toolchain;
+#else
+  (void)toolchain;
+#endif
+}
+
 bool can_compile_lag_files() {
 #ifdef PARDEL_LOADER_GEN
-  return fs::exists(PARDEL_LOADER_GEN) && fs::exists(PARDEL_LOADER_RENDER);
+  const LoaderToolchain tools = loader_toolchain();
+  return fs::exists(tools.generator) && fs::exists(tools.render_script);
 #else
   return false;
 #endif
@@ -171,15 +197,20 @@ const pardel_model* resolve_model(const std::string& name_or_path) {
   const fs::path lag = name_or_path;
   const std::string content = read_file(lag);
   std::uint64_t key = fnv1a(content);
-  key = fnv1a(PARDEL_LOADER_GEN, key);
-  key = fnv1a(PARDEL_LOADER_CXX, key);
-  key = fnv1a(std::to_string(fs::last_write_time(PARDEL_LOADER_GEN).time_since_epoch().count()), key);
+  const LoaderToolchain tools = loader_toolchain();
+  std::error_code time_error;
+  const auto generator_time = fs::last_write_time(tools.generator, time_error);
+  if (time_error)
+    throw ModelLoadError("cannot compile '" + name_or_path + "': no generator at " + tools.generator);
+  key = fnv1a(tools.generator, key);
+  key = fnv1a(tools.compiler, key);
+  key = fnv1a(std::to_string(generator_time.time_since_epoch().count()), key);
   if (auto it = loaded.find(key); it != loaded.end()) return it->second;
 
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(key));
   const fs::path dir = cache_root() / hex;
-  if (!fs::exists(dir / "model.so")) build_into(lag, dir);
+  if (!fs::exists(dir / "model.so")) build_into(lag, dir, tools);
 
   // Loads the cache entry; on failure returns nullptr and says why.
   auto load = [&dir](std::string* why) -> const pardel_model* {
@@ -214,7 +245,7 @@ const pardel_model* resolve_model(const std::string& name_or_path) {
     // compiled again once rather than failing until the cache is cleared.
     std::error_code ec;
     fs::remove_all(dir, ec);
-    build_into(lag, dir);
+    build_into(lag, dir, tools);
     descriptor = load(&why);
     if (!descriptor) throw ModelLoadError(why);
   }

@@ -32,6 +32,25 @@ const pardel_model* resolve_model(const std::string& name_or_path);
 /** True when this build can compile .lag files at run time (pardel-gen and a compiler found). */
 bool can_compile_lag_files();
 
+/** What compiles a .lag file: the generator, the Python that runs the render script (with
+ *  Jinja2), the render script, the C++ compiler and the folder holding pardel/kernel_abi.h. */
+struct LoaderToolchain {
+  std::string generator;
+  std::string python;
+  std::string render_script;
+  std::string compiler;
+  std::string abi_include;
+};
+
+/** The toolchain in use: the build tree's (fixed when pardel was built) unless replaced. All
+ *  fields are empty in a build without the generator. */
+LoaderToolchain loader_toolchain();
+
+/** Replaces the toolchain for the rest of the process (an installed copy of pardel points the
+ *  loader at its installed pardel-gen and render script). Has no effect in a build without the
+ *  generator, which cannot compile .lag files. */
+void set_loader_toolchain(const LoaderToolchain& toolchain);
+
 }  // namespace pardel
 
 #endif  // PARDEL_MODEL_LOADER_HPP
