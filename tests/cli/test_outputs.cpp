@@ -1,5 +1,6 @@
 // Tests of the solve outputs (tools/pardel/outputs.hpp): exit codes, convergence.csv, the
-// certificate's JSON and the physical cost (the summed clock checked against path length).
+// certificate's JSON, the physical cost (the summed clock checked against path length) and the
+// boundary momenta of summary.json (checked against the harmonic oscillator's exact velocities).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -104,6 +105,40 @@ TEST(Outputs, TravelTimeInStillAirIsThePathLength) {
   const PhysicalCost cost = physical_cost(scene, summary, path);
   EXPECT_EQ(cost.name, "travel_time");
   EXPECT_NEAR(cost.value, 11.0, 1e-12);
+}
+
+TEST(Outputs, SummaryHasTheBoundaryMomentaOfTheSolvedOscillator) {
+  // x'' = -x, x(0) = 0, x(T) = 1: x = sin t / sin T, so x'(0) = 1 / sin T and x'(T) = cos T / sin T;
+  // the discrete momenta approach them at second order (trapezoid, N = 200: within 1e-4).
+  Scene scene = scene_for("harmonic");
+  ASSERT_NE(scene.model, nullptr);
+  const double T = 1.3;
+  scene.problem.T = T;
+  scene.problem.N = 200;
+  scene.problem.q0 = {0};
+  scene.problem.qN = {1};
+  Trajectory trajectory = linear_guess(scene.problem);
+  Options options;
+  options.method = Method::newton;
+  const Summary summary = solve(scene.problem, options, trajectory);
+  ASSERT_TRUE(summary.converged()) << summary.message;
+  const nlohmann::ordered_json j = summary_json(scene, summary, trajectory, Certificate{}, "");
+  ASSERT_TRUE(j.contains("boundary_momenta"));
+  const auto& momenta = j["boundary_momenta"];
+  ASSERT_EQ(momenta["p0"].size(), 1u);
+  ASSERT_EQ(momenta["pN"].size(), 1u);
+  EXPECT_NEAR(momenta["p0"][0].get<double>(), 1 / std::sin(T), 1e-4);
+  EXPECT_NEAR(momenta["pN"][0].get<double>(), std::cos(T) / std::sin(T), 1e-4);
+  const BoundaryMomenta exact = boundary_momenta(scene.problem, trajectory);
+  EXPECT_EQ(momenta["p0"][0].get<double>(), exact.p0[0]);
+  EXPECT_EQ(momenta["pN"][0].get<double>(), exact.pN[0]);
+}
+
+TEST(Outputs, SummaryBoundaryMomentaAreNullWithoutATrajectory) {
+  const Scene scene = scene_for("harmonic");
+  ASSERT_NE(scene.model, nullptr);
+  const nlohmann::ordered_json j = summary_json(scene, Summary{}, Trajectory{}, Certificate{}, "");
+  EXPECT_TRUE(j["boundary_momenta"].is_null());
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -51,7 +52,56 @@ TEST_F(TrajectoryFiles, HeaderNamesCoordinatesAndDerivatives) {
   const pardel_model* order1 = find_model("fuel_nav");
   ASSERT_NE(order1, nullptr);
   const std::string csv1 = trajectory_csv(*order1, sample(*order1, 3));
-  EXPECT_EQ(csv1.substr(0, csv1.find('\n')), "k,t,x,y,x',y'");  // velocities by finite differences
+  EXPECT_EQ(csv1.substr(0, csv1.find('\n')), "k,t,x,y,x',y'");  // velocities: node_velocity
+}
+
+TEST(NodeVelocity, ExactForAQuadraticPathOnAnUnevenGridEndsIncluded) {
+  // q(t) = 3 - 2t + 5t^2 on uneven node times: the three-node quadratic is q itself, so every
+  // node, the first and the last included, gets q'(t_k) = -2 + 10 t_k.
+  Trajectory path;
+  path.N = 4;
+  path.dim = 1;
+  path.t = {0.0, 0.3, 0.45, 1.0, 1.7};
+  for (double t : path.t) path.q.push_back(3 - 2 * t + 5 * t * t);
+  for (int k = 0; k <= path.N; ++k) EXPECT_NEAR(node_velocity(path, k, 0), -2 + 10 * path.t[k], 1e-12) << k;
+}
+
+TEST(NodeVelocity, SecondOrderAtTheEndPointsAsInside) {
+  // q = sin t on a uniform grid: the error at the end points falls by 4 when h halves, as inside.
+  auto max_error = [](int N, bool ends) {
+    Trajectory path;
+    path.N = N;
+    path.dim = 1;
+    for (int k = 0; k <= N; ++k) {
+      path.t.push_back(1.5 * k / N);
+      path.q.push_back(std::sin(path.t.back()));
+    }
+    double worst = 0;
+    for (int k = 0; k <= N; ++k) {
+      if ((k == 0 || k == N) != ends) continue;
+      worst = std::max(worst, std::fabs(node_velocity(path, k, 0) - std::cos(path.t[k])));
+    }
+    return worst;
+  };
+  for (bool ends : {true, false}) {
+    const double ratio = max_error(40, ends) / max_error(80, ends);
+    EXPECT_GT(ratio, 3.8) << (ends ? "end points" : "interior");
+    EXPECT_LT(ratio, 4.2) << (ends ? "end points" : "interior");
+  }
+}
+
+TEST(NodeVelocity, OneIntervalGivesItsSlopeAndCoincidentTimesNaN) {
+  Trajectory path;
+  path.N = 1;
+  path.dim = 1;
+  path.t = {0, 2};
+  path.q = {1, 5};
+  EXPECT_EQ(node_velocity(path, 0, 0), 2);
+  EXPECT_EQ(node_velocity(path, 1, 0), 2);
+  path.N = 2;
+  path.t = {0, 0, 1};
+  path.q = {1, 1, 2};
+  EXPECT_TRUE(std::isnan(node_velocity(path, 1, 0)));
 }
 
 TEST_F(TrajectoryFiles, RoundTripIsExact) {

@@ -54,6 +54,18 @@ def test_boundary_momenta_approach_the_continuous_velocities(spring_lag):
     np.testing.assert_allclose(r.pN, vT, rtol=1e-3)
 
 
+def test_boundary_momenta_in_the_summary_and_exact_for_a_free_particle():
+    # A free particle moves at the constant velocity (qN - q0) / T, and both discretizations give
+    # it exactly: the discrete momenta are that velocity, and summary.json holds the same numbers.
+    q0, qN, duration = np.array([0.5, -1.0]), np.array([2.0, 3.0]), 2.5
+    for discretization in ("trapezoid", "midpoint"):
+        r = pardel.solve("free_particle", q0=q0, qN=qN, T=duration, N=20, discretization=discretization)
+        assert r.status == "converged"
+        np.testing.assert_allclose(r.p0, (qN - q0) / duration, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(r.pN, (qN - q0) / duration, rtol=0, atol=1e-12)
+        assert r.summary["boundary_momenta"] == {"p0": list(r.p0), "pN": list(r.pN)}
+
+
 def test_summary_fields(spring_lag):
     N = 50
     r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=T, N=N)

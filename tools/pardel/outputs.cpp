@@ -133,6 +133,14 @@ nlohmann::ordered_json point_json(const PointAssessment& p) {
   return j;
 }
 
+nlohmann::ordered_json boundary_momenta_json(const Problem& problem, const Trajectory& trajectory) {
+  Problem on_grid = problem;  // the trajectory's grid: a solve interrupted on a coarse level has fewer nodes
+  on_grid.N = trajectory.N;
+  const BoundaryMomenta momenta = boundary_momenta(on_grid, trajectory);
+  if (momenta.p0.empty()) return nullptr;
+  return {{"p0", momenta.p0}, {"pN", momenta.pN}};
+}
+
 nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                                     const Certificate& certificate, const std::string& model_source) {
   const Problem& problem = scene.problem;
@@ -166,6 +174,7 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   j["tolerance"] = summary.tolerance;
   j["scene"] = scene.path;
   j["point"] = point_json(summary.point);
+  j["boundary_momenta"] = boundary_momenta_json(problem, trajectory);
   if (certificate.free_components > 0 || !certificate.error.empty()) j["certificate"] = certificate_json(certificate);
   return j;
 }

@@ -41,6 +41,11 @@ nlohmann::ordered_json certificate_json(const Certificate& certificate, std::siz
 /** The solve's point assessment (minimum, saddle, degenerate; inertia; smallest eigenvalues). */
 nlohmann::ordered_json point_json(const PointAssessment& point);
 
+/** The discrete boundary momenta of a trajectory on its own grid, as summary.json's
+ *  "boundary_momenta": {"p0": -D1 Ld(q_0, q_1), "pN": D2 Ld(q_{N-1}, q_N)} (dim values each, the
+ *  order of the state columns); null when the trajectory is not a valid one of the problem. */
+nlohmann::ordered_json boundary_momenta_json(const Problem& problem, const Trajectory& trajectory);
+
 /** summary.json for one solve (the certificate only when it was computed: free_components > 0). */
 nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                                     const Certificate& certificate, const std::string& model_source);

@@ -31,6 +31,24 @@ std::string format_double(double value) {
   return fmt::format("{:.17g}", value);
 }
 
+double node_velocity(const Trajectory& trajectory, int k, int i) {
+  const int N = trajectory.N;
+  if (N < 1) return std::nan("");
+  if (N == 1) {
+    const double dt = trajectory.t[1] - trajectory.t[0];
+    return dt != 0 ? (trajectory.node(1)[i] - trajectory.node(0)[i]) / dt : std::nan("");
+  }
+  // The three nodes nearest k: k-1, k, k+1 inside; 0, 1, 2 and N-2, N-1, N at the ends.
+  const int a = k == 0 ? 0 : (k == N ? N - 2 : k - 1);
+  const double t = trajectory.t[k];
+  const double ta = trajectory.t[a], tb = trajectory.t[a + 1], tc = trajectory.t[a + 2];
+  if (ta == tb || tb == tc || ta == tc) return std::nan("");
+  // The derivative at t of the quadratic through (ta, qa), (tb, qb), (tc, qc) (Lagrange form).
+  const double qa = trajectory.node(a)[i], qb = trajectory.node(a + 1)[i], qc = trajectory.node(a + 2)[i];
+  return qa * ((t - tb) + (t - tc)) / ((ta - tb) * (ta - tc)) + qb * ((t - ta) + (t - tc)) / ((tb - ta) * (tb - tc)) +
+         qc * ((t - ta) + (t - tb)) / ((tc - ta) * (tc - tb));
+}
+
 std::string trajectory_csv(const pardel_model& model, const Trajectory& trajectory) {
   const int dim = trajectory.dim;
   const int nc = model.ncoords;
@@ -46,13 +64,7 @@ std::string trajectory_csv(const pardel_model& model, const Trajectory& trajecto
     const double* q = trajectory.node(k);
     for (int j = 0; j < dim; ++j) out += "," + format_double(q[j]);
     if (add_velocity) {
-      const int a = k == 0 ? 0 : k - 1;
-      const int b = k == trajectory.N ? k : k + 1;
-      const double dt = trajectory.t[b] - trajectory.t[a];
-      for (int i = 0; i < nc; ++i) {
-        const double dq = trajectory.node(b)[i] - trajectory.node(a)[i];
-        out += "," + format_double(dt != 0 ? dq / dt : std::nan(""));
-      }
+      for (int i = 0; i < nc; ++i) out += "," + format_double(node_velocity(trajectory, k, i));
     }
     out += '\n';
   }

@@ -17,9 +17,19 @@ namespace pardel::cli {
 std::vector<std::string> state_column_names(const pardel_model& model);
 
 /**
+ * The velocity column of coordinate i at node k of an order-1 model's trajectory: the derivative
+ * at t_k of the quadratic in t through the three nearest nodes (k-1, k, k+1 inside; 0, 1, 2 at the
+ * start; N-2, N-1, N at the end), second-order accurate at every node, the end points included;
+ * on a uniform grid the central difference (q_{k+1} - q_{k-1}) / (2h) inside and
+ * (-3 q_0 + 4 q_1 - q_2) / (2h), (3 q_N - 4 q_{N-1} + q_{N-2}) / (2h) at the ends. The slope of
+ * the one interval when N = 1; NaN when two of the node times coincide.
+ */
+double node_velocity(const Trajectory& trajectory, int k, int i);
+
+/**
  * trajectory.csv: header "k,t,<state columns>" and, for order-1 models, the velocity columns
- * x', y', ... estimated by finite differences in t (central inside, one-sided at the ends), which
- * are not part of the stored state. Numbers are printed with 17 significant digits.
+ * x', y', ... (node_velocity), which are not part of the stored state. Numbers are printed with
+ * 17 significant digits.
  */
 std::string trajectory_csv(const pardel_model& model, const Trajectory& trajectory);
 
