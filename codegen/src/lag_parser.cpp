@@ -646,13 +646,14 @@ GiNaC::ex Reader::parse_atom(Cursor& c, const ExprContext& ctx) const {
 
 /**
  * Refuses powers that GiNaC would evaluate exactly at unbounded cost (2^(10^308)) or that it
- * rejects by throwing after allocating (0^-3): both are reported here, before GiNaC sees them.
+ * rejects by throwing after allocating (0^-3, 0^0): all are reported here, before GiNaC sees them.
  */
 void Reader::check_power(const Line& line, const Token& op, const GiNaC::ex& base, const GiNaC::ex& exponent) const {
   if (!GiNaC::is_a<GiNaC::numeric>(exponent)) return;
   const GiNaC::numeric& e = GiNaC::ex_to<GiNaC::numeric>(exponent);
-  if (GiNaC::is_a<GiNaC::numeric>(base) && GiNaC::ex_to<GiNaC::numeric>(base).is_zero() && e.real().is_negative()) {
-    fail(line, op, "division by zero: 0 raised to a negative power");
+  if (GiNaC::is_a<GiNaC::numeric>(base) && GiNaC::ex_to<GiNaC::numeric>(base).is_zero()) {
+    if (e.real().is_negative()) fail(line, op, "division by zero: 0 raised to a negative power");
+    if (e.real().is_zero()) fail(line, op, "0^0 is undefined");
   }
   if (!GiNaC::is_a<GiNaC::numeric>(base) || !e.is_rational()) return;
   const GiNaC::numeric& b = GiNaC::ex_to<GiNaC::numeric>(base);
