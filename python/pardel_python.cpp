@@ -386,16 +386,9 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
   result["stopped_by_callback"] = stopped_by_callback;
   result["t"] = vector(trajectory.t);
   result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
-  std::vector<double> p0, pN;
-  if (!trajectory.t.empty()) {
-    Problem on_grid = scene.problem;  // the trajectory's grid (coarser when interrupted on a coarse level)
-    on_grid.N = trajectory.N;
-    const BoundaryMomenta momenta = boundary_momenta(on_grid, trajectory);
-    p0 = momenta.p0;
-    pN = momenta.pN;
-  }
-  result["p0"] = vector(p0);
-  result["pN"] = vector(pN);
+  const BoundaryMomenta momenta = cli::momenta_on_trajectory_grid(scene.problem, trajectory);
+  result["p0"] = vector(momenta.p0);
+  result["pN"] = vector(momenta.pN);
   const std::size_t n = summary.history.size();
   std::vector<double> it(n), N(n), res(n), act(n), sec(n);
   for (std::size_t i = 0; i < n; ++i) {

@@ -133,10 +133,14 @@ nlohmann::ordered_json point_json(const PointAssessment& p) {
   return j;
 }
 
-nlohmann::ordered_json boundary_momenta_json(const Problem& problem, const Trajectory& trajectory) {
+BoundaryMomenta momenta_on_trajectory_grid(const Problem& problem, const Trajectory& trajectory) {
   Problem on_grid = problem;  // the trajectory's grid: a solve interrupted on a coarse level has fewer nodes
   on_grid.N = trajectory.N;
-  const BoundaryMomenta momenta = boundary_momenta(on_grid, trajectory);
+  return boundary_momenta(on_grid, trajectory);
+}
+
+nlohmann::ordered_json boundary_momenta_json(const Problem& problem, const Trajectory& trajectory) {
+  const BoundaryMomenta momenta = momenta_on_trajectory_grid(problem, trajectory);
   if (momenta.p0.empty()) return nullptr;
   return {{"p0", momenta.p0}, {"pN", momenta.pN}};
 }

@@ -41,6 +41,10 @@ nlohmann::ordered_json certificate_json(const Certificate& certificate, std::siz
 /** The solve's point assessment (minimum, saddle, degenerate; inertia; smallest eigenvalues). */
 nlohmann::ordered_json point_json(const PointAssessment& point);
 
+/** The discrete boundary momenta of a trajectory on its own grid (coarser than the problem's when a
+ *  solve stopped on a coarse level); both empty when it is not a valid trajectory of the problem. */
+BoundaryMomenta momenta_on_trajectory_grid(const Problem& problem, const Trajectory& trajectory);
+
 /** The discrete boundary momenta of a trajectory on its own grid, as summary.json's
  *  "boundary_momenta": {"p0": -D1 Ld(q_0, q_1), "pN": D2 Ld(q_{N-1}, q_N)} (dim values each, the
  *  order of the state columns); null when the trajectory is not a valid one of the problem. */
