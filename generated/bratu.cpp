@@ -163,4 +163,6 @@ extern "C" const pardel_model bratu_model = {
     nullptr,
     2,
     bratu_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

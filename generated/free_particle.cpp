@@ -195,4 +195,6 @@ extern "C" const pardel_model free_particle_model = {
     nullptr,
     2,
     free_particle_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

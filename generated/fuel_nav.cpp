@@ -330,4 +330,6 @@ extern "C" const pardel_model fuel_nav_model = {
     nullptr,
     2,
     fuel_nav_discretizations,
+    "fuel",
+    PARDEL_COST_ACTION,
 };

@@ -164,4 +164,6 @@ extern "C" const pardel_model harmonic_model = {
     nullptr,
     2,
     harmonic_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

@@ -1183,4 +1183,6 @@ extern "C" const pardel_model interp_fuel_model = {
     nullptr,
     2,
     interp_fuel_discretizations,
+    "cost",
+    PARDEL_COST_ACTION,
 };

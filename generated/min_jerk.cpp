@@ -691,4 +691,6 @@ extern "C" const pardel_model min_jerk_model = {
     nullptr,
     1,
     min_jerk_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

@@ -1128,4 +1128,6 @@ extern "C" const pardel_model min_snap_model = {
     nullptr,
     1,
     min_snap_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

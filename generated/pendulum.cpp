@@ -170,4 +170,6 @@ extern "C" const pardel_model pendulum_model = {
     nullptr,
     2,
     pendulum_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

@@ -1569,4 +1569,6 @@ extern "C" const pardel_model spacecraft_model = {
     spacecraft_clock,
     2,
     spacecraft_discretizations,
+    "fuel",
+    PARDEL_COST_ACTION,
 };

@@ -289,4 +289,6 @@ extern "C" const pardel_model sphere_geodesic_model = {
     nullptr,
     2,
     sphere_geodesic_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

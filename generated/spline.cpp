@@ -449,4 +449,6 @@ extern "C" const pardel_model spline_model = {
     nullptr,
     2,
     spline_discretizations,
+    nullptr,
+    PARDEL_COST_ACTION,
 };

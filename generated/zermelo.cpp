@@ -1392,4 +1392,6 @@ extern "C" const pardel_model zermelo_model = {
     zermelo_clock,
     2,
     zermelo_discretizations,
+    "travel_time",
+    PARDEL_COST_CLOCK,
 };

@@ -872,4 +872,6 @@ extern "C" const pardel_model zermelo_tv_model = {
     zermelo_tv_clock,
     2,
     zermelo_tv_discretizations,
+    "travel_time",
+    PARDEL_COST_CLOCK,
 };

@@ -157,6 +157,7 @@ class Reader {
   std::optional<Line> lagrangian_line_;
   std::optional<Line> clock_line_;
   std::optional<Line> discretization_line_;
+  std::optional<Line> cost_line_;
   int model_line_ = 0;
   int order_line_ = 0;
   int coords_line_ = 0;
@@ -271,7 +272,7 @@ void Reader::read_declaration(const Line& line) {
   auto expect_end = [&](std::size_t pos, const char* after) {
     if (toks[pos].kind != Tok::end) fail(line, toks[pos], "unexpected " + toks[pos].shown() + " after " + after);
   };
-  const std::string keywords = "model, order, coords, param, let, L, clock or discretizations";
+  const std::string keywords = "model, order, coords, param, let, L, clock, cost or discretizations";
   if (head.kind != Tok::ident || head.primes > 0) {
     fail(line, head, "expected a declaration (" + keywords + "), found " + head.shown());
   }
@@ -354,6 +355,28 @@ void Reader::read_declaration(const Line& line) {
       fail(line, head, "duplicate '" + kw + "' (first defined at line " + std::to_string(slot->number) + ")");
     }
     slot = line;
+  } else if (kw == "cost") {
+    if (cost_line_) fail(line, head, "duplicate 'cost' line (first at line " + std::to_string(cost_line_->number) + ")");
+    const Token& name = toks[1];
+    if (name.kind != Tok::ident || name.primes > 0) {
+      fail(line, name, "expected the name of the cost (a C identifier, e.g. fuel), found " + name.shown());
+    }
+    if (name.text.size() > kMaxModelNameLength) {
+      fail(line, name, "cost name is too long (at most " + std::to_string(kMaxModelNameLength) + " characters)");
+    }
+    if (!(toks[2].kind == Tok::op && toks[2].text == "=")) {
+      fail(line, toks[2], "expected '=' after the cost name, found " + toks[2].shown());
+    }
+    const Token& kind = toks[3];
+    if (kind.kind != Tok::ident || kind.primes > 0 || (kind.text != "action" && kind.text != "clock")) {
+      fail(line, kind,
+           "expected 'action' (the cost is the discrete action) or 'clock' (the summed clock), found " + kind.shown());
+    }
+    expect_end(4, "the cost");
+    model_.cost_name = name.text;
+    model_.cost_kind = kind.text;
+    model_.cost_line = line.number;
+    cost_line_ = line;
   } else if (kw == "discretizations") {
     if (discretization_line_) {
       fail(line, head, "duplicate 'discretizations' line (first at line " +
@@ -794,6 +817,9 @@ LagModel Reader::read() {
     model_.has_clock = true;
     model_.clock_line = clock_line_->number;
     model_.clock_column = clock_line_->tokens[2].col;
+  }
+  if (cost_line_ && model_.cost_kind == "clock" && !clock_line_) {
+    fail(*cost_line_, cost_line_->tokens[3], "a cost that is the summed clock needs a 'clock = ...' declaration");
   }
   if (discretization_line_) {
     read_discretizations(*discretization_line_);

@@ -168,7 +168,7 @@ std::string ir_to_json(const ModelIR& ir) {
   j << "  \"format_version\": 1,\n";
   j << "  \"generator\": " << json_string(std::string("pardel-gen ") + generator_version()) << ",\n";
   j << "  \"generator_version\": " << json_string(generator_version()) << ",\n";
-  j << "  \"abi_version\": 1,\n";
+  j << "  \"abi_version\": 2,\n";
   j << "  \"model\": {\n";
   j << "    \"name\": " << json_string(m.name) << ",\n";
   j << "    \"source\": " << json_string(ir.source_name) << ",\n";
@@ -183,7 +183,13 @@ std::string ir_to_json(const ModelIR& ir) {
       << ", \"default\": " << json_string(c_double_literal(m.params[i].default_value)) << "}";
   }
   j << "],\n";
-  j << "    \"time_dependent\": " << (m.time_dependent() ? "true" : "false") << "\n";
+  j << "    \"time_dependent\": " << (m.time_dependent() ? "true" : "false") << ",\n";
+  j << "    \"cost\": ";
+  if (m.cost_name.empty()) {
+    j << "null\n";
+  } else {
+    j << "{\"name\": " << json_string(m.cost_name) << ", \"kind\": " << json_string(m.cost_kind) << "}\n";
+  }
   j << "  },\n";
   j << "  \"discretizations\": [";
   for (std::size_t i = 0; i < ir.discretizations.size(); ++i) {

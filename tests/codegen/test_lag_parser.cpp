@@ -152,6 +152,18 @@ TEST(LagParser, DiscretizationsAreCanonicalized) {
   EXPECT_EQ(m.discretizations[2].ident, "trapezoid_alpha_m1_3");
 }
 
+TEST(LagParser, ReadsTheDeclaredCost) {
+  LagModel none = parse_lag("model a\ncoords x\nL = x'^2\n", "a.lag");
+  EXPECT_TRUE(none.cost_name.empty());
+  LagModel fuel = parse_lag("model a\ncoords x\ncost energy_used = action\nL = x'^2\n", "a.lag");
+  EXPECT_EQ(fuel.cost_name, "energy_used");
+  EXPECT_EQ(fuel.cost_kind, "action");
+  EXPECT_EQ(fuel.cost_line, 3);
+  LagModel time = parse_lag("model a\ncoords x\nL = x'^2\nclock = 1 + x^2\ncost duration = clock\n", "a.lag");
+  EXPECT_EQ(time.cost_name, "duration");
+  EXPECT_EQ(time.cost_kind, "clock");
+}
+
 TEST(LagParser, TimeDependenceIsDetected) {
   EXPECT_FALSE(parse_lag("model a\ncoords x\nL = x'^2\n", "a.lag").time_dependent());
   EXPECT_TRUE(parse_lag("model a\ncoords x\nL = x'^2*cos(t)\n", "a.lag").time_dependent());

@@ -393,7 +393,7 @@ const char* const nan_params[] = {"omega"};
 const double nan_defaults[] = {2.0};
 const pardel_discretization nan_discs[] = {{"trapezoid", 2, nan_full, nan_sweep, nan_grad, nan_action}};
 const pardel_model nan_model = {PARDEL_KERNEL_ABI_VERSION, "nan_harmonic", "", 1, 1, 1, nan_coords, 1, nan_params,
-                                nan_defaults, 0, nullptr, 1, nan_discs};
+                                nan_defaults, 0, nullptr, 1, nan_discs, nullptr, PARDEL_COST_ACTION};
 
 TEST(Failure, NaNOnOneRankEndsEveryRankAsNonFinite) {
   pardel::Problem problem;

@@ -81,7 +81,7 @@ inline const pardel_discretization harmonic_discs[] = {
 };
 inline const pardel_model harmonic = {PARDEL_KERNEL_ABI_VERSION, "hand_harmonic", "tests/runtime/hand_models.hpp",
                                       1, 1, 1, harmonic_coords, 1, harmonic_params, harmonic_defaults, 0, nullptr,
-                                      2, harmonic_discs};
+                                      2, harmonic_discs, nullptr, PARDEL_COST_ACTION};
 
 // ---- Bratu, trapezoid: Ld = (u1-u0)^2/(2h) - h lambda (e^u0 + e^u1)/2
 inline void bratu_full(double h, double, double, const double* q0, const double* q1, const double* p, double* Ld,
@@ -116,7 +116,7 @@ inline const pardel_discretization bratu_discs[] = {
     {"trapezoid", 2, bratu_full, bratu_sweep, bratu_grad, bratu_action}};
 inline const pardel_model bratu = {PARDEL_KERNEL_ABI_VERSION, "hand_bratu", "tests/runtime/hand_models.hpp",
                                    1, 1, 1, bratu_coords, 1, bratu_params, bratu_defaults, 0, nullptr, 1,
-                                   bratu_discs};
+                                   bratu_discs, nullptr, PARDEL_COST_ACTION};
 
 // ---- forced particle (time-dependent): Ld = (x1-x0)^2/(2 dt) + dt (t0 x0 + t1 x1)/2, dt = t1 - t0;
 // the kinetic term uses the node times so that the same kernel serves every clock mode.
@@ -156,7 +156,7 @@ inline const pardel_discretization forced_discs[] = {
     {"trapezoid", 2, forced_full, forced_sweep, forced_grad, forced_action}};
 inline const pardel_model forced = {PARDEL_KERNEL_ABI_VERSION, "hand_forced", "tests/runtime/hand_models.hpp",
                                     1, 1, 1, forced_coords, 1, forced_params, forced_defaults, 1, forced_clock, 1,
-                                    forced_discs};
+                                    forced_discs, nullptr, PARDEL_COST_ACTION};
 
 // ---- cubic spline in one coordinate, L = q''^2/2, trapezoid(alpha): Ld = h/2 (a0^2 + a1^2)/2 with
 // a0 = g0.z, a1 = g1.z, z = (q0, v0, q1, v1) (seed Example exp:trapezoidal). alpha = p[0].
@@ -211,7 +211,7 @@ inline const pardel_discretization spline_discs[] = {
     {"trapezoid(alpha)", 2, spline_full, spline_sweep, spline_grad, spline_action}};
 inline const pardel_model spline = {PARDEL_KERNEL_ABI_VERSION, "hand_spline", "tests/runtime/hand_models.hpp",
                                     2, 1, 2, spline_coords, 1, spline_params, spline_defaults, 0, nullptr, 1,
-                                    spline_discs};
+                                    spline_discs, nullptr, PARDEL_COST_ACTION};
 
 }  // namespace hand
 

@@ -18,9 +18,9 @@ const char* const two_coords[] = {"x"};
 const char* const two_params[] = {"a", "b"};
 const double two_defaults[] = {1.5, -2.0};
 const pardel_model two = {PARDEL_KERNEL_ABI_VERSION, "two", "test_params.cpp", 1, 1, 1, two_coords, 2, two_params,
-                          two_defaults, 0, nullptr, 0, nullptr};
+                          two_defaults, 0, nullptr, 0, nullptr, nullptr, PARDEL_COST_ACTION};
 const pardel_model none = {PARDEL_KERNEL_ABI_VERSION, "none", "test_params.cpp", 1, 1, 1, two_coords, 0, nullptr,
-                           nullptr, 0, nullptr, 0, nullptr};
+                           nullptr, 0, nullptr, 0, nullptr, nullptr, PARDEL_COST_ACTION};
 
 TEST(Params, FindParamGivesTheDeclarationIndex) {
   EXPECT_EQ(pardel::find_param(two, "a"), 0);

@@ -61,6 +61,12 @@ struct LagModel {
   GiNaC::ex clock;                                 ///< dt/ds (derivatives up to order-1 only,
                                                    ///< or q' for order-1 models)
   std::vector<DiscretizationSpec> discretizations; ///< in the order asked for
+  /** What the model's reported cost is called ("fuel", "travel_time"; empty when the .lag
+   *  declares none) and how it is computed: "action" (the discrete action) or "clock" (the
+   *  summed clock, the physical time). Declared by `cost NAME = action|clock`. */
+  std::string cost_name;
+  std::string cost_kind;
+  int cost_line = 0;
   // Where things were read (diagnostics after parsing).
   std::string filename;                            ///< as given to parse_lag
   std::vector<std::string> source_lines;           ///< the text, line by line

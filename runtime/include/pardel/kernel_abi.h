@@ -18,7 +18,7 @@
 #ifndef PARDEL_KERNEL_ABI_H
 #define PARDEL_KERNEL_ABI_H
 
-#define PARDEL_KERNEL_ABI_VERSION 1
+#define PARDEL_KERNEL_ABI_VERSION 2
 
 #ifdef __cplusplus
 extern "C" {
@@ -59,6 +59,12 @@ typedef struct pardel_discretization {
   pardel_action_kernel action;
 } pardel_discretization;
 
+/** How a model's reported cost is computed from a solution (the .lag's `cost NAME = KIND`). */
+enum pardel_cost_kind {
+  PARDEL_COST_ACTION = 0, /**< the discrete action */
+  PARDEL_COST_CLOCK = 1   /**< the summed clock: the physical time of the trajectory */
+};
+
 /** A compiled model: what its .lag declared and the kernels of each discretization. */
 typedef struct pardel_model {
   int abi_version;               /**< PARDEL_KERNEL_ABI_VERSION at generation time */
@@ -75,6 +81,8 @@ typedef struct pardel_model {
   pardel_clock_kernel clock;     /**< NULL when the model declares no clock */
   int ndiscretizations;
   const pardel_discretization* discretizations;
+  const char* cost_name;         /**< what the reported cost is called ("fuel"); NULL: "action" */
+  int cost_kind;                 /**< a pardel_cost_kind */
 } pardel_model;
 
 #ifdef __cplusplus
