@@ -1,10 +1,13 @@
-# pardel_add_model(<target> <file.lag> [KERNELS_ONLY])
+# pardel_add_model(<target> <file.lag> [KERNELS_ONLY] [ALLOW_SINGULAR])
 #
 # Generates the kernels of a .lag model at build time (pardel-gen, then the Jinja2 render step)
 # and compiles them into <target>, which is linked to pardel::runtime (pardel::solve and the rest of
 # pardel/pardel.hpp); KERNELS_ONLY links only the kernel ABI (the bundled-model library uses it).
 # The generated header <model>.hpp is put on <target>'s include
 # path; the model's descriptor is the C symbol `<model>_model` (see pardel/kernel_abi.h).
+# pardel-gen refuses a model that is not regular (W = d2L/dq^(order)dq^(order) singular everywhere,
+# or a discretization such as trapezoid(alpha=0)); ALLOW_SINGULAR generates it with a warning
+# (pardel-gen --allow-singular), for a model that is degenerate on purpose.
 # Editing the .lag, the generator or its templates regenerates exactly that model.
 #
 # Without GiNaC (PARDEL_REGENERATE=OFF) the committed copy under generated/ is compiled instead;
@@ -48,7 +51,7 @@ function(pardel_source_name file out_var)
 endfunction()
 
 function(pardel_add_model target lag)
-  cmake_parse_arguments(PARSE_ARGV 2 _arg "KERNELS_ONLY" "" "")
+  cmake_parse_arguments(PARSE_ARGV 2 _arg "KERNELS_ONLY;ALLOW_SINGULAR" "" "")
   get_filename_component(lag "${lag}" ABSOLUTE)
   if(NOT EXISTS "${lag}")
     message(FATAL_ERROR "pardel_add_model: no such file: ${lag}")
@@ -66,10 +69,14 @@ function(pardel_add_model target lag)
     endif()
     set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/pardel_generated")
     set(ir "${out_dir}/${model}.ir.json")
+    set(gen_flags "")
+    if(_arg_ALLOW_SINGULAR)
+      set(gen_flags --allow-singular)
+    endif()
     add_custom_command(
       OUTPUT "${out_dir}/${model}.hpp" "${out_dir}/${model}.cpp"
       COMMAND ${CMAKE_COMMAND} -E make_directory "${out_dir}"
-      COMMAND $<TARGET_FILE:pardel::pardel-gen> "${lag}" -o "${ir}" --source-name "${source_name}"
+      COMMAND $<TARGET_FILE:pardel::pardel-gen> "${lag}" -o "${ir}" --source-name "${source_name}" ${gen_flags}
       COMMAND "${PARDEL_PYTHON}" "${PARDEL_RENDER_SCRIPT}" "${ir}" --out-dir "${out_dir}"
       DEPENDS "${lag}" ${gen} "${PARDEL_RENDER_SCRIPT}" ${PARDEL_TEMPLATES}
       COMMENT "pardel-gen: ${source_name} -> ${model}.hpp, ${model}.cpp"

@@ -2,6 +2,9 @@
  * @file pardel_gen.cpp
  * The pardel-gen command: reads a .lag model, writes its IR as JSON (-o), and/or prints the
  * operation counts of its kernels before and after CSE (--stats, --stats-json).
+ * Before generating it checks that the model is regular (codegen/src/regularity.cpp): a model whose
+ * W = d2L/dq^(order)dq^(order) is singular everywhere, or a discretization that is not regular, is
+ * refused unless --allow-singular or the .lag allows it.
  * Exit status: 0 on success, 1 on a bad model or an I/O failure, 2 on bad usage.
  */
 #include <sys/personality.h>
@@ -16,11 +19,13 @@
 
 #include "pardel_codegen/lag_parser.hpp"
 #include "pardel_codegen/model_ir.hpp"
+#include "pardel_codegen/regularity.hpp"
 
 namespace {
 
 const char* kUsage =
     "usage: pardel-gen INPUT.lag [-o OUT.json] [--source-name NAME] [--stats | --stats-json]\n"
+    "                  [--allow-singular]\n"
     "\n"
     "Reads a .lag model, discretizes it, differentiates the discrete Lagrangians symbolically\n"
     "(GiNaC), eliminates common subexpressions and writes the intermediate description (IR)\n"
@@ -30,6 +35,10 @@ const char* kUsage =
     "  --source-name NAME   the .lag path recorded in the IR and the banners (default: INPUT)\n"
     "  --stats              print each kernel's operation count before and after CSE\n"
     "  --stats-json         the same as JSON\n"
+    "  --allow-singular     generate a model whose W = d2L/dq^(order)dq^(order) is singular\n"
+    "                       everywhere, or a discretization that is not regular, with a\n"
+    "                       warning instead of refusing it (also: a .lag line\n"
+    "                       '# pardel: allow-singular')\n"
     "  --version, --help\n"
     "\n"
     "Operation counts: each binary + - * /, each unary minus and each function call is one\n"
@@ -82,7 +91,7 @@ void disable_address_randomization(char** argv) {
 int main(int argc, char** argv) {
   disable_address_randomization(argv);
   std::string input, output, source_name;
-  bool stats = false, stats_json = false;
+  bool stats = false, stats_json = false, allow_singular = false;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--help" || a == "-h") {
@@ -100,6 +109,8 @@ int main(int argc, char** argv) {
       stats = true;
     } else if (a == "--stats-json") {
       stats_json = true;
+    } else if (a == "--allow-singular") {
+      allow_singular = true;
     } else if (!a.empty() && a[0] == '-') {
       return usage_error("unknown option '" + a + "'");
     } else if (input.empty()) {
@@ -114,6 +125,9 @@ int main(int argc, char** argv) {
 
   try {
     pardel_codegen::LagModel model = pardel_codegen::parse_lag_file(input);
+    for (const std::string& warning : pardel_codegen::check_regularity(model, allow_singular)) {
+      std::cerr << warning << "\n";
+    }
     pardel_codegen::ModelIR ir = pardel_codegen::build_model_ir_located(model, source_name);
     if (!output.empty()) {
       if (!write_atomically(output, pardel_codegen::ir_to_json(ir))) {

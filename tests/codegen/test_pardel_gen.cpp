@@ -80,11 +80,45 @@ TEST_F(PardelGen, BadInputLeavesAnEarlierOutputUntouched) {
   EXPECT_EQ(read_file(out), "previous");
 }
 
-TEST_F(PardelGen, AlphaZeroIsGeneratedThoughNotRegular) {
+// trapezoid(alpha=0) is not regular for any L: refused at its name unless allowed.
+TEST_F(PardelGen, AlphaZeroIsRefusedAtItsNameUnlessAllowed) {
   const std::string lag = dir_ + "/alpha0.lag";
   { std::ofstream(lag) << "model alpha0\norder 2\ncoords x\nL = x''^2/2\ndiscretizations trapezoid(alpha=0)\n"; }
-  ASSERT_EQ(gen(lag + " -o " + dir_ + "/alpha0.json"), 0) << read_file(dir_ + "/stderr");
+  EXPECT_EQ(gen(lag + " -o " + dir_ + "/alpha0.json"), 1);
+  EXPECT_FALSE(exists(dir_ + "/alpha0.json"));
+  const std::string err = read_file(dir_ + "/stderr");
+  EXPECT_NE(err.find(lag + ":5:17: error: model 'alpha0': discretization 'trapezoid(alpha=0)' is not regular"),
+            std::string::npos) << err;
+  ASSERT_EQ(gen(lag + " -o " + dir_ + "/alpha0.json --allow-singular"), 0) << read_file(dir_ + "/stderr");
   EXPECT_NE(read_file(dir_ + "/alpha0.json").find("\"name\": \"trapezoid(alpha=0)\""), std::string::npos);
+  EXPECT_NE(read_file(dir_ + "/stderr").find(lag + ":5:17: warning: "), std::string::npos) << read_file(dir_ + "/stderr");
+}
+
+// A model whose W is singular everywhere: exit 1, the diagnostic on stderr, nothing written;
+// --allow-singular generates it and prints the same finding as a warning.
+TEST_F(PardelGen, SingularModelIsRefusedUnlessAllowed) {
+  const std::string lag = std::string(PARDEL_CODEGEN_TEST_DIR) + "/regularity/jerk_missing.lag";
+  const std::string out = dir_ + "/jm.json";
+  EXPECT_EQ(gen(lag + " -o " + out), 1);
+  EXPECT_FALSE(exists(out));
+  std::string err = read_file(dir_ + "/stderr");
+  EXPECT_NE(err.find(lag + ":5:5: error: model 'jerk_missing' is not regular"), std::string::npos) << err;
+  EXPECT_NE(err.find("L does not depend on a'''"), std::string::npos) << err;
+  EXPECT_NE(err.find("Newton's and Jacobi's iterations need W invertible"), std::string::npos) << err;
+  EXPECT_EQ(gen(lag + " --stats"), 1);  // every mode checks
+  ASSERT_EQ(gen(lag + " -o " + out + " --allow-singular"), 0) << read_file(dir_ + "/stderr");
+  EXPECT_TRUE(exists(out));
+  err = read_file(dir_ + "/stderr");
+  EXPECT_NE(err.find(lag + ":5:5: warning: model 'jerk_missing' is not regular"), std::string::npos) << err;
+}
+
+// A model singular on part of its domain only is generated, with a warning on stderr.
+TEST_F(PardelGen, PartlySingularModelIsGeneratedWithAWarning) {
+  const std::string lag = std::string(PARDEL_CODEGEN_TEST_DIR) + "/regularity/cubic_fold.lag";
+  ASSERT_EQ(gen(lag + " -o " + dir_ + "/cf.json"), 0) << read_file(dir_ + "/stderr");
+  const std::string err = read_file(dir_ + "/stderr");
+  EXPECT_NE(err.find(lag + ":5:5: warning: model 'cubic_fold'"), std::string::npos) << err;
+  EXPECT_NE(err.find("vanishes near s = 1"), std::string::npos) << err;
 }
 
 TEST_F(PardelGen, MissingInputAndBadUsageAreReported) {

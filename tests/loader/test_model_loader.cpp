@@ -95,6 +95,33 @@ TEST_F(ModelLoaderTest, BadLagReportsFileLineAndColumn) {
   }
 }
 
+// pardel-gen's refusal of a model that is not regular reaches the user whole: file, line and
+// column of L, the model, the coordinate involved and the way out.
+TEST_F(ModelLoaderTest, SingularLagShowsTheGeneratorsRefusal) {
+  if (!pardel::can_compile_lag_files()) GTEST_SKIP() << "this build has no generator";
+  const fs::path lag = write_lag("twin_drift.lag",
+                                 "model twin_drift\ncoords m n\n"
+                                 "L = 1/2*(m' - 2*n')^2 + m*n\n"
+                                 "discretizations trapezoid\n");
+  try {
+    pardel::resolve_model(lag.string());
+    FAIL() << "expected an error";
+  } catch (const pardel::ModelLoadError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("twin_drift.lag:3:5: error: model 'twin_drift' is not regular"), std::string::npos) << what;
+    EXPECT_NE(what.find("W annihilates the direction (1, 0.5) in (m', n')"), std::string::npos) << what;
+    EXPECT_NE(what.find("# pardel: allow-singular"), std::string::npos) << what;
+  }
+  // Declared degenerate, the same Lagrangian compiles.
+  const fs::path allowed = write_lag("twin_drift_allowed.lag",
+                                     "# pardel: allow-singular\nmodel twin_drift_allowed\ncoords m n\n"
+                                     "L = 1/2*(m' - 2*n')^2 + m*n\n"
+                                     "discretizations trapezoid\n");
+  const pardel_model* model = pardel::resolve_model(allowed.string());
+  ASSERT_NE(model, nullptr);
+  EXPECT_STREQ(model->name, "twin_drift_allowed");
+}
+
 TEST_F(ModelLoaderTest, NewModelIsUsable) {
   if (!pardel::can_compile_lag_files()) GTEST_SKIP() << "this build has no generator";
   const fs::path lag = write_lag("spring_pair.lag",
