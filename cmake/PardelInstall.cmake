@@ -1,7 +1,8 @@
 # What `cmake --install` puts under the prefix, and the CMake package that find_package(pardel)
 # reads there:
 #   include/pardel/                    the public headers (pardel.hpp, kernel_abi.h, ...)
-#   lib/libpardel_*.a                  pardel::runtime, pardel::mpi, pardel::bundled_models
+#   include/pardel/app/                the headers of pardel::app (scenes, outputs, sweeps)
+#   lib/libpardel_*.a                  pardel::runtime, pardel::mpi, pardel::app, pardel::bundled_models
 #   bin/pardel-gen                     the code generator (when GiNaC was found)
 #   share/pardel/codegen/              render.py and its templates
 #   share/pardel/generated/            the committed kernels of the bundled models
@@ -26,6 +27,12 @@ if(TARGET pardel_mpi)
   set_target_properties(pardel_mpi PROPERTIES EXPORT_NAME mpi)
   list(APPEND _pardel_export_targets pardel_mpi)
 endif()
+set(PARDEL_INSTALL_APP OFF)
+if(TARGET pardel_app)
+  set_target_properties(pardel_app PROPERTIES EXPORT_NAME app)
+  list(APPEND _pardel_export_targets pardel_app)
+  set(PARDEL_INSTALL_APP ON)
+endif()
 if(TARGET pardel_bundled_models)
   set_target_properties(pardel_bundled_models PROPERTIES EXPORT_NAME bundled_models)
   list(APPEND _pardel_export_targets pardel_bundled_models)
@@ -41,6 +48,10 @@ install(TARGETS ${_pardel_export_targets} EXPORT pardelTargets
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT cxx)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/runtime/include/pardel DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
         COMPONENT cxx)
+if(PARDEL_INSTALL_APP)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/runtime/app/include/pardel DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+          COMPONENT cxx)
+endif()
 install(FILES ${PARDEL_RENDER_SCRIPT} DESTINATION ${PARDEL_INSTALL_DATADIR}/codegen COMPONENT cxx)
 get_filename_component(_pardel_codegen_dir "${PARDEL_RENDER_SCRIPT}" DIRECTORY)
 install(DIRECTORY ${_pardel_codegen_dir}/templates DESTINATION ${PARDEL_INSTALL_DATADIR}/codegen

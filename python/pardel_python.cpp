@@ -24,16 +24,16 @@
 #include <string>
 #include <vector>
 
-#include "memory_estimate.hpp"
-#include "outputs.hpp"
+#include "pardel/memory.hpp"
+#include "pardel/app/outputs.hpp"
 #include "pardel/model_loader.hpp"
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
 namespace py = pybind11;
 using namespace pardel;
-using pardel::cli::Scene;
-using pardel::cli::SceneError;
+using pardel::app::Scene;
+using pardel::app::SceneError;
 
 namespace {
 
@@ -61,7 +61,7 @@ ModelHandle load_model(const std::string& spec) {
   const pardel_model* model = resolve_spec(spec);
   if (!model) {
     std::string message = fmt::format("unknown model '{}'", spec);
-    const std::string suggestion = cli::nearest_name(spec, bundled_names());
+    const std::string suggestion = app::nearest_name(spec, bundled_names());
     if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
     throw InputError(message);
   }
@@ -173,7 +173,7 @@ void insert_boundary(toml::table& boundary, const pardel_model& model, const py:
   for (int d = 0; d < model.order; ++d) {
     toml::array part;
     for (std::size_t i = 0; i < nc; ++i) part.push_back(*values.get(d * nc + i));
-    boundary.insert_or_assign(cli::boundary_prefix(d) + end, std::move(part));
+    boundary.insert_or_assign(app::boundary_prefix(d) + end, std::move(part));
   }
 }
 
@@ -197,7 +197,7 @@ Scene scene_from_arguments(const std::string& model_spec, const py::dict& argume
     for (const auto& n : names) known = known || n == key;
     if (!known) {
       std::string message = fmt::format("unknown option '{}'", key);
-      const std::string suggestion = cli::nearest_name(key, names);
+      const std::string suggestion = app::nearest_name(key, names);
       if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
       message += " (options: " + fmt::format("{}", fmt::join(names, ", ")) + ")";
       throw InputError(message);
@@ -260,7 +260,7 @@ Scene scene_from_arguments(const std::string& model_spec, const py::dict& argume
   const std::string source = "pardel.solve";
   Scene scene;
   try {
-    scene = cli::parse_scene(text.str(), source, {}, resolve_spec, bundled_names());
+    scene = app::parse_scene(text.str(), source, {}, resolve_spec, bundled_names());
   } catch (const SceneError& error) {
     throw SceneError(without_generated_position(error.what(), source));
   }
@@ -278,7 +278,7 @@ Scene scene_from_arguments(const std::string& model_spec, const py::dict& argume
 }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-  return cli::load_scene(path, overrides, resolve_spec, bundled_names());
+  return app::load_scene(path, overrides, resolve_spec, bundled_names());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -299,7 +299,7 @@ py::array_t<double> vector(const std::vector<double>& values) {
 /** The initial trajectory: the scene's guess, or `guess` ((M+1) x dim rows, resampled to the
  *  scene's N when M differs; node times `guess_t` when given, else uniform). */
 Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t) {
-  if (guess.is_none()) return cli::make_initial_guess(scene);
+  if (guess.is_none()) return app::make_initial_guess(scene);
   const Problem& problem = scene.problem;
   const int dim = scene.model->dim;
   const auto q = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(guess);
@@ -338,8 +338,8 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
                      const py::object& threads) {
   if (!threads.is_none()) scene.options.threads = threads.cast<int>();
   {
-    const cli::MemoryEstimate memory = cli::estimate_solve_memory(scene, false);
-    const std::string refusal = cli::memory_refusal(scene, memory, cli::machine_memory());
+    const MemoryEstimate memory = estimate_solve_memory(scene.problem, scene.options, false);
+    const std::string refusal = memory_refusal(scene.problem, scene.options, memory, machine_memory());
     if (!refusal.empty()) throw InputError(fmt::format("{}: {}", scene.path, refusal));
   }
   Trajectory trajectory = initial_trajectory(scene, guess, guess_t);
@@ -381,12 +381,12 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
     throw InputError(fmt::format("{}: error: {}", scene.path, summary.message));
 
   py::dict result;
-  const std::string model_source = cli::scene_model_source(scene);
-  result["summary"] = cli::summary_json(scene, summary, trajectory, Certificate{}, model_source).dump();
+  const std::string model_source = app::scene_model_source(scene);
+  result["summary"] = app::summary_json(scene, summary, trajectory, Certificate{}, model_source).dump();
   result["stopped_by_callback"] = stopped_by_callback;
   result["t"] = vector(trajectory.t);
   result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
-  const BoundaryMomenta momenta = cli::momenta_on_trajectory_grid(scene.problem, trajectory);
+  const BoundaryMomenta momenta = app::momenta_on_trajectory_grid(scene.problem, trajectory);
   result["p0"] = vector(momenta.p0);
   result["pN"] = vector(momenta.pN);
   const std::size_t n = summary.history.size();
@@ -426,7 +426,7 @@ std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
   j["N"] = trajectory.N;
   j["residual"] = residual;
   j["action"] = action;
-  j["certificate"] = cli::certificate_json(certificate, static_cast<std::size_t>(-1));
+  j["certificate"] = app::certificate_json(certificate, static_cast<std::size_t>(-1));
   return j.dump();
 }
 
@@ -494,7 +494,7 @@ py::dict scene_info(const Scene& s) {
   py::list knots;
   for (const Knot& k : s.problem.knots) knots.append(py::make_tuple(k.t, vector(k.q)));
   out["knots"] = knots;
-  out["clock"] = cli::to_string(s.problem.clock);
+  out["clock"] = app::to_string(s.problem.clock);
   out["method"] = to_string(s.options.method);
   out["tol"] = s.options.tol;
   out["rtol"] = s.options.rtol;

@@ -1,42 +1,63 @@
-// Memory estimate of `pardel solve` and the machine's memory (see memory_estimate.hpp).
-#include "memory_estimate.hpp"
+// Memory estimate of a solve, from the runtime's own block types, and the machine's memory (see
+// pardel/memory.hpp).
+#include "pardel/memory.hpp"
 
-#include <fmt/format.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
 
-namespace pardel::cli {
+#include "engine.hpp"
+
+namespace pardel {
 namespace {
 
 /** Heap bytes of one malloc(b) in glibc: an 8-byte header, rounded up to 16, at least 32. */
 double heap(double b) { return std::max(32.0, 16.0 * std::ceil((b + 8) / 16.0)); }
 
-/** The runtime specializes the block size for these dims (dispatch_dim); others use Eigen::Dynamic,
- *  where every block is a separate heap allocation. */
-bool fixed_size(int d) { return d == 1 || d == 2 || d == 4 || d == 6; }
+/** Bytes of one block of the runtime's block-tridiagonal algebra at dim d: the Eigen types of
+ *  BlockTridiagonal<D> for the block sizes the runtime specializes (detail::dispatch_dim), where a
+ *  block is inline; at other dims D is Eigen::Dynamic and every block's coefficients are a
+ *  separate heap allocation besides the object itself. */
+struct BlockBytes {
+  bool fixed_size = false;
+  double mat = 0;  ///< a d x d matrix
+  double vec = 0;  ///< a vector of d values
+  double llt = 0;  ///< Eigen::LLT of a block
+  double lu = 0;   ///< Eigen::PartialPivLU of a block: the matrix, two index vectors, the norm and flags
+};
 
-double mat_bytes(int d) { return fixed_size(d) ? 8.0 * d * d : 24 + heap(8.0 * d * d); }
-double vec_bytes(int d) { return fixed_size(d) ? 8.0 * d : 16 + heap(8.0 * d); }
-double llt_bytes(int d) { return mat_bytes(d) + 16; }
-/** Eigen::PartialPivLU: the matrix, two index vectors, the norm and flags. */
-double lu_bytes(int d) {
-  const double indices = fixed_size(d) ? 2 * 8 * std::ceil(4.0 * d / 8) : 2 * (16 + heap(4.0 * d));
-  return 16 * std::ceil((mat_bytes(d) + indices + 10) / 16);
+BlockBytes block_bytes(int d) {
+  return detail::dispatch_dim(d, [d](auto size) {
+    constexpr int D = decltype(size)::value;
+    using Mat = Eigen::Matrix<double, D, D>;
+    using Vec = Eigen::Matrix<double, D, 1>;
+    const bool fixed = D != Eigen::Dynamic;
+    const double coefficients = fixed ? 0 : heap(8.0 * d * d);
+    BlockBytes b;
+    b.fixed_size = fixed;
+    b.mat = sizeof(Mat) + coefficients;
+    b.vec = sizeof(Vec) + (fixed ? 0 : heap(8.0 * d));
+    b.llt = sizeof(Eigen::LLT<Mat>) + coefficients;
+    b.lu = sizeof(Eigen::PartialPivLU<Mat>) + (fixed ? 0 : coefficients + 2 * heap(4.0 * d));
+    return b;
+  });
 }
 
 /** BlockTridiagonal<D>: diag, off, W, y and the pivots' factors for N-1 blocks (resize), and with
  *  `cyclic` the cyclic-reduction levels (N-1, (N-1)/2, ..., 1 blocks: about 2(N-1) in all). */
 double block_tridiagonal_bytes(double N, int d, bool cyclic) {
+  const BlockBytes b = block_bytes(d);
   const double n = std::max(N - 1, 0.0);
-  const double factors = fixed_size(d) ? mat_bytes(d) : llt_bytes(d);
-  const double levels = cyclic ? 2 * n * (3 * mat_bytes(d) + 2 * vec_bytes(d) + llt_bytes(d) + 1) : 0;
-  return n * (3 * mat_bytes(d) + vec_bytes(d) + factors) + levels;
+  const double factors = b.fixed_size ? b.mat : b.llt;
+  const double levels = cyclic ? 2 * n * (3 * b.mat + 2 * b.vec + b.llt + 1) : 0;
+  return n * (3 * b.mat + b.vec + factors) + levels;
 }
 
 /** detail::Context at N (engine.cpp setup_context). */
@@ -91,15 +112,16 @@ double proc_kb(const std::string& text, const std::string& key) {
 
 }  // namespace
 
-MemoryEstimate estimate_solve_memory(const Scene& scene, bool certificate) {
-  const double N = scene.problem.N;
-  const int d = scene.model->dim;
+MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& options, bool certificate) {
+  const double N = problem.N;
+  const pardel_model& model = *problem.model;
+  const int d = model.dim;
   MemoryEstimate e;
   // The initial guess, solve()'s working copy, and with refinement the resampled level.
-  const bool levels = scene.options.refine_start_N > 0 || scene.options.method == Method::automatic;
+  const bool levels = options.refine_start_N > 0 || options.method == Method::automatic;
   const double trajectories = (levels ? 3 : 2) * trajectory_bytes(N, d);
-  const bool cyclic = scene.options.linear_solver == LinearSolver::cyclic_reduction;
-  e.solve = context_bytes(N, d) + method_bytes(scene.options.method, cyclic, N, d) + trajectories;
+  const bool cyclic = options.linear_solver == LinearSolver::cyclic_reduction;
+  e.solve = context_bytes(N, d) + method_bytes(options.method, cyclic, N, d) + trajectories;
   // The point assessment (assessment.cpp): the solve's context and trajectories, the Hessian and
   // four vectors of the inverse subspace iteration.
   const double n = std::max(N - 1, 0.0);
@@ -109,10 +131,10 @@ MemoryEstimate estimate_solve_memory(const Scene& scene, bool certificate) {
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).
   if (certificate) {
     e.certificate = trajectory_bytes(N, d) + context_bytes(N, d) + block_tridiagonal_bytes(N, d, false) +
-                    n * llt_bytes(d) + 3 * n * lu_bytes(d) + 4 * n * d * 8 + N * 32;
+                    n * block_bytes(d).llt + 3 * n * block_bytes(d).lu + 4 * n * d * 8 + N * 32;
   }
   // trajectory.csv: about 24 characters per number, a std::string that grows by doubling.
-  const int columns = 2 + d + (scene.model->order == 1 ? scene.model->ncoords : 0);
+  const int columns = 2 + d + (model.order == 1 ? model.ncoords : 0);
   e.output = trajectory_bytes(N, d) + 2 * (N + 1) * (24.0 * columns + 8);
   e.peak = std::max({e.solve, e.assessment, e.certificate, e.output});
   e.largest = e.peak == e.solve        ? "solve"
@@ -133,34 +155,37 @@ MachineMemory machine_memory() {
 }
 
 std::string format_bytes(double bytes) {
-  if (bytes >= 1e9) return fmt::format("{:.2f} GB", bytes / 1e9);
-  if (bytes >= 1e6) return fmt::format("{:.0f} MB", bytes / 1e6);
-  return fmt::format("{:.0f} kB", bytes / 1e3);
+  char text[64];
+  if (bytes >= 1e9) std::snprintf(text, sizeof text, "%.2f GB", bytes / 1e9);
+  else if (bytes >= 1e6) std::snprintf(text, sizeof text, "%.0f MB", bytes / 1e6);
+  else std::snprintf(text, sizeof text, "%.0f kB", bytes / 1e3);
+  return text;
 }
 
-std::string memory_refusal(const Scene& scene, const MemoryEstimate& estimate, const MachineMemory& machine) {
-  const std::string need =
-      fmt::format("grid.N = {} needs an estimated {} (method {}, linear solver {}, model dim {}; largest phase: {})",
-                  scene.problem.N, format_bytes(estimate.peak), to_string(scene.options.method),
-                  to_string(scene.options.linear_solver), scene.model->dim, estimate.largest);
+std::string memory_refusal(const Problem& problem, const Options& options, const MemoryEstimate& estimate,
+                           const MachineMemory& machine) {
+  const std::string need = "grid.N = " + std::to_string(problem.N) + " needs an estimated " +
+                           format_bytes(estimate.peak) + " (method " + to_string(options.method) +
+                           ", linear solver " + to_string(options.linear_solver) + ", model dim " +
+                           std::to_string(problem.model->dim) + "; largest phase: " + estimate.largest + ")";
   if (machine.available >= 0 && estimate.peak > machine.available) {
-    return fmt::format("{}; this machine has {} available (MemAvailable in /proc/meminfo); lower grid.N", need,
-                       format_bytes(machine.available));
+    return need + "; this machine has " + format_bytes(machine.available) +
+           " available (MemAvailable in /proc/meminfo); lower grid.N";
   }
   if (machine.address_limit >= 0) {
     // Every thread reserves a stack and a malloc arena of address space (not memory).
-    const int threads = std::max(1, scene.options.threads > 0 ? scene.options.threads
-                                                              : static_cast<int>(::sysconf(_SC_NPROCESSORS_ONLN)));
+    const int threads = std::max(1, options.threads > 0 ? options.threads
+                                                        : static_cast<int>(::sysconf(_SC_NPROCESSORS_ONLN)));
     const double reserved = threads * 72e6;
     const double used = std::max(machine.address_used, 0.0);
     if (used + reserved + estimate.peak > machine.address_limit) {
-      return fmt::format(
-          "{}; the address space of this process is limited to {} (RLIMIT_AS, `ulimit -v`), of which {} are in use "
-          "and about {} are reserved by {} thread(s); lower grid.N or raise the limit",
-          need, format_bytes(machine.address_limit), format_bytes(used), format_bytes(reserved), threads);
+      return need + "; the address space of this process is limited to " + format_bytes(machine.address_limit) +
+             " (RLIMIT_AS, `ulimit -v`), of which " + format_bytes(used) + " are in use and about " +
+             format_bytes(reserved) + " are reserved by " + std::to_string(threads) +
+             " thread(s); lower grid.N or raise the limit";
     }
   }
   return "";
 }
 
-}  // namespace pardel::cli
+}  // namespace pardel

@@ -1,4 +1,4 @@
-// Tests of the solve outputs (tools/pardel/outputs.hpp): exit codes, convergence.csv, the
+// Tests of the solve outputs (pardel/app/outputs.hpp): convergence.csv, the
 // certificate's JSON, the physical cost (the summed clock checked against path length) and the
 // boundary momenta of summary.json (checked against the harmonic oscillator's exact velocities).
 #include <gtest/gtest.h>
@@ -6,22 +6,12 @@
 #include <cmath>
 #include <string>
 
-#include "outputs.hpp"
+#include "pardel/app/outputs.hpp"
 
 namespace {
 
 using namespace pardel;
-using namespace pardel::cli;
-
-TEST(Outputs, ExitCodesAreDistinctPerTermination) {
-  EXPECT_EQ(exit_code(Termination::converged), 0);
-  EXPECT_EQ(exit_code(Termination::invalid_input), 2);
-  EXPECT_EQ(exit_code(Termination::max_iterations), 3);
-  EXPECT_EQ(exit_code(Termination::diverged), 4);
-  EXPECT_EQ(exit_code(Termination::non_finite), 5);
-  EXPECT_EQ(exit_code(Termination::interrupted), 6);
-  EXPECT_EQ(exit_code(Termination::stalled), 7);
-}
+using namespace pardel::app;
 
 TEST(Outputs, ConvergenceCsvHasOneRowPerRecord) {
   Summary summary;

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "pardel/pardel.hpp"
-#include "trajectory_io.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 namespace {
 
@@ -99,17 +99,17 @@ void expect_kernels_match(const std::string& model_name, const std::string& disc
   const pardel_discretization* disc = find_discretization(*model, disc_name);
   ASSERT_NE(disc, nullptr) << disc_name;
   std::vector<double> p(model->param_defaults, model->param_defaults + model->nparams);
-  std::string args = "kernels --model " + model_name + " --disc '" + disc_name + "' --h " + cli::format_double(h) +
-                     " --t0 " + cli::format_double(t0) + " --t1 " + cli::format_double(t1);
+  std::string args = "kernels --model " + model_name + " --disc '" + disc_name + "' --h " + app::format_double(h) +
+                     " --t0 " + app::format_double(t0) + " --t1 " + app::format_double(t1);
   auto join = [](const std::vector<double>& v) {
     std::string s;
-    for (double x : v) s += (s.empty() ? "" : ",") + cli::format_double(x);
+    for (double x : v) s += (s.empty() ? "" : ",") + app::format_double(x);
     return s;
   };
   args += " --q0=" + join(q0) + " --q1=" + join(q1);
   for (const auto& [index, value] : param_overrides) {
     p[index] = value;
-    args += std::string(" --param ") + model->param_names[index] + "=" + cli::format_double(value);
+    args += std::string(" --param ") + model->param_names[index] + "=" + app::format_double(value);
   }
   const Result r = pardel(args);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -199,7 +199,7 @@ tol = 1e-10
 
 TEST(PardelSolve, WritesEveryOutputAndExitsWith0WhenConverged) {
   TempDir dir;
-  cli::write_file_atomic(dir / "small.toml", kSmallScene);
+  app::write_file_atomic(dir / "small.toml", kSmallScene);
   const Result r = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "out") + "' --quiet --no-plot");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;  // --quiet
@@ -228,7 +228,7 @@ TEST(PardelSolve, WritesEveryOutputAndExitsWith0WhenConverged) {
   EXPECT_TRUE(with_certificate["certificate"]["hessian_positive_definite"].get<bool>());
   EXPECT_EQ(with_certificate["certificate"]["inertia_positive"], summary["point"]["inertia"]["positive"]);
   // The trajectory file holds the solution: its residual, recomputed here, is below the tolerance.
-  const Trajectory trajectory = cli::read_trajectory_csv(dir / "out/trajectory.csv", *find_model("fuel_nav"));
+  const Trajectory trajectory = app::read_trajectory_csv(dir / "out/trajectory.csv", *find_model("fuel_nav"));
   ASSERT_EQ(trajectory.N, 40);
   Problem problem;
   problem.model = find_model("fuel_nav");
@@ -249,7 +249,7 @@ TEST(PardelSolve, WritesEveryOutputAndExitsWith0WhenConverged) {
 
 TEST(PardelSolve, ExitCodeSaysHowItEnded) {
   TempDir dir;
-  cli::write_file_atomic(dir / "small.toml", kSmallScene);
+  app::write_file_atomic(dir / "small.toml", kSmallScene);
   const Result r = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "out") +
                           "' --quiet --no-plot --set solver.method=jacobi-newton --set solver.max_iterations=3");
   EXPECT_EQ(r.code, 3) << r.err;
@@ -274,7 +274,7 @@ TEST(PardelSolve, ExitCodeSaysHowItEnded) {
 
 TEST(PardelSolve, DrawsBothPlots) {
   TempDir dir;
-  cli::write_file_atomic(dir / "small.toml", kSmallScene);
+  app::write_file_atomic(dir / "small.toml", kSmallScene);
   const Result r = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "out") + "' --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(r.err.find("warning") == std::string::npos) << r.err;
@@ -288,9 +288,9 @@ TEST(PardelSolve, DrawsBothPlots) {
 TEST(PardelSolve, PlotsASolveThatEndedNonFinite) {
   // summary.json writes the non-finite cost of such a solve as null: the plots are still drawn.
   TempDir dir;
-  cli::write_file_atomic(dir / "edge.lag", "model cli_edge\ncoords x\nL = 1/2*x'^2 + log(1 - x)\n"
+  app::write_file_atomic(dir / "edge.lag", "model cli_edge\ncoords x\nL = 1/2*x'^2 + log(1 - x)\n"
                                              "discretizations trapezoid\n");
-  cli::write_file_atomic(dir / "edge.toml", "model = \"edge.lag\"\n[grid]\nT = 1\nN = 50\n[boundary]\nq0 = [0]\n"
+  app::write_file_atomic(dir / "edge.toml", "model = \"edge.lag\"\n[grid]\nT = 1\nN = 50\n[boundary]\nq0 = [0]\n"
                                               "qN = [3]\n[solver]\nmethod = \"jacobi-newton\"\n");
   const Result r = pardel("solve '" + (dir / "edge.toml") + "' --out '" + (dir / "out") + "' --quiet");
   EXPECT_EQ(r.code, 5) << r.err;  // non_finite
@@ -305,7 +305,7 @@ TEST(PardelSolve, PlotsASolveThatEndedNonFinite) {
 
 TEST(PardelCheck, ReportsTheCertificateOfAGuessAndOfASolution) {
   TempDir dir;
-  cli::write_file_atomic(dir / "small.toml", kSmallScene);
+  app::write_file_atomic(dir / "small.toml", kSmallScene);
   const Result guess = pardel("check '" + (dir / "small.toml") + "' --json");
   ASSERT_EQ(guess.code, 0) << guess.err;
   const auto at_guess = nlohmann::json::parse(guess.out);

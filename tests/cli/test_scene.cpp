@@ -1,4 +1,4 @@
-// Tests of the scene parser (tools/pardel/scene.hpp): the catalogue of bad scenes in
+// Tests of the scene parser (pardel/app/scene.hpp): the catalogue of bad scenes in
 // tests/cli/bad_scenes (each names its expected location and message in its first two lines),
 // a full valid scene, --set overrides, suggestions and the initial guesses.
 #include <gtest/gtest.h>
@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "scene.hpp"
-#include "trajectory_io.hpp"
+#include "pardel/app/scene.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 namespace {
 
 using namespace pardel;
-using namespace pardel::cli;
+using namespace pardel::app;
 namespace fs = std::filesystem;
 
 std::vector<std::string> model_names() {

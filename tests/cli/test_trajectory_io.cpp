@@ -1,4 +1,4 @@
-// Tests of trajectory.csv writing and reading and of atomic writes (tools/pardel/trajectory_io.hpp).
+// Tests of trajectory.csv writing and reading and of atomic writes (pardel/app/trajectory_io.hpp).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -9,12 +9,12 @@
 #include <sstream>
 #include <string>
 
-#include "trajectory_io.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 namespace {
 
 using namespace pardel;
-using namespace pardel::cli;
+using namespace pardel::app;
 namespace fs = std::filesystem;
 
 class TrajectoryFiles : public ::testing::Test {

@@ -1,6 +1,6 @@
 /**
  * @file fuzz_scene_parser.cpp
- * Fuzz entry for the scene reader (pardel::cli::parse_scene) with a fixed model registry: the
+ * Fuzz entry for the scene reader (pardel::app::parse_scene) with a fixed model registry: the
  * models bundled into this binary; a .lag path is refused by the resolver (nothing is compiled
  * while fuzzing). The input is the scene's TOML text, optionally followed by a line "%%" and one
  * --set override per line. Contract checked on every input:
@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
 namespace {
 
@@ -54,7 +54,7 @@ std::vector<std::string> model_names() {
   return names;
 }
 
-void check_error(const std::string& scene_text, const pardel::cli::SceneError& error) {
+void check_error(const std::string& scene_text, const pardel::app::SceneError& error) {
   const std::string what = error.what();
   if (what.rfind("--set ", 0) == 0) {
     if (what.find(": error: ") == std::string::npos) violated("--set diagnostic without ': error: '", what);
@@ -74,7 +74,7 @@ void check_error(const std::string& scene_text, const pardel::cli::SceneError& e
   }
 }
 
-void check_scene(const pardel::cli::Scene& scene) {
+void check_scene(const pardel::app::Scene& scene) {
   const pardel::Problem& problem = scene.problem;
   if (!scene.model || problem.model != scene.model) violated("accepted scene without its model", scene.model_spec);
   const std::size_t dim = static_cast<std::size_t>(scene.model->dim);
@@ -87,8 +87,8 @@ void check_scene(const pardel::cli::Scene& scene) {
                  std::to_string(problem.N));
   }
   // The guess allocates (N+1)*dim values: only small grids are built while fuzzing.
-  if (scene.guess.kind == pardel::cli::GuessKind::csv || (problem.N + 1.0) * dim > 1e6) return;
-  const pardel::Trajectory guess = pardel::cli::make_initial_guess(scene);
+  if (scene.guess.kind == pardel::app::GuessKind::csv || (problem.N + 1.0) * dim > 1e6) return;
+  const pardel::Trajectory guess = pardel::app::make_initial_guess(scene);
   if (guess.N != problem.N || guess.dim != scene.model->dim ||
       guess.q.size() != static_cast<std::size_t>(problem.N + 1) * dim ||
       guess.t.size() != static_cast<std::size_t>(problem.N) + 1) {
@@ -122,9 +122,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   static const std::vector<std::string> names = model_names();
   try {
-    const pardel::cli::Scene scene = pardel::cli::parse_scene(scene_text, kSourceName, overrides, resolve, names);
+    const pardel::app::Scene scene = pardel::app::parse_scene(scene_text, kSourceName, overrides, resolve, names);
     check_scene(scene);
-  } catch (const pardel::cli::SceneError& error) {
+  } catch (const pardel::app::SceneError& error) {
     check_error(scene_text, error);
   } catch (const std::exception& error) {
     violated("parse_scene threw something other than SceneError", error.what());

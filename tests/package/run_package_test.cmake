@@ -39,9 +39,12 @@ endif()
 # A fresh configuration each time (the installed prefix is new); objects are rebuilt only when
 # their inputs changed.
 run("configuring the project" "${CMAKE_COMMAND}" --fresh ${configure_args})
-run("building the project" "${CMAKE_COMMAND}" --build "${build}" --target projectile_test)
+run("building the project" "${CMAKE_COMMAND}" --build "${build}" --target projectile_test projectile_scene)
 set(program "${build}/projectile_test")
 run("the program" "${program}")
+file(REMOVE_RECURSE "${WORK_DIR}/scene_out")
+run("the scene program (pardel::app)" "${build}/projectile_scene" "${project_dir}/projectile.toml"
+    "${WORK_DIR}/scene_out")
 
 if(MODE STREQUAL "installed" AND PYTHON)
   run("cmake --install (python)" "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${prefix}" --component python)

@@ -22,14 +22,14 @@
 #include <string>
 #include <vector>
 
-#include "checkpoint.hpp"
+#include "pardel/app/checkpoint.hpp"
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-using pardel::cli::Checkpoint;
+using pardel::app::Checkpoint;
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -90,24 +90,24 @@ class CheckpointCli : public ::testing::Test {
 
   /** A valid checkpoint of `scene_path` at iteration K written without a signal (in-process solve). */
   static fs::path make_checkpoint(const std::string& name, long K, const fs::path& scene_path = scene_) {
-    const pardel::cli::Scene scene = pardel::cli::load_scene(
+    const pardel::app::Scene scene = pardel::app::load_scene(
         scene_path.string(), {}, [](const std::string& n) { return pardel::find_model(n); });
     pardel::Options options = scene.options;
     options.threads = 1;
     options.on_iteration = [K](const pardel::IterationRecord& r) { return r.iteration < K; };
-    pardel::Trajectory trajectory = pardel::cli::make_initial_guess(scene);
+    pardel::Trajectory trajectory = pardel::app::make_initial_guess(scene);
     const pardel::Summary summary = pardel::solve(scene.problem, options, trajectory);
     EXPECT_EQ(summary.termination, pardel::Termination::interrupted);
     Checkpoint c;
     c.scene_path = scene_path.string();
-    c.scene_hash = pardel::cli::fnv1a_hex(read_text(scene_path));
+    c.scene_hash = pardel::app::fnv1a_hex(read_text(scene_path));
     c.threads = 1;
     c.model = "fuel_nav";
     c.dim = 2;
     c.state = summary.state;
     const fs::path out = dir_ / name;
     fs::create_directories(out);
-    pardel::cli::write_checkpoint(out.string(), c);
+    pardel::app::write_checkpoint(out.string(), c);
     return out;
   }
 
@@ -163,7 +163,7 @@ TEST_F(CheckpointCli, SigtermWritesACheckpointAndResumeReachesTheSameTrajectory)
   EXPECT_TRUE(fs::exists(out / "summary.json"));
   for (const auto& entry : fs::directory_iterator(out))
     EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
-  const Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  const Checkpoint c = pardel::app::read_checkpoint(out.string());
   EXPECT_EQ(c.scene_path, fs::absolute(scene_).lexically_normal().string());
   EXPECT_LT(c.state.iteration, 10000);
   EXPECT_EQ(c.state.N, 1000);
@@ -217,7 +217,7 @@ TEST_F(CheckpointCli, NestedNewtonResumedOnAnIntermediateLevel) {
   }
   ASSERT_GT(K, 0) << "no level N = 100 in the history";
   const fs::path out = make_checkpoint("nested", K, scene);
-  const Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  const Checkpoint c = pardel::app::read_checkpoint(out.string());
   EXPECT_EQ(c.state.N, 100);
   EXPECT_EQ(c.state.previous_level.N, 50);
   const Outcome resumed = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet"}, out / "resume.log");
@@ -262,20 +262,20 @@ TEST_F(CheckpointCli, NotACheckpointIsRefused) {
 
 TEST_F(CheckpointCli, ChangedSceneIsRefused) {
   const fs::path out = make_checkpoint("changed_scene", 3);
-  Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  Checkpoint c = pardel::app::read_checkpoint(out.string());
   const fs::path copy = dir_ / "changed.toml";
   fs::copy_file(scene_, copy, fs::copy_options::overwrite_existing);
   c.scene_path = copy.string();
-  pardel::cli::write_checkpoint(out.string(), c);
+  pardel::app::write_checkpoint(out.string(), c);
   write_text(copy, read_text(scene_) + "# edited\n");
   expect_refused(out, "the scene file " + copy.string() + " changed since the checkpoint was written");
 }
 
 TEST_F(CheckpointCli, StateOfAnotherGridIsRefused) {
   const fs::path out = make_checkpoint("other_grid", 3);
-  Checkpoint c = pardel::cli::read_checkpoint(out.string());
+  Checkpoint c = pardel::app::read_checkpoint(out.string());
   c.overrides = {"grid.N=500"};
-  pardel::cli::write_checkpoint(out.string(), c);
+  pardel::app::write_checkpoint(out.string(), c);
   expect_refused(out, "resume: refinement level 0 with N = 1000 is not a level of this problem");
 }
 

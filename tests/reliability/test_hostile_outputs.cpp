@@ -20,15 +20,15 @@
 #include <string>
 #include <vector>
 
-#include "checkpoint.hpp"
+#include "pardel/app/checkpoint.hpp"
 #include "pardel/pardel.hpp"
 #include "pardel_process.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
 namespace {
 
 using namespace reliability;
-using pardel::cli::Checkpoint;
+using pardel::app::Checkpoint;
 
 /** fuel_nav solved by Newton on N intervals (a fraction of a second). */
 std::string small_scene(int N) {
@@ -317,24 +317,24 @@ class HostileCheckpoint : public ::testing::Test {
 
   /** A valid checkpoint of `scene_path` at iteration K, written in-process (no signal). */
   static fs::path make_checkpoint(const std::string& name, long K, const fs::path& scene_path = scene_) {
-    const pardel::cli::Scene scene = pardel::cli::load_scene(
+    const pardel::app::Scene scene = pardel::app::load_scene(
         scene_path.string(), {}, [](const std::string& n) { return pardel::find_model(n); });
     pardel::Options options = scene.options;
     options.threads = 1;
     options.on_iteration = [K](const pardel::IterationRecord& r) { return r.iteration < K; };
-    pardel::Trajectory trajectory = pardel::cli::make_initial_guess(scene);
+    pardel::Trajectory trajectory = pardel::app::make_initial_guess(scene);
     const pardel::Summary summary = pardel::solve(scene.problem, options, trajectory);
     EXPECT_EQ(summary.termination, pardel::Termination::interrupted);
     Checkpoint c;
     c.scene_path = scene_path.string();
-    c.scene_hash = pardel::cli::fnv1a_hex(read_text(scene_path));
+    c.scene_hash = pardel::app::fnv1a_hex(read_text(scene_path));
     c.threads = 1;
     c.model = "fuel_nav";
     c.dim = 2;
     c.state = summary.state;
     const fs::path out = dir_ / name;
     fs::create_directories(out);
-    pardel::cli::write_checkpoint(out.string(), c);
+    pardel::app::write_checkpoint(out.string(), c);
     return out;
   }
 
@@ -342,7 +342,7 @@ class HostileCheckpoint : public ::testing::Test {
   static void edit_body(const fs::path& out, const std::function<void(nlohmann::json&)>& edit) {
     nlohmann::json file = nlohmann::json::parse(read_text(out / "checkpoint.json"));
     edit(file["body"]);
-    file["checksum"] = pardel::cli::fnv1a_hex(file["body"].dump());
+    file["checksum"] = pardel::app::fnv1a_hex(file["body"].dump());
     write_text(out / "checkpoint.json", file.dump());
   }
 
@@ -396,7 +396,7 @@ TEST_F(HostileCheckpoint, KilledWhileReplacingACheckpointKeepsTheOldOne) {
       &seen);
   ASSERT_EQ(status, 128 + SIGKILL) << seen;
   EXPECT_EQ(read_text(out / "checkpoint.json"), old_checkpoint);
-  EXPECT_NO_THROW(pardel::cli::read_checkpoint(out.string()));
+  EXPECT_NO_THROW(pardel::app::read_checkpoint(out.string()));
   EXPECT_EQ(expect_consistent_outputs(out), 1000);
 }
 
@@ -509,19 +509,19 @@ TEST_F(HostileCheckpoint, SwappedCheckpointsContinueTheirOwnScenes) {
   const fs::path out_b = dir_ / "swap_b";
   {
     Checkpoint c;
-    const pardel::cli::Scene scene = pardel::cli::load_scene(
+    const pardel::app::Scene scene = pardel::app::load_scene(
         scene_b.string(), {}, [](const std::string& n) { return pardel::find_model(n); });
     pardel::Options options = scene.options;
     options.on_iteration = [](const pardel::IterationRecord& r) { return r.iteration < 1; };
-    pardel::Trajectory trajectory = pardel::cli::make_initial_guess(scene);
+    pardel::Trajectory trajectory = pardel::app::make_initial_guess(scene);
     c.state = pardel::solve(scene.problem, options, trajectory).state;
     ASSERT_TRUE(c.state.valid);
     c.scene_path = scene_b.string();
-    c.scene_hash = pardel::cli::fnv1a_hex(read_text(scene_b));
+    c.scene_hash = pardel::app::fnv1a_hex(read_text(scene_b));
     c.model = "fuel_nav";
     c.dim = 2;
     fs::create_directories(out_b);
-    pardel::cli::write_checkpoint(out_b.string(), c);
+    pardel::app::write_checkpoint(out_b.string(), c);
   }
   const std::string a = read_text(out_a / "checkpoint.json");
   write_text(out_a / "checkpoint.json", read_text(out_b / "checkpoint.json"));

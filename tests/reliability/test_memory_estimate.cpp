@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "memory_estimate.hpp"
+#include "pardel/memory.hpp"
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
 namespace {
 
@@ -79,8 +79,8 @@ class MemoryEstimate : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  pardel::cli::Scene scene(const std::vector<std::string>& sets) const {
-    return pardel::cli::load_scene(use_.string(), sets, [](const std::string& n) { return pardel::find_model(n); });
+  pardel::app::Scene scene(const std::vector<std::string>& sets) const {
+    return pardel::app::load_scene(use_.string(), sets, [](const std::string& n) { return pardel::find_model(n); });
   }
 
   /** Peak RSS of a two-iteration solve at N minus that of a tiny solve, against the estimate; with
@@ -101,7 +101,8 @@ class MemoryEstimate : public ::testing::Test {
     const Outcome big = run_pardel(args(N), dir_ / "big.log");
     EXPECT_EQ(base.status, to_convergence ? 0 : 3) << base.output;
     EXPECT_EQ(big.status, to_convergence ? 0 : 3) << big.output;
-    const double estimate = pardel::cli::estimate_solve_memory(scene(sets), certificate).peak;
+    const pardel::app::Scene at = scene(sets);
+    const double estimate = pardel::estimate_solve_memory(at.problem, at.options, certificate).peak;
     const double ratio = (big.peak_bytes - base.peak_bytes) / estimate;
     std::printf("method %s%s, N = %d: estimate %.1f MB, measured %.1f MB above a small solve (%.1f MB): ratio %.3f\n",
                 method.c_str(), certificate ? " with the certificate" : "", N, estimate / 1e6, (big.peak_bytes - base.peak_bytes) / 1e6, base.peak_bytes / 1e6,
@@ -170,8 +171,8 @@ TEST_F(MemoryEstimate, BadAllocWithoutTheCheckBecomesAMessage) {
 
 TEST_F(MemoryEstimate, RefusedWhenTheMachineHasTooLittle) {
   const auto s = scene({"grid.N=100000000", "solver.method=hybrid"});
-  const double need = pardel::cli::estimate_solve_memory(s).peak;
-  const pardel::cli::MachineMemory machine = pardel::cli::machine_memory();
+  const double need = pardel::estimate_solve_memory(s.problem, s.options).peak;
+  const pardel::MachineMemory machine = pardel::machine_memory();
   if (machine.available < 0 || machine.available >= need) GTEST_SKIP() << "this machine has the memory";
   const Outcome o = run_pardel({"solve", scene_.string(), "--out", (dir_ / "huge").string(), "--set",
                                 "grid.N=100000000", "--set", "solver.method=hybrid", "--no-plot", "--quiet"},
@@ -190,16 +191,17 @@ TEST_F(MemoryEstimate, GridBeyondTheSceneLimitNamesTheKey) {
 }
 
 TEST_F(MemoryEstimate, MessageNamesTheMachineMemory) {
-  pardel::cli::MemoryEstimate e;
+  pardel::MemoryEstimate e;
   e.peak = 5e9;
   e.largest = "solve";
-  pardel::cli::MachineMemory m;
+  pardel::MachineMemory m;
   m.available = 2e9;
-  const std::string why = pardel::cli::memory_refusal(scene({}), e, m);
+  const pardel::app::Scene s = scene({});
+  const std::string why = pardel::memory_refusal(s.problem, s.options, e, m);
   EXPECT_NE(why.find("grid.N = 200 needs an estimated 5.00 GB (method jacobi-newton"), std::string::npos) << why;
   EXPECT_NE(why.find("this machine has 2.00 GB available"), std::string::npos) << why;
   m.available = 8e9;
-  EXPECT_EQ(pardel::cli::memory_refusal(scene({}), e, m), "");
+  EXPECT_EQ(pardel::memory_refusal(s.problem, s.options, e, m), "");
 }
 
 }  // namespace

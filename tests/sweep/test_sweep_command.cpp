@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "pardel/pardel.hpp"
-#include "trajectory_io.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 namespace {
 
@@ -107,7 +107,7 @@ TEST(SweepCommand, Zermelo50WritesConsistentOutputs) {
   double previous = 0;
   for (const auto& s : summary["solutions"]) {
     const std::string file = dir / ("out/" + s["trajectory"].get<std::string>());
-    const Trajectory trajectory = cli::read_trajectory_csv(file, *model);
+    const Trajectory trajectory = app::read_trajectory_csv(file, *model);
     EXPECT_EQ(trajectory.N, 80);
     const Result check = run(pardel("check '" + std::string(PARDEL_SCENES_DIR) + "/zermelo_1.toml' --json --trajectory '" +
                                     file + "'"));

@@ -1,4 +1,4 @@
-// Tests of sweep files (tools/pardel/sweep.hpp): what good files produce (configurations,
+// Tests of sweep files (pardel/app/sweep.hpp): what good files produce (configurations,
 // guesses, variants) and the messages of bad ones (FILE:LINE:COL, the key, a suggestion).
 #include <gtest/gtest.h>
 
@@ -6,12 +6,12 @@
 #include <string>
 
 #include "pardel/pardel.hpp"
-#include "sweep.hpp"
+#include "pardel/app/sweep.hpp"
 
 namespace {
 
 using namespace pardel;
-using namespace pardel::cli;
+using namespace pardel::app;
 
 // A sweep file placed (by name only) in scenes/sweeps/, so that "../zermelo_1.toml" is the seed's scene.
 const std::string kName = std::string(PARDEL_SCENES_DIR) + "/sweeps/test.toml";

@@ -1,4 +1,4 @@
-// Tests of the grouping of sweep results into distinct local solutions (tools/pardel/sweep.hpp) on
+// Tests of the grouping of sweep results into distinct local solutions (pardel/app/sweep.hpp) on
 // synthetic results: what merges, what stays apart, the order of ids and ranks, the CSV table.
 #include <gtest/gtest.h>
 
@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "sweep.hpp"
+#include "pardel/app/sweep.hpp"
 
 namespace {
 
 using namespace pardel;
-using namespace pardel::cli;
+using namespace pardel::app;
 
 /** A converged result whose 1-D trajectory has nodes `q` (t = k). */
 VariantResult result(int id, double cost, double action, std::vector<double> q, int configuration = 0) {

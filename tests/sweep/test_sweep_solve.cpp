@@ -1,4 +1,4 @@
-// Tests of solving sweep variants (tools/pardel/sweep.hpp, sweep_command.hpp) on the seed's Zermelo
+// Tests of solving sweep variants (pardel/app/sweep.hpp) on the seed's Zermelo
 // scene with a handful of random guesses: every reported solution is converged, the solutions are
 // distinct, and solving again from a solution's trajectory reproduces it.
 #include <gtest/gtest.h>
@@ -6,15 +6,14 @@
 #include <cmath>
 #include <string>
 
-#include "outputs.hpp"
+#include "pardel/app/outputs.hpp"
 #include "pardel/pardel.hpp"
-#include "sweep.hpp"
-#include "sweep_command.hpp"
+#include "pardel/app/sweep.hpp"
 
 namespace {
 
 using namespace pardel;
-using namespace pardel::cli;
+using namespace pardel::app;
 
 const std::string kName = std::string(PARDEL_SCENES_DIR) + "/sweeps/test.toml";
 

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 #ifdef PARDEL_BENCH_WITH_IPOPT
 #include "ipopt_peer.hpp"
 #endif
@@ -348,16 +348,16 @@ double max_error_shared(const pardel::Trajectory& coarse, const pardel::Trajecto
 }
 
 /** A scene file with `--set`-style overrides (models resolved among the bundled ones). */
-pardel::cli::Scene load_or_fail(const std::string& path, const std::vector<std::string>& sets) {
+pardel::app::Scene load_or_fail(const std::string& path, const std::vector<std::string>& sets) {
   try {
-    return pardel::cli::load_scene(path, sets, [](const std::string& name) { return pardel::find_model(name); });
+    return pardel::app::load_scene(path, sets, [](const std::string& name) { return pardel::find_model(name); });
   } catch (const std::exception& e) {
     fail(e.what());
   }
 }
-pardel::cli::Scene scene_as_written(const std::string& path) { return load_or_fail(path, {}); }
+pardel::app::Scene scene_as_written(const std::string& path) { return load_or_fail(path, {}); }
 /** The scene at another grid size and discretization. */
-pardel::cli::Scene scene_at(const std::string& path, int N, const std::string& disc) {
+pardel::app::Scene scene_at(const std::string& path, int N, const std::string& disc) {
   return load_or_fail(path, {"grid.N=" + std::to_string(N), "discretization=" + disc});
 }
 
@@ -365,14 +365,14 @@ pardel::cli::Scene scene_at(const std::string& path, int N, const std::string& d
  * The scene's tolerance at N: as written for N <= the scene's own N0; for order-2 models, whose
  * attainable residual grows like N^3 (docs/solvers.md, statuses), scaled by (N / N0)^3 above it.
  */
-double tol_at(const pardel::cli::Scene& base, int N) {
+double tol_at(const pardel::app::Scene& base, int N) {
   const double tol = base.options.tol;
   if (base.problem.model->order < 2 || N <= base.problem.N) return tol;
   return tol * std::pow(static_cast<double>(N) / base.problem.N, 3);
 }
 
 /** Options for a work-precision run: the scene's (clock, tolerance) with the benchmark's method. */
-pardel::Options workprec_options(const pardel::cli::Scene& base, const std::string& method, int N, int threads) {
+pardel::Options workprec_options(const pardel::app::Scene& base, const std::string& method, int N, int threads) {
   pardel::Options o = base.options;
   o.refine_start_N = 0;
   configure_method(method, N, base.problem.N, o);
@@ -385,7 +385,7 @@ pardel::Options workprec_options(const pardel::cli::Scene& base, const std::stri
 
 int cmd_workprec(const Args& a) {
   const std::string path = a.get("scene", "scenes/fuel_nav.toml");
-  const pardel::cli::Scene base = scene_as_written(path);
+  const pardel::app::Scene base = scene_as_written(path);
   const std::string name = std::filesystem::path(path).stem().string();
   const std::vector<std::string> methods = a.words("methods", "newton,newton-nested,hybrid,jacobi-newton");
   const std::vector<double> Ns = a.list("N", "50,100,200,400");
@@ -402,9 +402,9 @@ int cmd_workprec(const Args& a) {
     pardel::Summary sf, sc;
     for (int half = 0; half < 2; ++half) {
       const int n = half ? ref_N / 2 : ref_N;
-      const pardel::cli::Scene sn = scene_at(path, n, disc);
+      const pardel::app::Scene sn = scene_at(path, n, disc);
       pardel::Options ro = workprec_options(base, "newton-nested", n, threads);
-      pardel::Trajectory tr = pardel::cli::make_initial_guess(sn);
+      pardel::Trajectory tr = pardel::app::make_initial_guess(sn);
       pardel::Summary s = solve_capped(sn.problem, ro, tr, ref_cap).summary;
       (half ? coarse : fine) = tr;
       (half ? sc : sf) = s;
@@ -425,10 +425,10 @@ int cmd_workprec(const Args& a) {
     for (double Nd : Ns) {
       const int N = static_cast<int>(Nd);
       if ((ref_N / 2) % N != 0) fail("--N: " + std::to_string(N) + " does not divide ref-N/2");
-      const pardel::cli::Scene sn = scene_at(path, N, disc);
+      const pardel::app::Scene sn = scene_at(path, N, disc);
       for (const std::string& method : methods) {
         const pardel::Options o = workprec_options(base, method, N, threads);
-        pardel::Trajectory tr = pardel::cli::make_initial_guess(sn);
+        pardel::Trajectory tr = pardel::app::make_initial_guess(sn);
         const Run run = solve_capped(sn.problem, o, tr, cap);
         const pardel::Summary& s = run.summary;
         const bool finite = std::isfinite(s.action) && tr.N == N;

@@ -4,17 +4,21 @@
  * from the straight-line guess and prints IPOPT's status, iterations, time, the recomputed DEL
  * residual and the action, e.g.
  *   pardel-ipopt --model fuel_nav --T 30 --N 200 --q0 0,0 --qN 6,5
+ * Params by name and the trajectory file are pardel's own (pardel::params_by_name,
+ * pardel::app::trajectory_csv), so that `pardel check --trajectory` reads what --output writes.
  */
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
+#include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "ipopt_peer.hpp"
+#include "pardel/app/trajectory_io.hpp"
 #include "pardel/model_loader.hpp"
 
 namespace {
@@ -29,7 +33,7 @@ const char* const kUsage =
     "  --no-acceptable      disable IPOPT's 'acceptable' early stop\n"
     "  --threads N          threads for kernel evaluation (default 1)\n"
     "  --print-level L      IPOPT print level (default 0)\n"
-    "  --output FILE        write the final trajectory as CSV (t, then dim columns)\n"
+    "  --output FILE        write the final trajectory as a trajectory.csv (k, t, state columns)\n"
     "  --csv                print one CSV line: model,N,status,iterations,seconds,residual,action\n";
 
 [[noreturn]] void fail(const std::string& message) {
@@ -71,7 +75,7 @@ std::vector<double> parse_list(const std::string& key, const std::string& text) 
 
 int main(int argc, char** argv) {
   std::string model_name, disc_name, output;
-  std::vector<std::pair<std::string, double>> params;
+  std::map<std::string, double> params;
   pardel::Problem problem;
   pardel::peer::IpoptOptions options;
   bool have_N = false, have_T = false, csv = false;
@@ -107,7 +111,7 @@ int main(int argc, char** argv) {
       const std::string v = value();
       const std::size_t eq = v.find('=');
       if (eq == std::string::npos || eq == 0) fail("--param: '" + v + "' is not NAME=VALUE");
-      params.emplace_back(v.substr(0, eq), parse_double("--param " + v.substr(0, eq), v.substr(eq + 1)));
+      params[v.substr(0, eq)] = parse_double("--param " + v.substr(0, eq), v.substr(eq + 1));
     } else if (key == "--tol") {
       options.tol = parse_double(key, value());
     } else if (key == "--max-iter") {
@@ -141,8 +145,7 @@ int main(int argc, char** argv) {
   if (!problem.model) fail("--model: unknown model '" + model_name + "'");
   const pardel_model& m = *problem.model;
   if (!disc_name.empty()) {
-    for (int i = 0; i < m.ndiscretizations; ++i)
-      if (disc_name == m.discretizations[i].name) problem.discretization = &m.discretizations[i];
+    problem.discretization = pardel::find_discretization(m, disc_name);
     if (!problem.discretization) {
       std::string names;
       for (int i = 0; i < m.ndiscretizations; ++i) names += std::string(i ? ", " : "") + m.discretizations[i].name;
@@ -154,14 +157,7 @@ int main(int argc, char** argv) {
     fail("--q0: model '" + std::string(m.name) + "' needs " + std::to_string(m.dim) + " values");
   if (problem.qN.size() != static_cast<std::size_t>(m.dim))
     fail("--qN: model '" + std::string(m.name) + "' needs " + std::to_string(m.dim) + " values");
-  problem.params.assign(m.param_defaults, m.param_defaults + m.nparams);
-  for (const auto& [name, v] : params) {
-    int found = -1;
-    for (int i = 0; i < m.nparams; ++i)
-      if (name == m.param_names[i]) found = i;
-    if (found < 0) fail("--param: model '" + std::string(m.name) + "' has no parameter '" + name + "'");
-    problem.params[static_cast<std::size_t>(found)] = v;
-  }
+  if (!pardel::params_by_name(m, params, &problem.params, &error)) fail("--param: " + error);
 
   pardel::Trajectory trajectory = pardel::peer::straight_line(problem);
   const pardel::peer::IpoptResult result = pardel::peer::solve_ipopt(problem, options, trajectory);
@@ -176,16 +172,11 @@ int main(int argc, char** argv) {
     std::printf("%s\n", result.brief_report().c_str());
   }
   if (!output.empty()) {
-    std::ofstream out(output);
-    if (!out) {
-      std::fprintf(stderr, "pardel-ipopt: error: --output: cannot write '%s'\n", output.c_str());
+    try {
+      pardel::app::write_file_atomic(output, pardel::app::trajectory_csv(m, trajectory));
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "pardel-ipopt: error: --output: %s\n", e.what());
       return 2;
-    }
-    out.precision(17);
-    for (int k = 0; k <= trajectory.N; ++k) {
-      out << trajectory.t[static_cast<std::size_t>(k)];
-      for (int a = 0; a < trajectory.dim; ++a) out << ',' << trajectory.node(k)[a];
-      out << '\n';
     }
   }
   return result.converged ? 0 : 1;

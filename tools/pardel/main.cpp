@@ -20,17 +20,19 @@
 #include <string>
 #include <vector>
 
-#include "checkpoint.hpp"
-#include "distributed_solve.hpp"
-#include "memory_estimate.hpp"
-#include "outputs.hpp"
+#include "exit_codes.hpp"
+#include "pardel/app/checkpoint.hpp"
+#include "pardel/app/outputs.hpp"
+#include "pardel/app/scene.hpp"
+#include "pardel/app/solve.hpp"
+#include "pardel/app/trajectory_io.hpp"
+#include "pardel/memory.hpp"
 #include "pardel/mpi_session.hpp"
 #include "pardel/pardel.hpp"
 #include "pardel_cli/config.hpp"
+#include "plot_runner.hpp"
 #include "progress.hpp"
-#include "scene.hpp"
 #include "sweep_command.hpp"
-#include "trajectory_io.hpp"
 #ifdef PARDEL_HAVE_MODEL_LOADER
 #include "pardel/model_loader.hpp"
 #endif
@@ -38,11 +40,9 @@
 namespace {
 
 using namespace pardel;
+using namespace pardel::app;
 using namespace pardel::cli;
 namespace fs = std::filesystem;
-
-constexpr int kExitUsage = 2;
-constexpr int kExitInternal = 1;
 
 const char* const kExitCodesHelp =
     "Exit codes: 0 converged (or success), 1 internal error (e.g. an output file cannot be written),\n"
@@ -303,12 +303,12 @@ int run_solve_unguarded(const SolveArgs& args) {
   }
   const int threads = args.threads >= 0 ? args.threads : resume ? resumed.threads : -1;
   if (threads >= 0) scene.options.threads = threads;
-  const MemoryEstimate memory = estimate_solve_memory(scene, args.certificate == "full");
+  const MemoryEstimate memory = estimate_solve_memory(scene.problem, scene.options, args.certificate == "full");
   g_solve_context = fmt::format("solving {} with grid.N = {} (method {}, model dim {}; estimated need {})", scene_path,
                                 scene.problem.N, to_string(scene.options.method), scene.model->dim,
                                 format_bytes(memory.peak));
   if (!args.no_memory_check) {
-    const std::string refusal = memory_refusal(scene, memory, machine_memory());
+    const std::string refusal = memory_refusal(scene.problem, scene.options, memory, machine_memory());
     if (!refusal.empty()) throw UsageError(fmt::format("{}: {} (--no-memory-check skips this check)", scene_path, refusal));
   }
   Trajectory trajectory = resume ? Trajectory{} : make_initial_guess(scene);
@@ -323,35 +323,41 @@ int run_solve_unguarded(const SolveArgs& args) {
   const bool created_out_dir = !fs::exists(out_dir, ec);
   fs::create_directories(out_dir, ec);
   if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
-  if (pardel::mpi::world_size() > 1) {  // under mpirun: one solve decomposed over the ranks
-    return run_distributed_solve(scene, trajectory, {out_dir, args.quiet, !args.no_plot});
-  }
-
-  ProgressLine progress(!args.quiet, scene.options.tol);
-  scene.options.on_iteration = [&progress](const IterationRecord& record) {
-    progress.update(record);
+  // Under mpirun with more than one rank, one solve decomposed over the ranks: every rank solves,
+  // rank 0 alone writes the outputs and reports.
+  const int ranks = pardel::mpi::world_size();
+  const bool root = pardel::mpi::world_rank() == 0;
+  ProgressLine progress(root && !args.quiet, scene.options.tol);
+  scene.options.on_iteration = [&progress, root](const IterationRecord& record) {
+    if (root) progress.update(record);
     return !g_interrupted.load();
   };
   g_interrupted.store(false);
   auto previous_int = std::signal(SIGINT, on_sigint);
   auto previous_term = std::signal(SIGTERM, on_sigint);
-  const Summary summary = solve(scene.problem, scene.options, trajectory);
+  const Summary summary = solve_scene(scene, trajectory);
   std::signal(SIGINT, previous_int);
   std::signal(SIGTERM, previous_term);
   progress.finish();
   scene.options.on_iteration = nullptr;
-  // A checkpoint that does not fit is refused before anything in the folder is overwritten.
-  if (resume && summary.termination == Termination::invalid_input)
+  // A checkpoint that does not fit is refused before anything in the folder is overwritten (under
+  // mpirun a resumed solve is refused as any other invalid input, below, by rank 0 alone).
+  if (ranks == 1 && resume && summary.termination == Termination::invalid_input)
     throw CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
-  // Input the runtime refused (a degenerate model, a method this build lacks, ...): an error,
-  // and nothing is written.
+  // Input the runtime refused (a degenerate model, a method this build lacks, fewer nodes than the
+  // ranks need, ...): an error, and nothing is written.
   if (summary.termination == Termination::invalid_input) {
+    if (!root) return exit_code(summary.termination);
     if (created_out_dir) fs::remove(out_dir, ec);  // still empty: nothing was written
     std::fprintf(stderr, "%s: error: %s\n", scene_path.c_str(), summary.message.c_str());
     return exit_code(summary.termination);
   }
+  if (!root) return exit_code(summary.termination);
 
-  const SolveOutputs outputs = write_solve_outputs(scene, summary, trajectory, out_dir, {}, args.certificate == "full");
+  nlohmann::ordered_json extra = nlohmann::ordered_json::object();
+  if (ranks > 1) extra["ranks"] = ranks;
+  const SolveOutputs outputs =
+      write_solve_outputs(scene, summary, trajectory, out_dir, extra, args.certificate == "full");
   const pardel_model& model = *scene.model;
   if (summary.termination == Termination::interrupted && summary.state.valid) {
     Checkpoint checkpoint;
@@ -368,7 +374,13 @@ int run_solve_unguarded(const SolveArgs& args) {
     fs::remove(fs::path(out_dir) / checkpoint_file_name(), ec);
   }
   if (!args.no_plot && outputs.have_trajectory) run_plot_script(config::plot_script, out_dir, "plots");
-  if (!args.quiet) print_solve_report(scene, summary, trajectory, outputs.certificate, out_dir);
+  if (!args.quiet) {
+    print_solve_report(scene, summary, trajectory, outputs.certificate, out_dir,
+                       ranks > 1 ? fmt::format("ranks: {} (nodes split into contiguous ranges, halos exchanged every "
+                                               "iteration)",
+                                               ranks)
+                                 : "");
+  }
   if (!summary.converged()) {
     std::fprintf(stderr, "pardel solve: %s: %s\n", to_string(summary.termination), summary.message.c_str());
   }

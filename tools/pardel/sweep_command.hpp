@@ -10,12 +10,10 @@
 #define PARDEL_CLI_SWEEP_COMMAND_HPP
 
 #include <CLI/CLI.hpp>
-#include <functional>
 #include <string>
 #include <vector>
 
-#include "scene.hpp"
-#include "sweep.hpp"
+#include "pardel/app/scene.hpp"
 
 namespace pardel::cli {
 
@@ -46,21 +44,12 @@ class SweepCommand {
    * rank 0), 1 when outputs cannot be written, kSweepExitInterrupted after SIGINT or SIGTERM,
    * kSweepExitNoSolution when no variant converged.
    */
-  int run(const ModelResolver& resolve, const std::vector<std::string>& model_names) const;
+  int run(const app::ModelResolver& resolve, const std::vector<std::string>& model_names) const;
 
  private:
   CLI::App* command_ = nullptr;
   SweepArgs args_;
 };
-
-/**
- * Solves the variants of `sweep` assigned to this rank (id % size == rank) and gathers all
- * results on rank 0 in variant order (other ranks get an empty vector). `threads` and `stop` as
- * in solve_variant. `on_done` (may be empty) is called on each rank after each of its variants.
- */
-std::vector<VariantResult> run_variants_over_ranks(const Sweep& sweep, int threads, int rank, int size,
-                                                   const std::function<void(int done, int mine)>& on_done = {},
-                                                   const std::atomic<bool>* stop = nullptr);
 
 }  // namespace pardel::cli
 

@@ -1,5 +1,5 @@
 // Checkpoint files of `pardel solve` (see checkpoint.hpp): writing, exact reading and checks.
-#include "checkpoint.hpp"
+#include "pardel/app/checkpoint.hpp"
 
 #include <fmt/format.h>
 
@@ -14,9 +14,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "trajectory_io.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 namespace {
 
 using json = nlohmann::json;
@@ -314,4 +314,4 @@ void write_checkpoint(const std::string& dir, const Checkpoint& checkpoint) {
   write_file_atomic((std::filesystem::path(dir) / checkpoint_file_name()).string(), checkpoint_json(checkpoint));
 }
 
-}  // namespace pardel::cli
+}  // namespace pardel::app

@@ -1,11 +1,9 @@
-// convergence.csv, summary.json and the physical cost of a solve (see outputs.hpp).
-#include "outputs.hpp"
+// convergence.csv, summary.json, the physical cost and the report of a solve (see outputs.hpp).
+#include "pardel/app/outputs.hpp"
 
 #include <fmt/format.h>
 #include <fcntl.h>
-#include <spawn.h>
 #include <sys/file.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -17,12 +15,9 @@
 #include <utility>
 #include <vector>
 
-#include "pardel_cli/config.hpp"
-#include "trajectory_io.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
-extern char** environ;
-
-namespace pardel::cli {
+namespace pardel::app {
 namespace {
 
 /** An exclusive flock(2) on a folder for the lifetime of the object (best effort: where the
@@ -183,26 +178,13 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   return j;
 }
 
-int exit_code(Termination termination) {
-  switch (termination) {
-    case Termination::converged: return 0;
-    case Termination::invalid_input: return 2;
-    case Termination::max_iterations: return 3;
-    case Termination::diverged: return 4;
-    case Termination::non_finite: return 5;
-    case Termination::interrupted: return 6;
-    case Termination::stalled: return 7;
-  }
-  return 1;
-}
-
 std::string model_source_path(const pardel_model& model) {
   namespace fs = std::filesystem;
   if (!model.source || !*model.source) return "";
   const fs::path source(model.source);
   std::error_code ec;
   if (source.is_absolute()) return fs::exists(source, ec) ? source.string() : "";
-  const fs::path in_project = fs::path(config::source_dir) / source;
+  const fs::path in_project = fs::path(PARDEL_SOURCE_DIR) / source;
   if (fs::exists(in_project, ec)) return in_project.lexically_normal().string();
   if (fs::exists(source, ec)) return fs::absolute(source, ec).lexically_normal().string();
   return "";
@@ -290,31 +272,4 @@ void print_solve_report(const Scene& scene, const Summary& summary, const Trajec
   std::cout << "output: " << out_dir << "\n";
 }
 
-bool run_plot_script(const std::string& script, const std::string& out_dir, const std::string& what) {
-  std::vector<std::string> argv_strings = {config::python, script, out_dir};
-  std::vector<char*> argv;
-  for (auto& s : argv_strings) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int spawn_error = ::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
-  if (spawn_error != 0) {
-    std::fprintf(stderr, "warning: %s not written: cannot run %s: %s\n", what.c_str(), config::python,
-                 std::strerror(spawn_error));
-    return false;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) {
-      std::fprintf(stderr, "warning: %s not written: waitpid failed: %s\n", what.c_str(), std::strerror(errno));
-      return false;
-    }
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::fprintf(stderr, "warning: %s not written: %s %s exited with status %d\n", what.c_str(), config::python,
-                 script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-    return false;
-  }
-  return true;
-}
-
-}  // namespace pardel::cli
+}  // namespace pardel::app

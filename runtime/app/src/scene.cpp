@@ -1,5 +1,5 @@
 // Scene parsing and checking for the pardel command line (see scene.hpp for the contract).
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
 #include <fmt/format.h>
 
@@ -13,9 +13,9 @@
 #define TOML_EXCEPTIONS 1
 #include <toml++/toml.h>
 
-#include "trajectory_io.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 
 std::size_t edit_distance(std::string_view a, std::string_view b) {
   std::vector<std::size_t> row(b.size() + 1);
@@ -390,40 +390,28 @@ void check_ascii_outside_strings(std::string_view text, const std::string& sourc
   }
 }
 
-Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
-                  const ModelResolver& resolve, const std::vector<std::string>& model_names) {
-  // A UTF-8 byte-order mark, which some editors write, is skipped (the ASCII filter below would
-  // refuse it); columns then count from the byte after it.
-  if (text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3);
-  check_ascii_outside_strings(text, source_name);
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name);
-  } catch (const toml::parse_error& error) {
-    throw SceneError(fmt::format("{}:{}:{}: error: {}", source_name, error.source().begin.line,
-                                 error.source().begin.column, error.description()));
-  }
-  std::map<std::string, std::string> origins;
-  for (const auto& assignment : overrides) {
-    const std::string dotted = apply_override(root, assignment);
-    origins[dotted] = "--set " + assignment;
-  }
-  const SceneReader r(source_name, origins);
+namespace {
 
-  Scene scene;
-  scene.path = source_name;
-  r.check_keys(root, "", {"model", "discretization", "params", "grid", "boundary", "knots", "guess", "solver", "output"});
+/** The model's coordinate names, as "x, y". */
+std::string coords_list(const pardel_model& model) {
+  std::vector<std::string> names;
+  for (int i = 0; i < model.ncoords; ++i) names.push_back(model.coords[i]);
+  return join(names);
+}
 
-  // model
+/** The `model` key: a bundled model's name or a .lag path, resolved (relative paths against the
+ *  scene's folder first). */
+void read_model(const SceneReader& r, const toml::table& root, const ModelResolver& resolve,
+                const std::vector<std::string>& model_names, Scene& scene) {
   const auto model_spec = r.string(&root, "model", "model");
   if (!model_spec) {
     throw SceneError(fmt::format("{}: error: missing key 'model' (a bundled model's name or a path to a .lag file)",
-                                 source_name));
+                                 r.file()));
   }
   scene.model_spec = *model_spec;
   std::string to_resolve = *model_spec;
   if (looks_like_path(to_resolve)) {
-    const std::string beside_scene = resolve_relative(source_name, to_resolve);
+    const std::string beside_scene = resolve_relative(r.file(), to_resolve);
     std::error_code ec;
     if (std::filesystem::exists(beside_scene, ec)) to_resolve = beside_scene;
     scene.model_path = to_resolve;
@@ -441,14 +429,13 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
     else if (!model_names.empty()) message += fmt::format(" (bundled models: {})", join(model_names));
     r.fail(model_node, "model", message);
   }
+  scene.problem.model = scene.model;
+}
+
+/** The `discretization` key, else the model's first. */
+void read_discretization(const SceneReader& r, const toml::table& root, Scene& scene) {
   const pardel_model& model = *scene.model;
   Problem& problem = scene.problem;
-  problem.model = scene.model;
-  std::vector<std::string> coord_names;
-  for (int i = 0; i < model.ncoords; ++i) coord_names.push_back(model.coords[i]);
-  const std::string coords_text = join(coord_names);
-
-  // discretization
   std::vector<std::string> disc_names;
   for (int i = 0; i < model.ndiscretizations; ++i) disc_names.push_back(model.discretizations[i].name);
   if (const auto disc = r.string(&root, "discretization", "discretization")) {
@@ -462,13 +449,17 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
     }
   } else {
     if (model.ndiscretizations < 1) {
-      throw SceneError(fmt::format("{}: error: model {} has no discretization", source_name, model.name));
+      throw SceneError(fmt::format("{}: error: model {} has no discretization", r.file(), model.name));
     }
     problem.discretization = &model.discretizations[0];
   }
   scene.discretization = problem.discretization->name;
+}
 
-  // params
+/** [params]: the model's params by name, the others at their defaults. */
+void read_params(const SceneReader& r, const toml::table& root, Scene& scene) {
+  const pardel_model& model = *scene.model;
+  Problem& problem = scene.problem;
   std::vector<std::string> param_names;
   for (int i = 0; i < model.nparams; ++i) param_names.push_back(model.param_names[i]);
   problem.params.assign(model.param_defaults, model.param_defaults + model.nparams);
@@ -479,10 +470,13 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
       if (auto v = r.number(params, param_names[i], "params." + param_names[i])) problem.params[i] = *v;
     }
   }
+}
 
-  // grid
+/** [grid]: t0, T and N, with node times that a double can tell apart. */
+void read_grid(const SceneReader& r, const toml::table& root, Scene& scene) {
+  Problem& problem = scene.problem;
   const toml::table* grid = r.table(root, "grid", "grid");
-  if (!grid) throw SceneError(fmt::format("{}: error: missing table [grid] (keys t0, T, N)", source_name));
+  if (!grid) throw SceneError(fmt::format("{}: error: missing table [grid] (keys t0, T, N)", r.file()));
   r.check_keys(*grid, "grid", {"t0", "T", "N"});
   problem.t0 = r.number(grid, "t0", "grid.t0").value_or(0.0);
   const auto T = r.number(grid, "T", "grid.T");
@@ -507,8 +501,14 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
            fmt::format("the step grid.T / grid.N = {} / {} = {} is too small to separate the node times", problem.T,
                        problem.N, step));
   }
+}
 
-  // boundary
+/** [boundary]: q0, qN and, for higher orders, the derivatives' end values, laid out
+ *  [coords, coords', ...] (derivative by derivative). */
+void read_boundary(const SceneReader& r, const toml::table& root, Scene& scene) {
+  const pardel_model& model = *scene.model;
+  Problem& problem = scene.problem;
+  const std::string coords_text = coords_list(model);
   const toml::table* boundary = r.table(root, "boundary", "boundary");
   std::vector<std::string> boundary_keys;
   for (int d = 0; d < model.order; ++d) {
@@ -516,7 +516,7 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
     boundary_keys.push_back(boundary_prefix(d) + "N");
   }
   if (!boundary) {
-    throw SceneError(fmt::format("{}: error: missing table [boundary] (keys {})", source_name, join(boundary_keys)));
+    throw SceneError(fmt::format("{}: error: missing table [boundary] (keys {})", r.file(), join(boundary_keys)));
   }
   r.check_keys(*boundary, "boundary", boundary_keys, fmt::format("(model {} has order {})", model.name, model.order));
   problem.q0.clear();
@@ -536,114 +536,122 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
       target.insert(target.end(), values.begin(), values.end());
     }
   }
-  // q0/qN are laid out [coords, coords', ...]: the loop above appended derivative by derivative.
+}
 
-  // solver (read before knots: the clock mode decides whether knots make sense)
+/** [solver]: the method and its options, and the clock mode (read before the knots: the clock
+ *  mode decides whether knots make sense). */
+void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
+  const pardel_model& model = *scene.model;
+  Problem& problem = scene.problem;
   Options& options = scene.options;
   const toml::table* solver = r.table(root, "solver", "solver");
-  if (solver) {
-    r.check_keys(*solver, "solver",
-                 {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift",
-                  "linear_solver", "threads", "refine", "clock_update_every", "clock"});
-    if (const auto method = r.string(solver, "method", "solver.method")) {
-      if (!parse_method(*method, &options.method)) {
-        const std::string suggestion = nearest_name(*method, kMethodNames);
-        std::string message = fmt::format("unknown method '{}'", *method);
-        if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
-        message += fmt::format(" (methods: {})", join(kMethodNames));
-        r.fail(*solver->get("method"), "solver.method", message);
-      }
-    }
-    if (const auto tol = r.number(solver, "tol", "solver.tol")) {
-      if (!(*tol > 0)) r.fail(*solver->get("tol"), "solver.tol", fmt::format("solver.tol must be > 0, got {}", *tol));
-      options.tol = *tol;
-    }
-    if (const auto rtol = r.number(solver, "rtol", "solver.rtol")) {
-      if (!(*rtol > 0 && *rtol < 1))
-        r.fail(*solver->get("rtol"), "solver.rtol", fmt::format("solver.rtol must be in (0, 1), got {}", *rtol));
-      options.rtol = *rtol;
-    }
-    if (const auto max_it = r.integer(solver, "max_iterations", "solver.max_iterations")) {
-      if (*max_it < 1) {
-        r.fail(*solver->get("max_iterations"), "solver.max_iterations",
-               fmt::format("solver.max_iterations must be >= 1, got {}", *max_it));
-      }
-      options.max_iterations = static_cast<long>(*max_it);
-    }
-    if (const auto damping = r.number(solver, "damping", "solver.damping")) {
-      if (!(*damping >= 0 && *damping < 1)) {
-        r.fail(*solver->get("damping"), "solver.damping",
-               fmt::format("solver.damping must be in [0, 1), got {}", *damping));
-      }
-      options.damping = *damping;
-    }
-    if (const auto m = r.integer(solver, "newton_substeps", "solver.newton_substeps")) {
-      if (*m < 1 || *m > 1000) {
-        r.fail(*solver->get("newton_substeps"), "solver.newton_substeps",
-               fmt::format("solver.newton_substeps must be between 1 and 1000, got {}", *m));
-      }
-      options.newton_substeps = static_cast<int>(*m);
-    }
-    if (const auto shift = r.string(solver, "newton_shift", "solver.newton_shift")) {
-      if (!parse_newton_shift(*shift, &options.newton_shift)) {
-        r.fail(*solver->get("newton_shift"), "solver.newton_shift",
-               fmt::format("unknown newton_shift '{}' (expected 'identity' or 'difference')", *shift));
-      }
-    }
-    if (const auto ls = r.string(solver, "linear_solver", "solver.linear_solver")) {
-      if (!parse_linear_solver(*ls, &options.linear_solver)) {
-        r.fail(*solver->get("linear_solver"), "solver.linear_solver",
-               fmt::format("unknown linear_solver '{}' (expected 'ldlt' or 'cyclic-reduction')", *ls));
-      }
-    }
-    if (const auto threads = r.integer(solver, "threads", "solver.threads")) {
-      if (*threads < 0 || *threads > 4096) {
-        r.fail(*solver->get("threads"), "solver.threads",
-               fmt::format("solver.threads must be between 0 (all cores) and 4096, got {}", *threads));
-      }
-      options.threads = static_cast<int>(*threads);
-    }
-    if (const toml::table* refine = r.table(*solver, "refine", "solver.refine")) {
-      r.check_keys(*refine, "solver.refine", {"start_N", "factor"});
-      const auto start = r.integer(refine, "start_N", "solver.refine.start_N");
-      if (!start) r.fail(refine->source(), "solver.refine", "missing key 'solver.refine.start_N'");
-      if (*start < 2 || *start > problem.N) {
-        r.fail(*refine->get("start_N"), "solver.refine.start_N",
-               fmt::format("solver.refine.start_N must be between 2 and grid.N = {}, got {}", problem.N, *start));
-      }
-      options.refine_start_N = static_cast<int>(*start);
-      if (const auto factor = r.number(refine, "factor", "solver.refine.factor")) {
-        if (!(*factor > 1 && *factor <= 16)) {
-          r.fail(*refine->get("factor"), "solver.refine.factor",
-                 fmt::format("solver.refine.factor must be in (1, 16], got {}", *factor));
-        }
-        options.refine_factor = *factor;
-      }
-    }
-    if (const auto every = r.integer(solver, "clock_update_every", "solver.clock_update_every")) {
-      if (*every < 1) {
-        r.fail(*solver->get("clock_update_every"), "solver.clock_update_every",
-               fmt::format("solver.clock_update_every must be >= 1, got {}", *every));
-      }
-      options.clock_update_every = static_cast<int>(std::min<long long>(*every, 1000000000));
-    }
-    if (const auto clock = r.string(solver, "clock", "solver.clock")) {
-      if (!parse_clock_mode(*clock, &problem.clock)) {
-        const std::string suggestion = nearest_name(*clock, kClockNames);
-        std::string message = fmt::format("unknown clock mode '{}'", *clock);
-        if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
-        message += fmt::format(" (modes: {})", join(kClockNames));
-        r.fail(*solver->get("clock"), "solver.clock", message);
-      }
-      if (problem.clock != ClockMode::none && !model.clock) {
-        r.fail(*solver->get("clock"), "solver.clock",
-               fmt::format("solver.clock = \"{}\" needs a model with a clock; model {} declares none", *clock,
-                           model.name));
-      }
+  if (!solver) return;
+  r.check_keys(*solver, "solver",
+               {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift",
+                "linear_solver", "threads", "refine", "clock_update_every", "clock"});
+  if (const auto method = r.string(solver, "method", "solver.method")) {
+    if (!parse_method(*method, &options.method)) {
+      const std::string suggestion = nearest_name(*method, kMethodNames);
+      std::string message = fmt::format("unknown method '{}'", *method);
+      if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+      message += fmt::format(" (methods: {})", join(kMethodNames));
+      r.fail(*solver->get("method"), "solver.method", message);
     }
   }
+  if (const auto tol = r.number(solver, "tol", "solver.tol")) {
+    if (!(*tol > 0)) r.fail(*solver->get("tol"), "solver.tol", fmt::format("solver.tol must be > 0, got {}", *tol));
+    options.tol = *tol;
+  }
+  if (const auto rtol = r.number(solver, "rtol", "solver.rtol")) {
+    if (!(*rtol > 0 && *rtol < 1))
+      r.fail(*solver->get("rtol"), "solver.rtol", fmt::format("solver.rtol must be in (0, 1), got {}", *rtol));
+    options.rtol = *rtol;
+  }
+  if (const auto max_it = r.integer(solver, "max_iterations", "solver.max_iterations")) {
+    if (*max_it < 1) {
+      r.fail(*solver->get("max_iterations"), "solver.max_iterations",
+             fmt::format("solver.max_iterations must be >= 1, got {}", *max_it));
+    }
+    options.max_iterations = static_cast<long>(*max_it);
+  }
+  if (const auto damping = r.number(solver, "damping", "solver.damping")) {
+    if (!(*damping >= 0 && *damping < 1)) {
+      r.fail(*solver->get("damping"), "solver.damping",
+             fmt::format("solver.damping must be in [0, 1), got {}", *damping));
+    }
+    options.damping = *damping;
+  }
+  if (const auto m = r.integer(solver, "newton_substeps", "solver.newton_substeps")) {
+    if (*m < 1 || *m > 1000) {
+      r.fail(*solver->get("newton_substeps"), "solver.newton_substeps",
+             fmt::format("solver.newton_substeps must be between 1 and 1000, got {}", *m));
+    }
+    options.newton_substeps = static_cast<int>(*m);
+  }
+  if (const auto shift = r.string(solver, "newton_shift", "solver.newton_shift")) {
+    if (!parse_newton_shift(*shift, &options.newton_shift)) {
+      r.fail(*solver->get("newton_shift"), "solver.newton_shift",
+             fmt::format("unknown newton_shift '{}' (expected 'identity' or 'difference')", *shift));
+    }
+  }
+  if (const auto ls = r.string(solver, "linear_solver", "solver.linear_solver")) {
+    if (!parse_linear_solver(*ls, &options.linear_solver)) {
+      r.fail(*solver->get("linear_solver"), "solver.linear_solver",
+             fmt::format("unknown linear_solver '{}' (expected 'ldlt' or 'cyclic-reduction')", *ls));
+    }
+  }
+  if (const auto threads = r.integer(solver, "threads", "solver.threads")) {
+    if (*threads < 0 || *threads > 4096) {
+      r.fail(*solver->get("threads"), "solver.threads",
+             fmt::format("solver.threads must be between 0 (all cores) and 4096, got {}", *threads));
+    }
+    options.threads = static_cast<int>(*threads);
+  }
+  if (const toml::table* refine = r.table(*solver, "refine", "solver.refine")) {
+    r.check_keys(*refine, "solver.refine", {"start_N", "factor"});
+    const auto start = r.integer(refine, "start_N", "solver.refine.start_N");
+    if (!start) r.fail(refine->source(), "solver.refine", "missing key 'solver.refine.start_N'");
+    if (*start < 2 || *start > problem.N) {
+      r.fail(*refine->get("start_N"), "solver.refine.start_N",
+             fmt::format("solver.refine.start_N must be between 2 and grid.N = {}, got {}", problem.N, *start));
+    }
+    options.refine_start_N = static_cast<int>(*start);
+    if (const auto factor = r.number(refine, "factor", "solver.refine.factor")) {
+      if (!(*factor > 1 && *factor <= 16)) {
+        r.fail(*refine->get("factor"), "solver.refine.factor",
+               fmt::format("solver.refine.factor must be in (1, 16], got {}", *factor));
+      }
+      options.refine_factor = *factor;
+    }
+  }
+  if (const auto every = r.integer(solver, "clock_update_every", "solver.clock_update_every")) {
+    if (*every < 1) {
+      r.fail(*solver->get("clock_update_every"), "solver.clock_update_every",
+             fmt::format("solver.clock_update_every must be >= 1, got {}", *every));
+    }
+    options.clock_update_every = static_cast<int>(std::min<long long>(*every, 1000000000));
+  }
+  if (const auto clock = r.string(solver, "clock", "solver.clock")) {
+    if (!parse_clock_mode(*clock, &problem.clock)) {
+      const std::string suggestion = nearest_name(*clock, kClockNames);
+      std::string message = fmt::format("unknown clock mode '{}'", *clock);
+      if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+      message += fmt::format(" (modes: {})", join(kClockNames));
+      r.fail(*solver->get("clock"), "solver.clock", message);
+    }
+    if (problem.clock != ClockMode::none && !model.clock) {
+      r.fail(*solver->get("clock"), "solver.clock",
+             fmt::format("solver.clock = \"{}\" needs a model with a clock; model {} declares none", *clock,
+                         model.name));
+    }
+  }
+}
 
-  // knots
+/** [[knots]]: interior points the path must pass, each on a grid node. */
+void read_knots(const SceneReader& r, const toml::table& root, Scene& scene) {
+  const pardel_model& model = *scene.model;
+  Problem& problem = scene.problem;
+  const std::string coords_text = coords_list(model);
   if (const toml::node* knots_node = root.get("knots")) {
     const toml::array* knots = knots_node->as_array();
     if (!knots) {
@@ -691,8 +699,12 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
       problem.knots.push_back(std::move(k));
     }
   }
+}
 
-  // guess
+/** [guess]: the initial guess (linear, polyline or a trajectory.csv). */
+void read_guess(const SceneReader& r, const toml::table& root, Scene& scene) {
+  const pardel_model& model = *scene.model;
+  const std::string coords_text = coords_list(model);
   if (const toml::table* guess = r.table(root, "guess", "guess")) {
     r.check_keys(*guess, "guess", {"kind", "points", "path"});
     const std::string kind = r.string(guess, "kind", "guess.kind").value_or("linear");
@@ -734,15 +746,17 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
     if (scene.guess.kind == GuessKind::csv) {
       const auto csv = r.string(guess, "path", "guess.path");
       if (!csv) r.fail(guess->source(), "guess", "missing key 'guess.path' (a trajectory.csv file)");
-      scene.guess.csv_path = resolve_relative(source_name, *csv);
+      scene.guess.csv_path = resolve_relative(r.file(), *csv);
       std::error_code ec;
       if (!std::filesystem::exists(scene.guess.csv_path, ec)) {
         r.fail(*path, "guess.path", fmt::format("guess.path: file '{}' not found", scene.guess.csv_path));
       }
     }
   }
+}
 
-  // output
+/** [output]: the output folder. */
+void read_output(const SceneReader& r, const toml::table& root, Scene& scene) {
   if (const toml::table* output = r.table(root, "output", "output")) {
     r.check_keys(*output, "output", {"dir"});
     if (const auto dir = r.string(output, "dir", "output.dir")) {
@@ -750,9 +764,47 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
       scene.output_dir = *dir;
     }
   }
+}
+
+}  // namespace
+
+Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
+                  const ModelResolver& resolve, const std::vector<std::string>& model_names) {
+  // A UTF-8 byte-order mark, which some editors write, is skipped (the ASCII filter below would
+  // refuse it); columns then count from the byte after it.
+  if (text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3);
+  check_ascii_outside_strings(text, source_name);
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& error) {
+    throw SceneError(fmt::format("{}:{}:{}: error: {}", source_name, error.source().begin.line,
+                                 error.source().begin.column, error.description()));
+  }
+  std::map<std::string, std::string> origins;
+  for (const auto& assignment : overrides) {
+    const std::string dotted = apply_override(root, assignment);
+    origins[dotted] = "--set " + assignment;
+  }
+  const SceneReader r(source_name, origins);
+
+  Scene scene;
+  scene.path = source_name;
+  r.check_keys(root, "", {"model", "discretization", "params", "grid", "boundary", "knots", "guess", "solver", "output"});
+
+  read_model(r, root, resolve, model_names, scene);
+  read_discretization(r, root, scene);
+  read_params(r, root, scene);
+  read_grid(r, root, scene);
+  read_boundary(r, root, scene);
+  read_solver(r, root, scene);
+  read_knots(r, root, scene);
+  read_guess(r, root, scene);
+  read_output(r, root, scene);
 
   std::string why;
-  if (!options.is_valid(&why)) {
+  const toml::table* solver = r.table(root, "solver", "solver");
+  if (!scene.options.is_valid(&why)) {
     throw SceneError(fmt::format("{}: error: invalid solver options: {}", r.where(solver ? solver->source()
                                                                                         : toml::source_region{},
                                                                                  "solver"),
@@ -796,4 +848,4 @@ Trajectory make_initial_guess(const Scene& scene) {
   return linear_guess(scene.problem);
 }
 
-}  // namespace pardel::cli
+}  // namespace pardel::app

@@ -1,6 +1,6 @@
-// Sweep files, variants, their solves, the grouping into distinct solutions and the output files
-// of `pardel sweep` (see sweep.hpp for the contract).
-#include "sweep.hpp"
+// Sweep files, variants, their solves, the grouping into distinct solutions, the output files and
+// the report of `pardel sweep` (see sweep.hpp for the contract).
+#include "pardel/app/sweep.hpp"
 
 #include <fmt/format.h>
 
@@ -8,7 +8,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -16,11 +18,10 @@
 #define TOML_EXCEPTIONS 1
 #include <toml++/toml.h>
 
-#include "outputs.hpp"
-#include "pardel_cli/config.hpp"
-#include "trajectory_io.hpp"
+#include "pardel/app/outputs.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 
 namespace fs = std::filesystem;
 
@@ -749,4 +750,50 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
   write_file_atomic((dir / "sweep.json").string(), j.dump(2) + "\n");
 }
 
-}  // namespace pardel::cli
+namespace {
+
+std::string short_number(double v) { return fmt::format("{:.10g}", v); }
+
+}  // namespace
+
+void print_sweep_report(const Sweep& sweep, const std::vector<VariantResult>& results,
+                  const std::vector<Solution>& solutions, const SweepRunInfo& info, const std::string& out_dir) {
+  std::map<std::string, int> failures;
+  int converged = 0;
+  for (const auto& r : results) {
+    if (r.converged()) ++converged;
+    else ++failures[r.status];
+  }
+  std::string failed;
+  for (const auto& [status, count] : failures) failed += fmt::format("{}{} {}", failed.empty() ? "" : ", ", count, status);
+  const PhysicalCost kind = physical_cost(sweep.configurations.front(), Summary{}, Trajectory{});
+  std::cout << fmt::format("sweep {}: {} variant{} on {} rank{}, {} converged{}, {} distinct solution{}, {:.3g} s\n",
+                           sweep.path, results.size(), results.size() == 1 ? "" : "s", info.ranks,
+                           info.ranks == 1 ? "" : "s", converged, failed.empty() ? "" : " (" + failed + ")",
+                           solutions.size(), solutions.size() == 1 ? "" : "s", info.wall_seconds);
+  if (solutions.empty()) return;
+  const bool several = sweep.configurations.size() > 1;
+  std::cout << fmt::format("{:>8}{}{:>5}  {:>18}  {:>18}  {:>9}  {:>8}  {}\n", "solution",
+                           several ? fmt::format("{:>7}", "config") : "", "rank",
+                           kind.name == "action" ? "cost (action)" : kind.name, "action", "residual",
+                           "variants", "certificate");
+  for (const auto& s : solutions) {
+    std::string verdict = "unknown";
+    for (const auto& r : results) {
+      if (r.id == s.first_variant) verdict = certificate_verdict(r);
+    }
+    std::cout << fmt::format("{:>8}{}{:>5}  {:>18}  {:>18}  {:>9.2e}  {:>8}  {}\n", s.id,
+                             several ? fmt::format("{:>7}", s.configuration) : "", s.rank, short_number(s.cost),
+                             short_number(s.action), s.residual, s.variants.size(), verdict);
+  }
+  const Solution* best = &solutions.front();
+  for (const auto& s : solutions) {
+    if (s.cost < best->cost) best = &s;
+  }
+  std::cout << fmt::format("best: solution {}, {} = {} (first reached by variant {}, {})\n", best->id, kind.name,
+                           format_double(best->cost), best->first_variant,
+                           make_variant(sweep, best->first_variant).guess_label);
+  std::cout << "output: " << out_dir << "\n";
+}
+
+}  // namespace pardel::app

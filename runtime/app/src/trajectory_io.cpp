@@ -1,5 +1,5 @@
 // Trajectory CSV files and atomic writes for the pardel command line (see trajectory_io.hpp).
-#include "trajectory_io.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 #include <fmt/format.h>
 #include <signal.h>
@@ -15,7 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace pardel::cli {
+namespace pardel::app {
 
 std::vector<std::string> state_column_names(const pardel_model& model) {
   std::vector<std::string> names;
@@ -206,4 +206,4 @@ void remove_stale_temporaries(const std::string& path) {
   }
 }
 
-}  // namespace pardel::cli
+}  // namespace pardel::app

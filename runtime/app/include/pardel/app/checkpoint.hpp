@@ -11,8 +11,8 @@
  * an FNV-1a checksum of its body, so that a truncated, edited or corrupted file is refused with
  * a message naming the file and what is wrong.
  */
-#ifndef PARDEL_CLI_CHECKPOINT_HPP
-#define PARDEL_CLI_CHECKPOINT_HPP
+#ifndef PARDEL_APP_CHECKPOINT_HPP
+#define PARDEL_APP_CHECKPOINT_HPP
 
 #include <stdexcept>
 #include <string>
@@ -20,7 +20,7 @@
 
 #include "pardel/pardel.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 
 /** A checkpoint file that cannot be used; what() is "FILE: error: MESSAGE". */
 class CheckpointError : public std::runtime_error {
@@ -58,6 +58,6 @@ Checkpoint read_checkpoint(const std::string& dir);
 /** Writes DIR/checkpoint.json atomically (temporary file + rename); throws std::runtime_error. */
 void write_checkpoint(const std::string& dir, const Checkpoint& checkpoint);
 
-}  // namespace pardel::cli
+}  // namespace pardel::app
 
-#endif  // PARDEL_CLI_CHECKPOINT_HPP
+#endif  // PARDEL_APP_CHECKPOINT_HPP

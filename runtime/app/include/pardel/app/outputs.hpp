@@ -1,18 +1,19 @@
 /**
  * @file outputs.hpp
- * What `pardel solve` writes besides the trajectory: convergence.csv, summary.json (status,
- * numbers, the example's physical cost and the convergence certificate) and the cost itself.
+ * What a solve of a scene writes besides the trajectory: convergence.csv, summary.json (status,
+ * numbers, the example's physical cost and the convergence certificate), the cost itself and the
+ * report `pardel solve` prints.
  */
-#ifndef PARDEL_CLI_OUTPUTS_HPP
-#define PARDEL_CLI_OUTPUTS_HPP
+#ifndef PARDEL_APP_OUTPUTS_HPP
+#define PARDEL_APP_OUTPUTS_HPP
 
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 
 /** The physical cost a scene's example minimizes, as reported in summary.json. */
 struct PhysicalCost {
@@ -86,17 +87,6 @@ void print_solve_report(const Scene& scene, const Summary& summary, const Trajec
                         const Certificate& certificate, const std::string& out_dir,
                         const std::string& extra_line = "");
 
-/**
- * Runs a plotting script (tools/pardel/plot.py, plot_sweep.py) with the configured Python on an
- * output folder. A plot is optional: on failure it warns "warning: WHAT not written: ..." on
- * stderr and returns false.
- */
-bool run_plot_script(const std::string& script, const std::string& out_dir, const std::string& what);
+}  // namespace pardel::app
 
-/** The exit status of `pardel solve` for a termination: 0 converged, 2 invalid_input,
- *  3 max_iterations, 4 diverged, 5 non_finite, 6 interrupted, 7 stalled (tol below round-off). */
-int exit_code(Termination termination);
-
-}  // namespace pardel::cli
-
-#endif  // PARDEL_CLI_OUTPUTS_HPP
+#endif  // PARDEL_APP_OUTPUTS_HPP

@@ -4,10 +4,11 @@
  * `pardel solve` and `pardel check` — model, discretization, params, grid, boundary values,
  * knots, initial guess, solver options and output folder. Parsing is strict: unknown keys,
  * wrong types and wrong sizes raise SceneError naming the key and its FILE:LINE:COL, with the
- * nearest valid key suggested. Kept apart from main.cpp so that tests and fuzzers can call it.
+ * nearest valid key suggested. Each TOML table has its own reader (scene.cpp); the command line,
+ * the Python module, tests and fuzzers call the same parse_scene.
  */
-#ifndef PARDEL_CLI_SCENE_HPP
-#define PARDEL_CLI_SCENE_HPP
+#ifndef PARDEL_APP_SCENE_HPP
+#define PARDEL_APP_SCENE_HPP
 
 #include <cstddef>
 #include <functional>
@@ -18,7 +19,7 @@
 
 #include "pardel/pardel.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 
 /** A user error in a scene or an override; what() is "LOCATION: error: MESSAGE". */
 class SceneError : public std::runtime_error {
@@ -88,10 +89,10 @@ const char* to_string(ClockMode mode);
 /**
  * Refuses non-ASCII bytes outside strings and comments (SceneError naming FILE:LINE:COL) before
  * toml++ sees them: toml++ 3.3.0 reaches undefined behaviour on some non-ASCII code points where
- * whitespace may stand. Every TOML reader of the command line calls it first.
+ * whitespace may stand. Every TOML reader of pardel::app calls it first.
  */
 void check_ascii_outside_strings(std::string_view text, const std::string& source_name);
 
-}  // namespace pardel::cli
+}  // namespace pardel::app
 
-#endif  // PARDEL_CLI_SCENE_HPP
+#endif  // PARDEL_APP_SCENE_HPP

@@ -1,32 +1,26 @@
 /**
- * @file distributed_solve.hpp
- * `pardel solve` under mpirun with more than one rank: the domain-decomposed solve of
- * pardel/distributed.hpp, with rank 0 alone writing the outputs and reporting.
+ * @file solve.hpp
+ * Solving a scene: pardel::solve in one process, and under mpirun with more than one rank the
+ * domain-decomposed solve of pardel/distributed.hpp over all ranks (a build without MPI is one
+ * rank of one), so that a front end needs no branch of its own for either.
  */
-#ifndef PARDEL_CLI_DISTRIBUTED_SOLVE_HPP
-#define PARDEL_CLI_DISTRIBUTED_SOLVE_HPP
+#ifndef PARDEL_APP_SOLVE_HPP
+#define PARDEL_APP_SOLVE_HPP
 
-#include <string>
-
+#include "pardel/app/scene.hpp"
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
 
-namespace pardel::cli {
-
-struct DistributedSolveOutput {
-  std::string out_dir;  ///< the output folder (already created)
-  bool quiet = false;   ///< no progress line and no report
-  bool plot = true;     ///< draw trajectory.png and convergence.png
-};
+namespace pardel::app {
 
 /**
- * Solves the scene over all ranks of the MPI run (every rank calls it with the same scene and
- * initial guess). Rank 0 gathers the trajectory and writes summary.json (with "ranks"),
- * trajectory.csv, convergence.csv and the plots, and prints the report; the other ranks write and
- * print nothing. Returns the exit code of `pardel solve`, the same on every rank.
+ * Solves the scene's problem with its options, from `trajectory` (the initial guess; on return the
+ * solve's trajectory). With pardel::mpi::world_size() > 1, every rank calls it with the same scene
+ * and guess; the nodes are split into contiguous ranges, one per rank, and the trajectory is
+ * gathered on rank 0 (the other ranks get an empty one, N and dim set); the summary is the same
+ * on every rank (pardel::mpi::solve_distributed).
  */
-int run_distributed_solve(Scene& scene, Trajectory& trajectory, const DistributedSolveOutput& output);
+Summary solve_scene(const Scene& scene, Trajectory& trajectory);
 
-}  // namespace pardel::cli
+}  // namespace pardel::app
 
-#endif  // PARDEL_CLI_DISTRIBUTED_SOLVE_HPP
+#endif  // PARDEL_APP_SOLVE_HPP

@@ -5,23 +5,24 @@
  * the converged ones are grouped into distinct local solutions (by action and by the distance
  * between trajectories) and ranked by the physical cost. Parsing is strict like scene.hpp:
  * unknown keys, wrong types and bad values raise SceneError "FILE:LINE:COL: error: ...".
- * This header holds the parts that do not depend on MPI; sweep_command.hpp spreads variants
- * over ranks.
+ * Under mpirun the variants are spread over the ranks (run_variants_over_ranks); a build without
+ * MPI is one rank of one.
  */
-#ifndef PARDEL_CLI_SWEEP_HPP
-#define PARDEL_CLI_SWEEP_HPP
+#ifndef PARDEL_APP_SWEEP_HPP
+#define PARDEL_APP_SWEEP_HPP
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "pardel/pardel.hpp"
-#include "scene.hpp"
+#include "pardel/app/scene.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 
 /** One scene key that varies: its values as TOML text (as given to --set), in sweep order. */
 struct VaryAxis {
@@ -169,6 +170,20 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
 /** solutions.csv text: solution,configuration,rank,cost,action,residual,variants,first_variant,certificate. */
 std::string solutions_csv(const std::vector<VariantResult>& results, const std::vector<Solution>& solutions);
 
-}  // namespace pardel::cli
+/**
+ * Solves the variants of `sweep` assigned to this rank (id % size == rank) and gathers all
+ * results on rank 0 in variant order (other ranks get an empty vector). `threads` and `stop` as
+ * in solve_variant. `on_done` (may be empty) is called on each rank after each of its variants.
+ */
+std::vector<VariantResult> run_variants_over_ranks(const Sweep& sweep, int threads, int rank, int size,
+                                                   const std::function<void(int done, int mine)>& on_done = {},
+                                                   const std::atomic<bool>* stop = nullptr);
 
-#endif  // PARDEL_CLI_SWEEP_HPP
+/** The report `pardel sweep` prints on stdout: the counts, one line per solution (cost, action,
+ *  residual, variants, certificate), the best solution and the output folder. */
+void print_sweep_report(const Sweep& sweep, const std::vector<VariantResult>& results,
+                        const std::vector<Solution>& solutions, const SweepRunInfo& info, const std::string& out_dir);
+
+}  // namespace pardel::app
+
+#endif  // PARDEL_APP_SWEEP_HPP

@@ -1,17 +1,17 @@
 /**
  * @file trajectory_io.hpp
- * Trajectory files of the command line: trajectory.csv (k, t, the coordinates and their stored
- * derivatives) written and read back, and atomic file writes (temporary file, then rename).
+ * Trajectory files: trajectory.csv (k, t, the coordinates and their stored derivatives) written
+ * and read back, and atomic file writes (temporary file, then rename).
  */
-#ifndef PARDEL_CLI_TRAJECTORY_IO_HPP
-#define PARDEL_CLI_TRAJECTORY_IO_HPP
+#ifndef PARDEL_APP_TRAJECTORY_IO_HPP
+#define PARDEL_APP_TRAJECTORY_IO_HPP
 
 #include <string>
 #include <vector>
 
 #include "pardel/pardel.hpp"
 
-namespace pardel::cli {
+namespace pardel::app {
 
 /** Names of the stored components of a node: the coordinates, then x', y', ..., up to order-1 primes. */
 std::vector<std::string> state_column_names(const pardel_model& model);
@@ -59,6 +59,6 @@ void remove_stale_temporaries(const std::string& path);
 /** Formats a double with 17 significant digits ("nan", "inf" and "-inf" when not finite). */
 std::string format_double(double value);
 
-}  // namespace pardel::cli
+}  // namespace pardel::app
 
-#endif  // PARDEL_CLI_TRAJECTORY_IO_HPP
+#endif  // PARDEL_APP_TRAJECTORY_IO_HPP

@@ -1,0 +1,20 @@
+# Checks that the first C++ block of DOC (docs/library.md) is a piece of SOURCE (the compiled
+# example it shows), line by line with the indentation ignored, so that the documentation cannot
+# drift from code that builds and runs. Run by ctest (app_example_snippet_in_docs).
+cmake_policy(VERSION 3.20)
+file(READ "${DOC}" doc)
+file(READ "${SOURCE}" source)
+string(FIND "${doc}" "```cpp\n" start)
+if(start LESS 0)
+  message(FATAL_ERROR "${DOC}: no ```cpp block")
+endif()
+math(EXPR start "${start} + 7")
+string(SUBSTRING "${doc}" ${start} -1 rest)
+string(FIND "${rest}" "```" end)
+string(SUBSTRING "${rest}" 0 ${end} block)
+string(REGEX REPLACE "\n[ ]*" "\n" block "\n${block}")
+string(REGEX REPLACE "\n[ ]*" "\n" source "\n${source}")
+string(FIND "${source}" "${block}" at)
+if(at LESS 0)
+  message(FATAL_ERROR "${DOC}: its C++ block is not a piece of ${SOURCE}:\n${block}")
+endif()
