@@ -97,6 +97,33 @@ TEST(Outputs, TravelTimeInStillAirIsThePathLength) {
   EXPECT_NEAR(cost.value, 11.0, 1e-12);
 }
 
+TEST(Outputs, CostFollowsTheModelsDeclarationNotItsName) {
+  // The same zermelo kernels without the .lag's `cost travel_time = clock`: the discrete action,
+  // under its own name; the harmonic kernels declaring `cost energy = action`: the action as energy.
+  Scene scene = scene_for("zermelo");
+  ASSERT_NE(scene.model, nullptr);
+  pardel_model undeclared = *scene.model;
+  undeclared.cost_name = nullptr;
+  scene.model = &undeclared;
+  scene.problem.model = &undeclared;
+  Summary summary;
+  summary.action = 1.5;
+  PhysicalCost cost = physical_cost(scene, summary, Trajectory{});
+  EXPECT_EQ(cost.name, "action");
+  EXPECT_EQ(cost.value, 1.5);
+
+  Scene harmonic = scene_for("harmonic");
+  ASSERT_NE(harmonic.model, nullptr);
+  pardel_model declared = *harmonic.model;
+  declared.cost_name = "energy";
+  declared.cost_kind = PARDEL_COST_ACTION;
+  harmonic.model = &declared;
+  harmonic.problem.model = &declared;
+  cost = physical_cost(harmonic, summary, Trajectory{});
+  EXPECT_EQ(cost.name, "energy");
+  EXPECT_EQ(cost.value, 1.5);
+}
+
 TEST(Outputs, SummaryHasTheBoundaryMomentaOfTheSolvedOscillator) {
   // x'' = -x, x(0) = 0, x(T) = 1: x = sin t / sin T, so x'(0) = 1 / sin T and x'(T) = cos T / sin T;
   // the discrete momenta approach them at second order (trapezoid, N = 200: within 1e-4).

@@ -32,7 +32,7 @@ FUNCTIONS = {
     "pow": sympy.Pow,
 }
 FUNCTION_ARITY = {name: (2 if name in ("atan2", "pow") else 1) for name in FUNCTIONS}
-KEYWORDS = ("model", "order", "coords", "param", "let", "L", "clock", "discretizations")
+KEYWORDS = ("model", "order", "coords", "param", "let", "L", "clock", "cost", "discretizations")
 DECIMALS = 40  # digits of the reference arithmetic
 
 
@@ -56,6 +56,7 @@ class LagModel:
         self.lagrangian = None    # L in terms of the let Dummies
         self.clock = None
         self.discretizations = []
+        self.cost = None          # (name, "action" | "clock"): what the reported cost is
 
     def expand(self, expr):
         """expr with every let replaced by its definition (lets are substituted last to first)."""
@@ -233,6 +234,12 @@ def parse_lag(path):
                 if model.clock is not None:
                     raise LagError("%s:%d:1: error: clock defined twice" % (path, lineno))
                 model.clock = _parse_expression(rhs, (path, lineno, rhs_col), names, model)
+        elif word == "cost":
+            m = re.fullmatch(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*=\s*(action|clock)\s*", after)
+            if not m:
+                raise LagError("%s:%d:%d: error: expected 'cost NAME = action' or 'cost NAME = clock'"
+                               % (path, lineno, col_after))
+            model.cost = (m.group(1), m.group(2))
         elif word == "discretizations":
             items = re.findall(r"[A-Za-z_][A-Za-z0-9_]*(?:\([^)]*\))?", after)
             if not items:

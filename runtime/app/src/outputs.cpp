@@ -53,26 +53,20 @@ double summed_clock(const Problem& problem, const Trajectory& trajectory) {
 
 PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Trajectory& trajectory) {
   const Problem& problem = scene.problem;
-  const std::string name = scene.model->name;
-  auto starts_with = [&name](const char* prefix) { return name.rfind(prefix, 0) == 0; };
-  // Fuel problems first: their clock (if any) only places the nodes (Sundman step).
-  if (name == "fuel_nav") {
-    return {"fuel", summary.action, "the discrete action: the integral of |u|^2/2 dt by the discretization"};
-  }
-  if (starts_with("spacecraft")) {
-    return {"fuel", summary.action, "the discrete action: the integral of |u|^2 dt by the discretization"};
-  }
-  if (name == "interp_fuel") {
-    return {"cost", summary.action,
-            "the discrete action: the integral of (|u|^2 + c |u'|^2)/2 dt by the discretization"};
+  const pardel_model& model = *scene.model;
+  // What the model declares (`cost NAME = action|clock` in its .lag) decides; a clock that only
+  // places the nodes (a Sundman step) leaves the declared action cost alone.
+  const bool declared = model.cost_name != nullptr;
+  if (declared && model.cost_kind == PARDEL_COST_ACTION) {
+    return {model.cost_name, summary.action, "the discrete action (the model declares it its cost)"};
   }
   // Time-reparametrized models: the clock is dt/ds, its sum the travel time.
-  if (scene.model->clock && problem.clock == ClockMode::free_final_time) {
-    return {"travel_time", summary.final_time - problem.t0,
+  if (model.clock && problem.clock == ClockMode::free_final_time) {
+    return {declared ? model.cost_name : "travel_time", summary.final_time - problem.t0,
             "t_N - t_0, the node times being the prefix sums of the model's clock (free final time)"};
   }
-  if (scene.model->clock && problem.clock == ClockMode::none && starts_with("zermelo")) {
-    return {"travel_time", summed_clock(problem, trajectory),
+  if (declared && model.cost_kind == PARDEL_COST_CLOCK && model.clock) {
+    return {model.cost_name, summed_clock(problem, trajectory),
             "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the clock F)"};
   }
   return {"action", summary.action, "the discrete action"};

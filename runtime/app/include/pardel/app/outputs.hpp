@@ -17,15 +17,16 @@ namespace pardel::app {
 
 /** The physical cost a scene's example minimizes, as reported in summary.json. */
 struct PhysicalCost {
-  std::string name;        ///< "travel_time", "fuel", "cost" or "action"
+  std::string name;        ///< the model's declared name ("fuel", "travel_time"), or "action"
   double value = 0;
   std::string definition;  ///< how the value was computed
 };
 
 /**
- * The discrete action named "fuel" (fuel_nav, spacecraft*) or "cost" (interp_fuel); for other
- * models with a clock, the travel time: Summary::final_time - t0 under free_final_time, the summed
- * clock kernel for zermelo* models under a fixed grid; otherwise the discrete action ("action").
+ * The cost the model declares (`cost NAME = action|clock` in its .lag, carried in pardel_model):
+ * the discrete action under NAME, or the travel time, i.e. the summed clock kernel (or
+ * Summary::final_time - t0 under free_final_time). A model with a clock and no declaration
+ * reports the travel time under free_final_time; every other model the discrete action ("action").
  */
 PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Trajectory& trajectory);
 
