@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Fuzzing job of continuous integration: configures build-fuzz (or $1) with clang, builds the
-# libFuzzer targets of tests/fuzz/ (the .lag reader and the scene reader, instrumented with
-# ASan + UBSan + coverage) and runs each for a fixed number of executions from the seed corpus.
+# libFuzzer targets of tests/fuzz/ (the .lag reader, the scene reader, the checkpoint reader, the
+# sweep-file reader and --set overrides of valid scenes, instrumented with ASan + UBSan +
+# coverage) and runs each for a fixed number of executions from the seed corpus.
 # Fails on any crash, contract violation (abort), leak, UB report or input slower than -timeout.
 # New interesting inputs are kept in BUILD_DIR/corpus_*; a failing input in BUILD_DIR/artifacts/.
 #
@@ -9,7 +10,8 @@
 # environment: JOBS (build parallelism, 2), LAG_RUNS (200000: the .lag reader alone),
 #              LAG_PIPELINE_RUNS (5000: reader + symbolic pipeline, ~100x slower per input),
 #              SCENE_RUNS (200000), MAX_SECONDS (per run, a guard on slow machines: 240),
-#              MAX_LEN (4096)
+#              CHECKPOINT_RUNS (100000), SWEEP_RUNS (30000), OVERRIDES_RUNS (100000),
+#              EXTRA_MAX_SECONDS (per run of these three: 55), MAX_LEN (4096)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build_dir="${1:-build-fuzz}"
@@ -18,6 +20,10 @@ lag_runs="${LAG_RUNS:-200000}"
 lag_pipeline_runs="${LAG_PIPELINE_RUNS:-5000}"
 scene_runs="${SCENE_RUNS:-200000}"
 max_seconds="${MAX_SECONDS:-240}"
+checkpoint_runs="${CHECKPOINT_RUNS:-100000}"
+sweep_runs="${SWEEP_RUNS:-30000}"
+overrides_runs="${OVERRIDES_RUNS:-100000}"
+extra_max_seconds="${EXTRA_MAX_SECONDS:-55}"
 max_len="${MAX_LEN:-4096}"
 
 if ! command -v clang++ >/dev/null; then
@@ -39,7 +45,8 @@ CC=clang CXX=clang++ cmake -S . -B "$build_dir" -G Ninja \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DPARDEL_BUILD_BENCHMARKS=OFF
-cmake --build "$build_dir" -j "$jobs" --target fuzz_lag_parser fuzz_scene_parser
+cmake --build "$build_dir" -j "$jobs" --target fuzz_lag_parser fuzz_scene_parser fuzz_checkpoint_reader \
+  fuzz_sweep_reader fuzz_scene_overrides
 
 # Seed folders as configured by tests/fuzz/CMakeLists.txt (the corpora and the catalogues).
 seeds() {
@@ -47,13 +54,13 @@ seeds() {
 }
 
 status=0
-run_fuzzer() {  # NAME RUNS DICT SEED_VARIABLE
-  local name=$1 runs=$2 dict=$3 seed_var=$4
+run_fuzzer() {  # NAME RUNS DICT SEED_VARIABLE [MAX_SECONDS]
+  local name=$1 runs=$2 dict=$3 seed_var=$4 seconds=${5:-$max_seconds}
   local corpus="$build_dir/corpus_${name#fuzz_}"
   mkdir -p "$corpus" "$build_dir/artifacts"
-  echo "== $name: $runs executions (at most $max_seconds s), max_len $max_len${PARDEL_FUZZ_PARSE_ONLY:+, reader only}"
+  echo "== $name: $runs executions (at most $seconds s), max_len $max_len${PARDEL_FUZZ_PARSE_ONLY:+, reader only}"
   # shellcheck disable=SC2046
-  if ! "$build_dir/$name" -runs="$runs" -max_total_time="$max_seconds" -max_len="$max_len" -timeout=10 \
+  if ! "$build_dir/$name" -runs="$runs" -max_total_time="$seconds" -max_len="$max_len" -timeout=10 \
       -rss_limit_mb=2048 -dict="$dict" -print_final_stats=1 \
       -artifact_prefix="$build_dir/artifacts/$name-" "$corpus" $(seeds "$seed_var"); then
     echo "fuzz.sh: $name FAILED; the input is in $build_dir/artifacts/" >&2
@@ -63,4 +70,9 @@ run_fuzzer() {  # NAME RUNS DICT SEED_VARIABLE
 PARDEL_FUZZ_PARSE_ONLY=1 run_fuzzer fuzz_lag_parser "$lag_runs" tests/fuzz/lag.dict PARDEL_FUZZ_LAG_SEEDS
 run_fuzzer fuzz_lag_parser "$lag_pipeline_runs" tests/fuzz/lag.dict PARDEL_FUZZ_LAG_SEEDS
 run_fuzzer fuzz_scene_parser "$scene_runs" tests/fuzz/scene.dict PARDEL_FUZZ_SCENE_SEEDS
+run_fuzzer fuzz_checkpoint_reader "$checkpoint_runs" tests/fuzz/checkpoint.dict PARDEL_FUZZ_CHECKPOINT_SEEDS \
+  "$extra_max_seconds"
+run_fuzzer fuzz_sweep_reader "$sweep_runs" tests/fuzz/sweep.dict PARDEL_FUZZ_SWEEP_SEEDS "$extra_max_seconds"
+run_fuzzer fuzz_scene_overrides "$overrides_runs" tests/fuzz/overrides.dict PARDEL_FUZZ_OVERRIDES_SEEDS \
+  "$extra_max_seconds"
 exit $status

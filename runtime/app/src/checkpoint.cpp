@@ -53,10 +53,16 @@ class Reader {
   }
 
   long integer(const json& object, const char* key, const std::string& where, long lo, long hi) const {
-    const json& v = at(object, key, where);
-    if (!v.is_number_integer()) fail(fmt::format("key {}.{} must be an integer", where, key));
+    return integer(at(object, key, where), fmt::format("key {}.{}", where, key), lo, hi);
+  }
+
+  /** An integer in [lo, hi]; one beyond `long` (an unsigned JSON number) is out of range too. */
+  long integer(const json& v, const std::string& what, long lo, long hi) const {
+    if (!v.is_number_integer()) fail(fmt::format("{} must be an integer", what));
+    if (v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi))
+      fail(fmt::format("{} = {} is out of range [{}, {}]", what, v.get<std::uint64_t>(), lo, hi));
     const long value = v.get<long>();
-    if (value < lo || value > hi) fail(fmt::format("key {}.{} = {} is out of range [{}, {}]", where, key, value, lo, hi));
+    if (value < lo || value > hi) fail(fmt::format("{} = {} is out of range [{}, {}]", what, value, lo, hi));
     return value;
   }
 
@@ -192,6 +198,10 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
   } catch (const json::parse_error& error) {
     rd.fail(fmt::format("not a valid checkpoint (JSON parse error at byte {}); the file is truncated or corrupted",
                         error.byte));
+  } catch (const json::out_of_range& error) {
+    // A number beyond double's range ("1e400"): nlohmann reports it without a position.
+    const std::string what = error.what();
+    rd.fail(fmt::format("not a valid checkpoint (JSON {}); the file is corrupted", what.substr(what.find(']') + 2)));
   }
   if (!file.is_object()) rd.fail("not a checkpoint (the top level is not a JSON object)");
   const auto format = file.find("format");
@@ -268,8 +278,8 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
     if (!h.is_array() || h.size() != 5 || !h[0].is_number_integer() || !h[1].is_number_integer())
       rd.fail(fmt::format("{} must be [iteration, N, residual, action, seconds]", where));
     IterationRecord r;
-    r.iteration = h[0].get<long>();
-    r.N = h[1].get<int>();
+    r.iteration = rd.integer(h[0], "key " + where + "[0] (iteration)", 0, kMaxLong);
+    r.N = static_cast<int>(rd.integer(h[1], "key " + where + "[1] (N)", 0, std::numeric_limits<int>::max()));
     r.residual = rd.real(h[2], where + "[2]");
     r.action = rd.real(h[3], where + "[3]");
     r.seconds = rd.real(h[4], where + "[4]");
