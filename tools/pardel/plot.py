@@ -10,6 +10,12 @@ depends on t is drawn at t = 0, T/3, 2T/3 and T (T the final node time), with th
 at each instant and, along the path, the wind the ship meets when it passes. The spacecraft model
 is drawn with the Earth, the Moon's orbit and the Moon at both ends, and beside it in the frame
 that rotates with the Moon. Files are written atomically (temporary file, then rename).
+
+Whatever the solve's status, each plot is drawn or skipped with a line on stderr
+("plot.py: trajectory.png skipped: REASON"), and the exit status is 0: trajectory.png is skipped
+(and an older one removed) when trajectory.csv has no rows or a value that is not finite; the wind
+field is left out, with a note, when the path reaches beyond FIELD_LIMIT (a diverged solve), where
+matplotlib's arrows never finish drawing.
 """
 import csv
 import json
@@ -32,6 +38,18 @@ FUNCTIONS = {
     "pow": sympy.Pow,
 }
 IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*'*")
+# The wind field is drawn only while the path stays within this distance of the origin (in the
+# model's units): at 10^12 matplotlib 3.6 does not finish drawing the arrows of a streamplot.
+FIELD_LIMIT = 1e6
+
+
+def skip(png, reason):
+    print("plot.py: %s skipped: %s" % (png, reason), file=sys.stderr)
+
+
+def number_text(value, spec="%.3g"):
+    """summary.json writes a number that is not finite as null."""
+    return spec % value if isinstance(value, (int, float)) else "not finite"
 
 
 def read_lag(path):
@@ -191,6 +209,11 @@ def plot_trajectory(summary, traj, coords, lag, out_path):
         return
     xs, ys = traj[coords[0]], traj[coords[1]]
     field = lag.field() if lag else None
+    reach = max(np.max(np.abs(xs)), np.max(np.abs(ys)))
+    if field is not None and reach > FIELD_LIMIT:
+        print("plot.py: trajectory.png: the wind field is not drawn: the path reaches %.3g, beyond %.0e"
+              % (reach, FIELD_LIMIT), file=sys.stderr)
+        field = None
     if summary["model"].startswith("spacecraft") and lag is not None:
         plot_spacecraft(summary, traj, coords, lag, title, out_path)
         return
@@ -285,9 +308,9 @@ def plot_convergence(summary, conv, out_path):
         ax.axhline(tol, color="0.5", ls="--", lw=0.8)
     ax.set_xlabel("iteration")
     ax.set_ylabel("DEL residual (inf-norm)")
-    ax.set_title("%s, %s: %s after %d iterations, %.3g s" % (summary["model"], summary["method"],
-                                                             summary["status"], summary["iterations"],
-                                                             summary["wall_seconds"]), fontsize=9)
+    ax.set_title("%s, %s: %s after %d iterations, %s s" % (summary["model"], summary["method"],
+                                                           summary["status"], summary["iterations"],
+                                                           number_text(summary["wall_seconds"])), fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     save(fig, out_path)
 
@@ -310,7 +333,16 @@ def main(argv):
         values.update({k: repr(float(v)) for k, v in summary.get("params", {}).items()})
         lag = LagExpressions(lag_coords, values, lets)
         coords = lag_coords
-    plot_trajectory(summary, traj, coords, lag, os.path.join(out, "trajectory.png"))
+    trajectory_png = os.path.join(out, "trajectory.png")
+    bad = [(name, int(np.flatnonzero(~np.isfinite(traj[name]))[0])) for name in ["t"] + coords
+           if name in traj and not np.all(np.isfinite(traj[name]))]
+    if len(traj.get("t", [])) == 0 or bad:
+        skip("trajectory.png", "trajectory.csv has no rows" if not bad else
+             "trajectory.csv holds a value that is not finite (%s at row %d)" % (bad[0][0], bad[0][1]))
+        if os.path.exists(trajectory_png):
+            os.remove(trajectory_png)  # an older solve's picture would be taken for this one's
+    else:
+        plot_trajectory(summary, traj, coords, lag, trajectory_png)
     plot_convergence(summary, conv, os.path.join(out, "convergence.png"))
     return 0
 
