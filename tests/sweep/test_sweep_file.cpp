@@ -250,6 +250,37 @@ TEST(SweepFileErrors, NegativeGroupingTolerance) {
             kName + ":3:16: error: grouping.distance_tol must be >= 0, got -1");
 }
 
+// Found by the contract of tests/fuzz/fuzz_sweep_reader.cpp (regressions in tests/fuzz/regressions_sweep/):
+// a sweep file of five lines asked for gigabytes of random numbers, for a million scenes loaded
+// before anything was solved, or for guesses whose vertices were not finite.
+TEST(SweepFileErrors, TooManyConfigurations) {
+  EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n[[vary]]\nkey = \"params.s\"\nfrom = 1\nto = 2\n"
+                     "count = 1000000\n"),
+            kName + ":6:9: error: vary[0].count must be between 1 and 10000, got 1000000");
+  EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n[[vary]]\nkey = \"params.s\"\nfrom = 1\nto = 2\ncount = 200\n"
+                     "[[vary]]\nkey = \"grid.N\"\nfrom = 10\nto = 109\ncount = 100\n"),
+            kName + ": error: the varied keys give more than 10000 configurations (each is a scene loaded and "
+                    "checked before anything is solved)");
+}
+
+TEST(SweepFileErrors, TooManyRandomNumbers) {
+  EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n[random_guesses]\ncount = 1000000\ninterior_points = 1000\n"
+                     "spread = 1\n"),
+            kName + ":3:9: error: random_guesses: count x interior_points x coordinates = 1000000 x 1000 x 2 = "
+                    "2000000000 random numbers, more than 10000000");
+}
+
+TEST(SweepFileErrors, GuessVerticesBeyondTheRangeOfADouble) {
+  EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n[random_guesses]\ncount = 1\n"
+                     "box = { min = [-1e308, 0], max = [1e308, 1] }\n"),
+            kName + ":4:34: error: random_guesses.box: max[0] - min[0] = 1e+308 - (-1e+308) is beyond the range of "
+                    "a double");
+  EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\nset = [\"boundary.q0=[-1e308, 0]\", \"boundary.qN=[1e308, 0]\"]\n"
+                     "[random_guesses]\ncount = 1\nspread = 1\n"),
+            kName + ":5:10: error: random_guesses.spread = 1: the vertices around the line from q0[0] = -1e+308 to "
+                    "qN[0] = 1e+308 (configuration 0) are beyond the range of a double");
+}
+
 TEST(SweepFileErrors, MissingFile) {
   try {
     load_sweep("/nonexistent/sweep.toml", {}, resolve);

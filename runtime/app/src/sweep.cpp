@@ -38,6 +38,12 @@ namespace {
 
 const std::vector<std::string> kTopKeys = {"scene", "set", "guesses", "random_guesses", "vary", "grouping", "output"};
 constexpr long long kMaxVariants = 10000000;
+// Every configuration is a scene loaded and checked before anything is solved (10^6 of them took
+// minutes and gigabytes): at most this many.
+constexpr long long kMaxConfigurations = 10000;
+// The random numbers of all random guesses are drawn when the file is read: at most this many
+// (80 MB; count = 10^6 with interior_points = 1000 asked for 16 GB).
+constexpr long long kMaxRandomNumbers = 10000000;
 
 std::string join(const std::vector<std::string>& names, const char* separator = ", ") {
   std::string out;
@@ -218,7 +224,7 @@ VaryAxis read_axis(const SweepReader& r, const toml::node& node, const std::stri
   }
   const double a = r.number(*from, name + ".from");
   const double b = r.number(*to, name + ".to");
-  const long long n = r.integer(*count, name + ".count", 1, 1000000);
+  const long long n = r.integer(*count, name + ".count", 1, kMaxConfigurations);
   for (long long i = 0; i < n; ++i) {
     const double v = n == 1 ? a : (i == n - 1 ? b : a + (b - a) * static_cast<double>(i) / static_cast<double>(n - 1));
     axis.values.push_back(number_text(v));
@@ -292,9 +298,10 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
   long long configurations = 1;
   for (const auto& axis : sweep.axes) {
     configurations *= static_cast<long long>(axis.values.size());
-    if (configurations > kMaxVariants) {
-      throw SceneError(fmt::format("{}: error: the varied keys give more than {} configurations", source_name,
-                                   kMaxVariants));
+    if (configurations > kMaxConfigurations) {
+      throw SceneError(fmt::format("{}: error: the varied keys give more than {} configurations (each is a scene "
+                                   "loaded and checked before anything is solved)",
+                                   source_name, kMaxConfigurations));
     }
   }
   for (long long c = 0; c < configurations; ++c) {
@@ -400,10 +407,33 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
           r.fail(*hi, fmt::format("random_guesses.box.max[{}] = {} is below min[{}] = {}", i, spec.box_max[i], i,
                                   spec.box_min[i]));
         }
+        // A vertex is min + u (max - min): the width must be a finite number.
+        if (!std::isfinite(spec.box_max[i] - spec.box_min[i])) {
+          r.fail(*hi, fmt::format("random_guesses.box: max[{}] - min[{}] = {} - ({}) is beyond the range of a double",
+                                  i, i, spec.box_max[i], spec.box_min[i]));
+        }
       }
     } else {
       spec.spread = r.number(*spread, "random_guesses.spread");
       if (!(spec.spread > 0)) r.fail(*spread, fmt::format("random_guesses.spread must be > 0, got {}", spec.spread));
+      // A vertex is q0 + f (qN - q0) + s spread, 0 <= f <= 1, |s| <= 1: finite in every configuration.
+      for (std::size_t c = 0; c < sweep.configurations.size(); ++c) {
+        const Problem& problem = sweep.configurations[c].problem;
+        for (int i = 0; i < ncoords; ++i) {
+          const double q0 = problem.q0[i], qN = problem.qN[i];
+          if (!std::isfinite(qN - q0) || !std::isfinite(std::abs(q0) + std::abs(qN - q0) + spec.spread)) {
+            r.fail(*spread, fmt::format("random_guesses.spread = {}: the vertices around the line from q0[{}] = {} "
+                                        "to qN[{}] = {} (configuration {}) are beyond the range of a double",
+                                        spec.spread, i, q0, i, qN, c));
+          }
+        }
+      }
+    }
+    const long long numbers = static_cast<long long>(spec.count) * spec.interior_points * ncoords;
+    if (numbers > kMaxRandomNumbers) {
+      r.fail(*count, fmt::format("random_guesses: count x interior_points x coordinates = {} x {} x {} = {} random "
+                                 "numbers, more than {}",
+                                 spec.count, spec.interior_points, ncoords, numbers, kMaxRandomNumbers));
     }
     // std::mt19937_64's sequence is fixed by the C++ standard, so the guesses are the same everywhere.
     std::mt19937_64 generator(spec.seed);
