@@ -1,5 +1,7 @@
 // Output folders and faults while `pardel solve` writes: --out that is a file, under a file,
-// read-only, a symlink or a dangling one, outputs that are symlinks or directories; two solves
+// read-only, a symlink, a dangling one, one under a dangling link, a loop of links, a link to a
+// file, a FIFO, a device, a name too long (and `pardel sweep --out` a dangling link), outputs that
+// are symlinks or directories; two solves
 // into one folder at once; SIGKILL and SIGTERM at each rename of the outputs and of the checkpoint
 // (injected by a preloaded library, fault_inject.c, so no timing is involved); damaged, foreign,
 // swapped and special-file checkpoints beyond those of test_checkpoint_cli.cpp. The promise
@@ -113,7 +115,10 @@ TEST_F(HostileOutputs, OutIsAFile) {
   write_text(dir_ / "a_file", "keep me");
   const Outcome o = solve(40, dir_ / "a_file");
   EXPECT_EQ(o.status, 1) << o.output;
-  EXPECT_NE(o.output.find("a_file: cannot create output folder: Not a directory"), std::string::npos) << o.output;
+  const std::string path = (dir_ / "a_file").string();
+  EXPECT_NE(o.output.find(path + ": cannot create output folder: " + path + " is a file, not a folder"),
+            std::string::npos)
+      << o.output;
   EXPECT_EQ(read_text(dir_ / "a_file"), "keep me");
 }
 
@@ -121,7 +126,10 @@ TEST_F(HostileOutputs, OutIsUnderAFile) {
   write_text(dir_ / "b_file", "keep me");
   const Outcome o = solve(40, dir_ / "b_file" / "sub");
   EXPECT_EQ(o.status, 1) << o.output;
-  EXPECT_NE(o.output.find("b_file/sub: cannot create output folder"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("b_file/sub: cannot create output folder: " + (dir_ / "b_file").string() +
+                          " is a file, not a folder"),
+            std::string::npos)
+      << o.output;
   EXPECT_EQ(read_text(dir_ / "b_file"), "keep me");
 }
 
@@ -158,11 +166,96 @@ TEST_F(HostileOutputs, OutIsASymlinkToAFolder) {
 }
 
 TEST_F(HostileOutputs, OutIsADanglingSymlink) {
+  // Said "cannot create output folder: File exists" until the message named the link.
   fs::create_directory_symlink(dir_ / "nowhere", dir_ / "dangling");
   const Outcome o = solve(40, dir_ / "dangling");
   EXPECT_EQ(o.status, 1) << o.output;
-  EXPECT_NE(o.output.find("dangling: cannot create output folder"), std::string::npos) << o.output;
+  const std::string link = (dir_ / "dangling").string();
+  EXPECT_NE(o.output.find(link + ": cannot create output folder: " + link + " is a symbolic link to '" +
+                          (dir_ / "nowhere").string() + "', which does not exist"),
+            std::string::npos)
+      << o.output;
   EXPECT_FALSE(fs::exists(dir_ / "nowhere"));
+}
+
+TEST_F(HostileOutputs, OutIsUnderADanglingSymlink) {
+  fs::create_directory_symlink(dir_ / "nowhere_else", dir_ / "dangling_parent");
+  const Outcome o = solve(40, dir_ / "dangling_parent" / "sub");
+  EXPECT_EQ(o.status, 1) << o.output;
+  EXPECT_NE(o.output.find("dangling_parent/sub: cannot create output folder: " + (dir_ / "dangling_parent").string() +
+                          " is a symbolic link to '" + (dir_ / "nowhere_else").string() + "', which does not exist"),
+            std::string::npos)
+      << o.output;
+  EXPECT_FALSE(fs::exists(dir_ / "nowhere_else"));
+}
+
+TEST_F(HostileOutputs, OutIsASymlinkLoop) {
+  fs::create_symlink("loop_b", dir_ / "loop_a");
+  fs::create_symlink("loop_a", dir_ / "loop_b");
+  const Outcome o = solve(40, dir_ / "loop_a");
+  EXPECT_FALSE(o.timed_out);
+  EXPECT_EQ(o.status, 1) << o.output;
+  const std::string link = (dir_ / "loop_a").string();
+  EXPECT_NE(o.output.find(link + ": cannot create output folder: " + link +
+                          " is a symbolic link to 'loop_b' in a loop of links"),
+            std::string::npos)
+      << o.output;
+}
+
+TEST_F(HostileOutputs, OutIsASymlinkToAFile) {
+  write_text(dir_ / "target_file", "keep me");
+  fs::create_symlink(dir_ / "target_file", dir_ / "link_to_file");
+  const Outcome o = solve(40, dir_ / "link_to_file");
+  EXPECT_EQ(o.status, 1) << o.output;
+  EXPECT_NE(o.output.find("link_to_file is a symbolic link to '" + (dir_ / "target_file").string() +
+                          "', which is a file, not a folder"),
+            std::string::npos)
+      << o.output;
+  EXPECT_EQ(read_text(dir_ / "target_file"), "keep me");
+}
+
+TEST_F(HostileOutputs, OutIsAFifo) {
+  // Nothing opens it: a FIFO without a reader would block a writer forever.
+  ASSERT_EQ(::mkfifo((dir_ / "a_fifo").c_str(), 0644), 0) << std::strerror(errno);
+  const Outcome o = solve(40, dir_ / "a_fifo");
+  EXPECT_FALSE(o.timed_out);
+  EXPECT_EQ(o.status, 1) << o.output;
+  const std::string path = (dir_ / "a_fifo").string();
+  EXPECT_NE(o.output.find(path + ": cannot create output folder: " + path + " is a FIFO, not a folder"),
+            std::string::npos)
+      << o.output;
+}
+
+TEST_F(HostileOutputs, OutIsACharacterDevice) {
+  const Outcome o = solve(40, "/dev/null");
+  EXPECT_EQ(o.status, 1) << o.output;
+  EXPECT_NE(o.output.find("/dev/null: cannot create output folder: /dev/null is a character device, not a folder"),
+            std::string::npos)
+      << o.output;
+}
+
+TEST_F(HostileOutputs, OutNameTooLong) {
+  const fs::path out = dir_ / std::string(300, 'n');
+  const Outcome o = solve(40, out);
+  EXPECT_EQ(o.status, 1) << o.output;
+  EXPECT_NE(o.output.find(out.string() + ": cannot create output folder: File name too long"), std::string::npos)
+      << o.output;
+}
+
+TEST_F(HostileOutputs, SweepOutIsADanglingSymlink) {
+  // pardel sweep makes its output folder through the same function.
+  fs::create_directory_symlink(dir_ / "sweep_nowhere", dir_ / "sweep_dangling");
+  write_text(dir_ / "one.sweep.toml", "scene = \"n40.toml\"\n");
+  scene(40);
+  const Outcome o = run_pardel({"sweep", (dir_ / "one.sweep.toml").string(), "--out", (dir_ / "sweep_dangling").string(),
+                                "--no-plot", "--quiet", "--threads", "1"},
+                               dir_ / "sweep_dangling.log");
+  EXPECT_EQ(o.status, 1) << o.output;
+  const std::string link = (dir_ / "sweep_dangling").string();
+  EXPECT_NE(o.output.find(link + ": cannot create output folder: " + link + " is a symbolic link to '" +
+                          (dir_ / "sweep_nowhere").string() + "', which does not exist"),
+            std::string::npos)
+      << o.output;
 }
 
 TEST_F(HostileOutputs, SymlinkedOutputIsReplacedNotFollowed) {

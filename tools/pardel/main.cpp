@@ -321,8 +321,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   if (out_dir.empty()) out_dir = (fs::path("out") / fs::path(args.scene).stem()).string();
   std::error_code ec;
   const bool created_out_dir = !fs::exists(out_dir, ec);
-  fs::create_directories(out_dir, ec);
-  if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
+  create_output_folder(out_dir);
   // Under mpirun with more than one rank, one solve decomposed over the ranks: every rank solves,
   // rank 0 alone writes the outputs and reports.
   const int ranks = pardel::mpi::world_size();

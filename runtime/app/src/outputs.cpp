@@ -190,6 +190,56 @@ std::string scene_model_source(const Scene& scene) {
   return std::filesystem::absolute(scene.model_path, ec).lexically_normal().string();
 }
 
+namespace {
+
+const char* kind_of(std::filesystem::file_type type) {
+  switch (type) {
+    case std::filesystem::file_type::regular: return "a file";
+    case std::filesystem::file_type::character: return "a character device";
+    case std::filesystem::file_type::block: return "a block device";
+    case std::filesystem::file_type::fifo: return "a FIFO";
+    case std::filesystem::file_type::socket: return "a socket";
+    default: return "something other than a folder";
+  }
+}
+
+/** The first part of `dir` (from its start) that exists and is not a folder or a link to one,
+ *  described; "" when every existing part is a folder. */
+std::string why_not_a_folder(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  fs::path prefix;
+  for (const fs::path& part : dir) {
+    prefix /= part;
+    std::error_code ec;
+    const fs::file_status own = fs::symlink_status(prefix, ec);
+    if (ec || !fs::exists(own)) return "";
+    if (fs::is_symlink(own)) {
+      const std::string target = fs::read_symlink(prefix, ec).string();
+      const fs::file_status pointed = fs::status(prefix, ec);
+      if (ec == std::errc::too_many_symbolic_link_levels)
+        return fmt::format("{} is a symbolic link to '{}' in a loop of links", prefix.string(), target);
+      if (!fs::exists(pointed))
+        return fmt::format("{} is a symbolic link to '{}', which does not exist", prefix.string(), target);
+      if (!fs::is_directory(pointed))
+        return fmt::format("{} is a symbolic link to '{}', which is {}, not a folder", prefix.string(), target,
+                           kind_of(pointed.type()));
+    } else if (!fs::is_directory(own)) {
+      return fmt::format("{} is {}, not a folder", prefix.string(), kind_of(own.type()));
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+void create_output_folder(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (!ec) return;
+  const std::string why = why_not_a_folder(dir);
+  throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", dir, why.empty() ? ec.message() : why));
+}
+
 SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, const Trajectory& trajectory,
                                  const std::string& out_dir, const nlohmann::ordered_json& extra,
                                  bool full_certificate) {

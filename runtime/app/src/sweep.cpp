@@ -694,9 +694,7 @@ std::string solutions_csv(const std::vector<VariantResult>& results, const std::
 void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& results,
                          const std::vector<Solution>& solutions, const std::vector<int>& solution_of,
                          const SweepRunInfo& info, const std::string& out_dir) {
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec) throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", out_dir, ec.message()));
+  create_output_folder(out_dir);
   const fs::path dir(out_dir);
 
   write_file_atomic((dir / "solutions.csv").string(), solutions_csv(results, solutions));

@@ -64,6 +64,15 @@ std::string model_source_path(const pardel_model& model);
  *  else the bundled model's source (model_source_path). */
 std::string scene_model_source(const Scene& scene);
 
+/**
+ * Makes the output folder `dir` with its missing parents. Throws std::runtime_error
+ * "DIR: cannot create output folder: WHAT", where WHAT names the part of the path at fault when one
+ * is: a symbolic link to nothing (dangling) or into a loop, a link to something other than a
+ * folder, a file, FIFO, device or socket where a folder should be; else the system's reason
+ * (permission denied, name too long, ...).
+ */
+void create_output_folder(const std::string& dir);
+
 /** What a finished solve wrote. */
 struct SolveOutputs {
   bool have_trajectory = false;  ///< the returned trajectory lies on the problem's grid
