@@ -1,8 +1,8 @@
 /**
  * @file pardel_python.cpp
  * The compiled part of the Python module `pardel` (pardel._pardel): a translation layer over the
- * runtime (pardel::runtime), the model loader (pardel::model_loader) and the scene reader
- * (pardel::scene). Keyword arguments of pardel.solve are written as a scene (a TOML table) and read
+ * runtime (pardel::runtime), the model loader (pardel::model_loader) and the application library
+ * (pardel::app: the scene reader, summary.json). Keyword arguments of pardel.solve are written as a scene (a TOML table) and read
  * by the scene reader, so their checks and messages are those of `pardel solve`; solves run with the
  * GIL released and stop at Ctrl-C through Options::on_iteration; results come back as NumPy arrays
  * and summary.json's dictionary (as text).

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include "block_tridiagonal.hpp"
 #include "engine.hpp"
 
 namespace pardel {
@@ -36,8 +37,8 @@ struct BlockBytes {
 BlockBytes block_bytes(int d) {
   return detail::dispatch_dim(d, [d](auto size) {
     constexpr int D = decltype(size)::value;
-    using Mat = Eigen::Matrix<double, D, D>;
-    using Vec = Eigen::Matrix<double, D, 1>;
+    using Mat = typename detail::BlockTridiagonal<D>::Mat;
+    using Vec = typename detail::BlockTridiagonal<D>::Vec;
     const bool fixed = D != Eigen::Dynamic;
     const double coefficients = fixed ? 0 : heap(8.0 * d * d);
     BlockBytes b;

@@ -1,4 +1,4 @@
-// Scene parsing and checking for the pardel command line (see scene.hpp for the contract).
+// Scene parsing and checking, one reader per TOML table (see scene.hpp for the contract).
 #include "pardel/app/scene.hpp"
 
 #include <fmt/format.h>

@@ -1,4 +1,4 @@
-// Trajectory CSV files and atomic writes for the pardel command line (see trajectory_io.hpp).
+// Trajectory CSV files and atomic writes (see trajectory_io.hpp).
 #include "pardel/app/trajectory_io.hpp"
 
 #include <fmt/format.h>
