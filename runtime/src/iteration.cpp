@@ -78,6 +78,11 @@ bool Iteration::run_level(bool last) {
 /** At the tolerance where the method accepts to stop (Newton not at a saddle): the last level
  *  has converged; an intermediate level of Newton's nested iteration is solved. */
 bool Iteration::converged_at_tolerance(bool last, double r, double target, bool* settled) {
+  // A level's start (the guess, or a coarser level's solution resampled) can have a residual below
+  // the target and still a smooth error of any size: the Hessian's smallest eigenvalues are O(h),
+  // so a small residual bounds only the rough part of the error. Newton takes one step on each
+  // level before it stops; that step removes a smooth error.
+  if (options_.method == Method::newton && level_.level_it == 0) return false;
   const bool at_target = r <= target && method_.accept_stop(ctx_, last);
   if (!at_target) return false;
   if (last) {

@@ -31,16 +31,21 @@ bool knots_on_grid(const Problem& problem, int n) {
   return true;
 }
 
-/** The coarsest grid of the automatic method's grid sequencing, and the N above which it is used. */
+/** The coarsest grid of the automatic method's grid sequencing, and the ratio of successive grids.
+ *  Each level takes one Newton step from the extrapolated coarser solution on well-posed problems,
+ *  so the levels below N cost 1/(kAutoRatio - 1) of the finest one: a third at ratio 4, against as
+ *  much as the finest level at ratio 2 (docs/benchmarks.md has the measurements). */
 constexpr int kAutoCoarseN = 200;
+constexpr int kAutoRatio = 4;
 
-/** Grid sequencing of the automatic method: N, N/2, N/4, ... (each rounded up to a grid that holds
- *  the knots) down to about kAutoCoarseN, coarsest first; {N} when N <= 2 kAutoCoarseN. */
+/** Grid sequencing of the automatic method: N, N/4, N/16, ... (each rounded up to a grid that
+ *  holds the knots) down to between kAutoCoarseN and kAutoRatio kAutoCoarseN, coarsest first;
+ *  {N} when N <= kAutoRatio kAutoCoarseN. */
 std::vector<int> automatic_levels(const Problem& problem) {
   std::vector<int> down{problem.N};
   int n = problem.N;
-  while (n > 2 * kAutoCoarseN) {
-    int next = (n + 1) / 2;
+  while (n > kAutoRatio * kAutoCoarseN) {
+    int next = (n + kAutoRatio - 1) / kAutoRatio;
     while (next < n && !knots_on_grid(problem, next)) ++next;
     if (next >= n) break;
     down.push_back(next);
