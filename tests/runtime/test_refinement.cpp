@@ -3,10 +3,12 @@
  * Coarse-to-fine refinement: starting at refine_start_N and growing N by refine_factor reaches
  * the same solution as a direct solve (Jacobi-Newton and Newton), records the grid sizes in the
  * history, and keeps knots on grid nodes at every level; Newton's nested iteration (coarse levels
- * solved to tol, each level started from the extrapolation of the two before) and its resumption.
+ * solved to tol, each level started from the extrapolation of the two before, one step on every
+ * level) and its resumption.
  */
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "hand_models.hpp"
@@ -51,6 +53,39 @@ TEST(Refinement, ReachesTheDirectSolution) {
     EXPECT_EQ(s.history.back().N, 120);
     for (std::size_t i = 1; i < s.history.size(); ++i) EXPECT_GE(s.history[i].N, s.history[i - 1].N);
   }
+}
+
+TEST(Refinement, NewtonStepsOnEveryLevelEvenWhenItsStartMeetsTheTolerance) {
+  // Bratu from N = 100 to 400 with an absolute tol of 1e-2: the level N = 100 stops after one step
+  // (residual 2e-3), and each finer level's start, its resampled solution, already has a residual
+  // below 1e-2 while it is 2.6e-2 away from that level's discrete solution (max norm). Newton
+  // still takes a step on each level, so the answer is within 1e-4 of the discrete solution at
+  // N = 400 instead of a resampled coarse iterate reported as converged.
+  const auto p = bratu_problem(400);
+  pardel::Options direct;
+  direct.method = pardel::Method::newton;
+  direct.tol = 1e-13;
+  auto ref = pardel::linear_guess(p);
+  ASSERT_TRUE(pardel::solve(p, direct, ref).converged());
+  pardel::Options opt;
+  opt.method = pardel::Method::newton;
+  opt.tol = 1e-2;
+  opt.threads = 1;
+  opt.history_every = 1;
+  opt.refine_start_N = 100;
+  opt.refine_factor = 2;
+  auto x = pardel::linear_guess(bratu_problem(100));
+  const auto s = pardel::solve(p, opt, x);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  ASSERT_EQ(x.N, 400);
+  for (int N : {200, 400}) {
+    int records = 0;
+    for (const auto& r : s.history) records += r.N == N ? 1 : 0;
+    EXPECT_GE(records, 1) << "level N = " << N << " (a record after each step; none when no step)";
+  }
+  double worst = 0;
+  for (int k = 0; k <= 400; ++k) worst = std::max(worst, std::fabs(x.node(k)[0] - ref.node(k)[0]));
+  EXPECT_LT(worst, 1e-4);
 }
 
 TEST(Refinement, CoarseStartNeedsFewerSweepsThanAStraightLine) {
