@@ -10,7 +10,7 @@
 # environment: JOBS (build parallelism, 2), LAG_RUNS (200000: the .lag reader alone),
 #              LAG_PIPELINE_RUNS (5000: reader + symbolic pipeline, ~100x slower per input),
 #              SCENE_RUNS (200000), MAX_SECONDS (per run, a guard on slow machines: 240),
-#              CHECKPOINT_RUNS (100000), SWEEP_RUNS (30000), OVERRIDES_RUNS (100000),
+#              CHECKPOINT_RUNS (500000), SWEEP_RUNS (500000), OVERRIDES_RUNS (500000),
 #              EXTRA_MAX_SECONDS (per run of these three: 55), MAX_LEN (4096)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -20,9 +20,9 @@ lag_runs="${LAG_RUNS:-200000}"
 lag_pipeline_runs="${LAG_PIPELINE_RUNS:-5000}"
 scene_runs="${SCENE_RUNS:-200000}"
 max_seconds="${MAX_SECONDS:-240}"
-checkpoint_runs="${CHECKPOINT_RUNS:-100000}"
-sweep_runs="${SWEEP_RUNS:-30000}"
-overrides_runs="${OVERRIDES_RUNS:-100000}"
+checkpoint_runs="${CHECKPOINT_RUNS:-500000}"
+sweep_runs="${SWEEP_RUNS:-500000}"
+overrides_runs="${OVERRIDES_RUNS:-500000}"
 extra_max_seconds="${EXTRA_MAX_SECONDS:-55}"
 max_len="${MAX_LEN:-4096}"
 
