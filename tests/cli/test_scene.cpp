@@ -138,8 +138,10 @@ newton_substeps = 2
 newton_shift = "identity"
 linear_solver = "cyclic-reduction"
 threads = 1
-refine = { start_N = 40, factor = 1.5 }
+refine = { start_N = 40, factor = 1.5, settle = 0.01 }
 clock_update_every = 10
+history_every = 5
+divergence_factor = 1e6
 clock = "none"
 [output]
 dir = "somewhere"
@@ -170,6 +172,9 @@ dir = "somewhere"
   EXPECT_EQ(scene.options.refine_start_N, 40);
   EXPECT_EQ(scene.options.refine_factor, 1.5);
   EXPECT_EQ(scene.options.clock_update_every, 10);
+  EXPECT_EQ(scene.options.refine_settle, 0.01);
+  EXPECT_EQ(scene.options.history_every, 5);
+  EXPECT_EQ(scene.options.divergence_factor, 1e6);
   EXPECT_EQ(scene.problem.clock, ClockMode::none);
   EXPECT_EQ(scene.output_dir, "somewhere");
 }

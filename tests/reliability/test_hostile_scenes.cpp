@@ -148,6 +148,12 @@ INSTANTIATE_TEST_SUITE_P(
              "solver.max_iterations must be >= 1, got 0"},
         Case{"refine_factor_inf", "", kGrid, kBoundary, "[solver]\nrefine = {start_N = 2, factor = inf}\n", {},
              "solver.refine.factor must be a finite number, got inf"},
+        Case{"refine_settle_one", "", kGrid, kBoundary, "[solver]\nrefine = {start_N = 2, settle = 1}\n", {},
+             "solver.refine.settle must be in (0, 1), got 1"},
+        Case{"set_history_every_zero", "", kGrid, kBoundary, "", {"--set", "solver.history_every=0"},
+             "--set solver.history_every=0: error: solver.history_every must be >= 1, got 0"},
+        Case{"divergence_factor_one", "", kGrid, kBoundary, "[solver]\ndivergence_factor = 1\n", {},
+             "FILE:9:21: error: solver.divergence_factor must be > 1, got 1"},
         // Wrong types.
         Case{"model_is_an_integer", "model = 42\n", kGrid, kBoundary, "", {},
              "FILE:1:9: error: model must be a string, got an integer 42"},

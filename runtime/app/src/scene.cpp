@@ -548,7 +548,8 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   if (!solver) return;
   r.check_keys(*solver, "solver",
                {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift",
-                "linear_solver", "threads", "refine", "clock_update_every", "clock"});
+                "linear_solver", "threads", "refine", "clock_update_every", "history_every", "divergence_factor",
+                "clock"});
   if (const auto method = r.string(solver, "method", "solver.method")) {
     if (!parse_method(*method, &options.method)) {
       const std::string suggestion = nearest_name(*method, kMethodNames);
@@ -608,7 +609,7 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
     options.threads = static_cast<int>(*threads);
   }
   if (const toml::table* refine = r.table(*solver, "refine", "solver.refine")) {
-    r.check_keys(*refine, "solver.refine", {"start_N", "factor"});
+    r.check_keys(*refine, "solver.refine", {"start_N", "factor", "settle"});
     const auto start = r.integer(refine, "start_N", "solver.refine.start_N");
     if (!start) r.fail(refine->source(), "solver.refine", "missing key 'solver.refine.start_N'");
     if (*start < 2 || *start > problem.N) {
@@ -623,6 +624,27 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
       }
       options.refine_factor = *factor;
     }
+    if (const auto settle = r.number(refine, "settle", "solver.refine.settle")) {
+      if (!(*settle > 0 && *settle < 1)) {
+        r.fail(*refine->get("settle"), "solver.refine.settle",
+               fmt::format("solver.refine.settle must be in (0, 1), got {}", *settle));
+      }
+      options.refine_settle = *settle;
+    }
+  }
+  if (const auto every = r.integer(solver, "history_every", "solver.history_every")) {
+    if (*every < 1) {
+      r.fail(*solver->get("history_every"), "solver.history_every",
+             fmt::format("solver.history_every must be >= 1, got {}", *every));
+    }
+    options.history_every = static_cast<long>(std::min<long long>(*every, 1000000000));
+  }
+  if (const auto factor = r.number(solver, "divergence_factor", "solver.divergence_factor")) {
+    if (!(*factor > 1)) {
+      r.fail(*solver->get("divergence_factor"), "solver.divergence_factor",
+             fmt::format("solver.divergence_factor must be > 1, got {}", *factor));
+    }
+    options.divergence_factor = *factor;
   }
   if (const auto every = r.integer(solver, "clock_update_every", "solver.clock_update_every")) {
     if (*every < 1) {
