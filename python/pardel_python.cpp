@@ -2,10 +2,12 @@
  * @file pardel_python.cpp
  * The compiled part of the Python module `pardel` (pardel._pardel): a translation layer over the
  * runtime (pardel::runtime), the model loader (pardel::model_loader) and the application library
- * (pardel::app: the scene reader, summary.json). Keyword arguments of pardel.solve are written as a scene (a TOML table) and read
- * by the scene reader, so their checks and messages are those of `pardel solve`; solves run with the
- * GIL released and stop at Ctrl-C through Options::on_iteration; results come back as NumPy arrays
- * and summary.json's dictionary (as text).
+ * (pardel::app: the scene reader, summary.json, sweeps). Keyword arguments of pardel.solve are
+ * written as a scene (a TOML table) and read by the scene reader, so their checks and messages are
+ * those of `pardel solve`; solves run with the GIL released and stop at Ctrl-C through
+ * Options::on_iteration; results come back as NumPy arrays and summary.json's dictionary (as text).
+ * Sweeps are pardel::app's (`pardel sweep` without its command line): the variants run on a worker
+ * thread while the calling thread watches for Ctrl-C.
  */
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -14,14 +16,19 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "pardel/memory.hpp"
@@ -29,6 +36,7 @@
 #include "pardel/model_loader.hpp"
 #include "pardel/pardel.hpp"
 #include "pardel/app/scene.hpp"
+#include "pardel/app/sweep.hpp"
 
 namespace py = pybind11;
 using namespace pardel;
@@ -430,6 +438,124 @@ std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
   return j.dump();
 }
 
+// ---------------------------------------------------------------------------------------------
+// Sweeps
+
+/**
+ * `pardel sweep` without its command line: reads the sweep file (`overrides` as --set), solves
+ * every variant with pardel::app's run_variants_over_ranks (one rank) on a worker thread, the GIL
+ * released, while this thread checks Python's signals every 50 ms; a pending exception
+ * (KeyboardInterrupt) stops the running solve, the variants not yet started end "interrupted", and
+ * it is raised once the results are grouped (and written to `out` when given). The results come
+ * back as plain values, sweep.json's dictionary as text, and the trajectories of the converged
+ * variants as arrays.
+ */
+py::dict run_sweep(const std::string& path, const std::vector<std::string>& overrides, int threads,
+                   const std::string& out) {
+  const app::Sweep sweep = app::load_sweep(path, overrides, resolve_spec, bundled_names());
+  std::atomic<bool> stop{false};
+  std::vector<app::VariantResult> results;
+  std::exception_ptr failure;
+  std::unique_ptr<py::error_already_set> pending;
+  const auto start = std::chrono::steady_clock::now();
+  {
+    py::gil_scoped_release release;
+    std::mutex mutex;
+    std::condition_variable finished;
+    bool done = false;
+    std::thread worker([&] {
+      try {
+        results = app::run_variants_over_ranks(sweep, threads, 0, 1, {}, &stop);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        done = true;
+      }
+      finished.notify_one();
+    });
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!finished.wait_for(lock, kSignalCheckPeriod, [&done] { return done; })) {
+      if (pending) continue;
+      lock.unlock();
+      {
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() != 0) {
+          pending = std::make_unique<py::error_already_set>();
+          stop.store(true);
+        }
+      }
+      lock.lock();
+    }
+    lock.unlock();
+    worker.join();
+  }
+  if (failure) std::rethrow_exception(failure);
+
+  app::SweepRunInfo info;
+  info.ranks = 1;
+  info.threads = threads > 0 ? threads : sweep.configurations.front().options.threads;
+  info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::vector<int> solution_of;
+  const std::vector<app::Solution> solutions = app::group_solutions(results, sweep.grouping, &solution_of);
+  if (!out.empty()) app::write_sweep_outputs(sweep, results, solutions, solution_of, info, out);
+  if (pending) throw std::move(*pending);
+
+  py::list variants;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const app::VariantResult& r = results[i];
+    const app::Variant v = app::make_variant(sweep, r.id);
+    py::dict d;
+    d["id"] = r.id;
+    d["configuration"] = r.configuration;
+    d["guess"] = v.guess_label;
+    d["guess_points"] = v.points;
+    d["status"] = r.status;
+    d["message"] = r.message;
+    d["iterations"] = r.iterations;
+    d["residual"] = r.residual;
+    d["action"] = r.action;
+    d["cost"] = r.cost;
+    d["seconds"] = r.seconds;
+    d["certificate"] = r.converged() ? py::object(py::str(app::certificate_verdict(r))) : py::object(py::none());
+    d["solution"] = i < solution_of.size() && solution_of[i] > 0 ? py::object(py::int_(solution_of[i])) : py::none();
+    if (r.converged()) {
+      d["t"] = vector(r.trajectory.t);
+      d["q"] = matrix(r.trajectory.q, static_cast<std::size_t>(r.trajectory.N) + 1,
+                      static_cast<std::size_t>(r.trajectory.dim));
+    } else {
+      d["t"] = py::none();
+      d["q"] = py::none();
+    }
+    variants.append(d);
+  }
+  py::list groups;
+  for (const app::Solution& s : solutions) {
+    py::dict d;
+    d["id"] = s.id;
+    d["configuration"] = s.configuration;
+    d["rank"] = s.rank;
+    d["first_variant"] = s.first_variant;
+    d["variants"] = s.variants;
+    d["cost"] = s.cost;
+    d["action"] = s.action;
+    d["residual"] = s.residual;
+    groups.append(d);
+  }
+  py::dict result;
+  result["summary"] = app::sweep_json(sweep, results, solutions, info).dump();
+  result["axes"] = [&sweep] {
+    std::vector<std::string> keys;
+    for (const auto& axis : sweep.axes) keys.push_back(axis.key);
+    return keys;
+  }();
+  result["configuration_values"] = sweep.configuration_values;
+  result["variants"] = variants;
+  result["solutions"] = groups;
+  return result;
+}
+
 /** The kernels of a model at one interval (what `pardel kernels` prints). */
 py::dict kernels(const ModelHandle& handle, const std::string& discretization, double h, double t0, double t1,
                  const std::vector<double>& q0, const std::vector<double>& q1, const std::vector<double>& params) {
@@ -557,6 +683,7 @@ PYBIND11_MODULE(_pardel, m) {
   m.def("load_scene", &load_scene, py::arg("path"), py::arg("overrides"));
   m.def("solve_scene", &solve_scene, py::arg("scene"), py::arg("guess"), py::arg("guess_t"), py::arg("on_iteration"),
         py::arg("threads"));
+  m.def("run_sweep", &run_sweep, py::arg("path"), py::arg("overrides"), py::arg("threads"), py::arg("out"));
   m.def("check_scene", &check_scene, py::arg("scene"), py::arg("q"), py::arg("t"));
   m.def("kernels", &kernels, py::arg("model"), py::arg("discretization"), py::arg("h"), py::arg("t0"), py::arg("t1"),
         py::arg("q0"), py::arg("q1"), py::arg("params"));

@@ -30,6 +30,7 @@ if _INSTALLED_TOOLCHAIN:
 __all__ = [
     "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError",
     "model", "models", "solve", "load_scene", "solve_scene", "check", "kernels", "lag_cache_dir",
+    "sweep", "SweepResult", "SweepVariant", "SweepSolution",
 ]
 
 
@@ -217,6 +218,98 @@ def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=N
     spec = _model_spec(model)
     scene = Scene(_pardel.scene_from_arguments(spec, arguments))
     return solve_scene(scene, guess=guess, on_iteration=on_iteration)
+
+
+class SweepVariant:
+    """One variant of a sweep (a row of variants.csv): id, configuration (its index), values (the
+    varied keys' values as TOML text, by key), guess ("scene", "listed 0", "random 3") and
+    guess_points (the polyline's vertices, [] for the scene's own guess), status, message,
+    iterations, residual, action, cost, seconds, certificate (the point's verdict when converged,
+    else None), solution (the id of the distinct solution it reached, or None), and t, q (its
+    trajectory as arrays when converged, else None: the sweep keeps only converged trajectories)."""
+
+    def __init__(self, raw, values):
+        for key, value in raw.items():
+            setattr(self, key, value)
+        self.values = values
+        self.guess_points = [list(p) for p in raw["guess_points"]]
+        if self.t is not None:
+            self.t = np.asarray(self.t)
+            self.q = np.asarray(self.q)
+
+    @property
+    def converged(self):
+        return self.status == "converged"
+
+    def __repr__(self):
+        return "pardel.SweepVariant(%d, %s: %s, cost %.10g, solution %s)" % (
+            self.id, self.guess, self.status, self.cost, self.solution)
+
+
+class SweepSolution:
+    """A distinct local solution of a sweep (a row of solutions.csv): id, configuration, rank (1 =
+    lowest cost in its configuration), cost, action, residual, variants (the ids of the variants
+    that reached it), first_variant (the representative), certificate, and t, q (the
+    representative's trajectory, what solution_<id>.csv holds)."""
+
+    def __init__(self, raw, representative):
+        for key, value in raw.items():
+            setattr(self, key, value)
+        self.variants = list(raw["variants"])
+        self.certificate = representative.certificate
+        self.t = representative.t
+        self.q = representative.q
+
+    def __repr__(self):
+        return "pardel.SweepSolution(%d: configuration %d, rank %d, cost %.10g, %d variants, %s)" % (
+            self.id, self.configuration, self.rank, self.cost, len(self.variants), self.certificate)
+
+
+class SweepResult:
+    """What pardel.sweep returned: variants (a SweepVariant per variant, in variant order),
+    solutions (a SweepSolution per distinct solution, by configuration then cost), best (the
+    lowest-cost solution or None), summary (the dictionary of sweep.json), and from it
+    configurations, cost_name, converged (how many variants converged), failures (counts by
+    status) and wall_seconds; out is the folder the files were written to, or None."""
+
+    def __init__(self, raw, out):
+        self.summary = json.loads(raw["summary"])
+        s = self.summary
+        axes = list(raw["axes"])
+        values = [dict(zip(axes, v)) for v in raw["configuration_values"]]
+        self.variants = [SweepVariant(v, values[v["configuration"]]) for v in raw["variants"]]
+        self.solutions = [SweepSolution(g, self.variants[g["first_variant"]]) for g in raw["solutions"]]
+        self.best = None if s["best"] is None else self.solutions[s["best"]["id"] - 1]
+        self.configurations = s["configurations"]
+        self.cost_name = s["cost"]["name"]
+        self.converged = s["converged"]
+        self.failures = s["failures"]
+        self.wall_seconds = s["wall_seconds"]
+        self.out = out
+
+    def __repr__(self):
+        return "pardel.SweepResult(%s: %d variants, %d converged, %d distinct solutions)" % (
+            self.summary["sweep"], len(self.variants), self.converged, len(self.solutions))
+
+
+def sweep(path, overrides=(), *, threads=None, out=None):
+    """Runs a sweep file as `pardel sweep` does (pardel::app's sweep: the same variants, solves,
+    grouping and ranking) and returns a SweepResult.
+
+    overrides: "key=value" strings for the base scene, as `pardel sweep --set` takes. threads:
+    threads per variant (None: the scene's solver.threads, where 0 is all cores). out: a folder
+    to write solutions.csv, variants.csv, sweep.json and solution_<id>.csv into (no sweep.png;
+    None: no files). A bad sweep file raises SceneError with the command line's FILE:LINE:COL message.
+    Ctrl-C stops the running solve; the outputs (when out is given) hold what was done, and
+    KeyboardInterrupt is raised.
+    """
+    if threads is not None and (isinstance(threads, bool) or int(threads) != threads or not 1 <= threads <= 4096):
+        raise PardelError("threads: an integer in [1, 4096] was expected, got %r" % (threads,))
+    out = None if out is None else os.fspath(out)
+    if out == "":
+        raise PardelError("out: a folder was expected, got ''")
+    raw = _pardel.run_sweep(os.fspath(path), list(overrides), 0 if threads is None else int(threads), out or "")
+    return SweepResult(raw, out)
 
 
 def check(scene, q=None):

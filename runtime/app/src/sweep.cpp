@@ -717,7 +717,6 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
   write_file_atomic((dir / "variants.csv").string(), variants);
 
   // one trajectory per solution
-  const Scene& first = sweep.configurations.front();
   for (const auto& s : solutions) {
     const VariantResult* r = find_result(results, s.first_variant);
     if (!r) continue;
@@ -725,7 +724,12 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
                       trajectory_csv(*sweep.configurations[s.configuration].model, r->trajectory));
   }
 
-  // sweep.json
+  write_file_atomic((dir / "sweep.json").string(), sweep_json(sweep, results, solutions, info).dump(2) + "\n");
+}
+
+nlohmann::ordered_json sweep_json(const Sweep& sweep, const std::vector<VariantResult>& results,
+                                  const std::vector<Solution>& solutions, const SweepRunInfo& info) {
+  const Scene& first = sweep.configurations.front();
   const PhysicalCost cost_kind = physical_cost(first, Summary{}, Trajectory{});  // for its name only
   nlohmann::ordered_json j;
   j["sweep"] = sweep.path;
@@ -775,7 +779,7 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
   j["solutions_count"] = solutions.size();
   j["solutions"] = list;
   j["best"] = best ? list[static_cast<std::size_t>(best->id - 1)] : nlohmann::ordered_json(nullptr);
-  write_file_atomic((dir / "sweep.json").string(), j.dump(2) + "\n");
+  return j;
 }
 
 namespace {

@@ -19,6 +19,8 @@
 #include <string_view>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "pardel/pardel.hpp"
 #include "pardel/app/scene.hpp"
 
@@ -166,6 +168,11 @@ struct SweepRunInfo {
 void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& results,
                          const std::vector<Solution>& solutions, const std::vector<int>& solution_of,
                          const SweepRunInfo& info, const std::string& out_dir);
+
+/** The dictionary of sweep.json: the sweep, model, cost, configurations, run info, tolerances, the
+ *  converged count, failures by status, every solution and the best. */
+nlohmann::ordered_json sweep_json(const Sweep& sweep, const std::vector<VariantResult>& results,
+                                  const std::vector<Solution>& solutions, const SweepRunInfo& info);
 
 /** solutions.csv text: solution,configuration,rank,cost,action,residual,variants,first_variant,certificate. */
 std::string solutions_csv(const std::vector<VariantResult>& results, const std::vector<Solution>& solutions);
