@@ -6,7 +6,8 @@
  * its conjugate point; a Lagrangian without velocities refused before solving; an order-2
  * minimum-acceleration path through knots converged (not stalled) and converging to the clamped
  * cubic spline at second order; a double-pendulum swing converged at N = 2e5 on the grid that was asked, with the
- * discretization's second order against coarser solves.
+ * discretization's second order against coarser solves; a regular order-4 model accepted by the
+ * solve-time regularity check on fine grids.
  */
 #include <gtest/gtest.h>
 
@@ -21,6 +22,7 @@
 #include "kepler_arc.hpp"
 #include "min_accel3.hpp"
 #include "no_velocity.hpp"
+#include "plate_pair.hpp"
 #endif
 
 namespace {
@@ -175,6 +177,24 @@ double clamped_spline(const double tau[4], const double P[4], double m0, double 
   const double s = (t - tau[i]) / L, s2 = s * s, s3 = s2 * s;
   return (2 * s3 - 3 * s2 + 1) * P[i] + (s3 - 2 * s2 + s) * L * slopes[i] + (-2 * s3 + 3 * s2) * P[i + 1] +
          (s3 - s2) * L * slopes[i + 1];
+}
+
+TEST(Assessment, ARegularOrderFourModelIsAcceptedOnFineGrids) {
+  // D12 Ld of an order-4 discretization pairs derivatives whose entries differ by h^6: unscaled,
+  // its smallest relative singular value fell below the degeneracy threshold from h = 1/16 on.
+  pardel::Problem p;
+  p.model = &plate_pair_model;
+  p.discretization = &plate_pair_model.discretizations[0];
+  p.T = 1;
+  p.q0 = {0, 0, 1, 0, 0, 0, 0, 0};
+  p.qN = {1, -1, 0, 0, 0, 0, 0, 0};
+  for (int N : {8, 64, 256}) {
+    p.N = N;
+    auto tr = pardel::linear_guess(p);
+    const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
+    EXPECT_NE(s.termination, pardel::Termination::invalid_input) << "N = " << N << ": " << s.message;
+    EXPECT_EQ(s.termination, pardel::Termination::converged) << "N = " << N << ": " << s.brief_report();
+  }
 }
 
 TEST(Assessment, MinimumAccelerationThroughKnotsConvergesToTheClampedSpline) {
