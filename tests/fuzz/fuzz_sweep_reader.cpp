@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "pardel/app/sweep.hpp"
+#include "fuzz_registry.hpp"
 #include "pardel/pardel.hpp"
 
 namespace {
@@ -36,24 +37,9 @@ const std::string kSource = std::string(PARDEL_FUZZ_SCENES_DIR) + "/sweeps/fuzz.
   std::abort();
 }
 
-std::size_t count_lines(const std::string& text) {
-  std::size_t lines = 1;
-  for (char c : text) lines += c == '\n';
-  return lines;
-}
-
-const pardel_model* resolve(const std::string& name) {
-  if (name.find('/') != std::string::npos || (name.size() > 4 && name.compare(name.size() - 4, 4, ".lag") == 0)) {
-    throw std::runtime_error("the fuzzing registry compiles no .lag files");
-  }
-  return pardel::find_model(name);
-}
-
-std::vector<std::string> model_names() {
-  std::vector<std::string> names;
-  for (const pardel_model* model : pardel::bundled_models()) names.emplace_back(model->name);
-  return names;
-}
+using pardel_fuzz::count_lines;
+using pardel_fuzz::model_names;
+using pardel_fuzz::resolve;
 
 void check_error(const std::string& text, const std::string& what) {
   const std::size_t at = what.find(": error: ");
