@@ -58,7 +58,7 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
   // places the nodes (a Sundman step) leaves the declared action cost alone.
   const bool declared = model.cost_name != nullptr;
   if (declared && model.cost_kind == PARDEL_COST_ACTION) {
-    return {model.cost_name, summary.action, "the discrete action (the model declares it its cost)"};
+    return {model.cost_name, summary.action, "the discrete action, which the model declares its cost"};
   }
   // Time-reparametrized models: the clock is dt/ds, its sum the travel time.
   if (model.clock && problem.clock == ClockMode::free_final_time) {
