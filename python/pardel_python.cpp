@@ -658,6 +658,8 @@ PYBIND11_MODULE(_pardel, m) {
 
   py::class_<Scene>(m, "Scene").def("info", &scene_info);
 
+  // The upper bound of pardel::Options::threads (option_bound), for the checks of pardel.sweep.
+  m.attr("max_threads") = static_cast<int>(pardel::option_bound("threads")->high);
   m.def("bundled_models", &bundled_names, "The names of the models compiled into this module.");
   m.def("can_compile_lag_files", &pardel::can_compile_lag_files);
   m.def("loader_toolchain", [] {

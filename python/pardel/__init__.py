@@ -303,8 +303,9 @@ def sweep(path, overrides=(), *, threads=None, out=None):
     Ctrl-C stops the running solve; the outputs (when out is given) hold what was done, and
     KeyboardInterrupt is raised.
     """
-    if threads is not None and (isinstance(threads, bool) or int(threads) != threads or not 1 <= threads <= 4096):
-        raise PardelError("threads: an integer in [1, 4096] was expected, got %r" % (threads,))
+    if threads is not None and (isinstance(threads, bool) or int(threads) != threads
+                                or not 1 <= threads <= _pardel.max_threads):
+        raise PardelError("threads: an integer in [1, %d] was expected, got %r" % (_pardel.max_threads, threads))
     out = None if out is None else os.fspath(out)
     if out == "":
         raise PardelError("out: a folder was expected, got ''")

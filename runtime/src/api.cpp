@@ -1,10 +1,12 @@
 /**
  * @file api.cpp
- * Names, parsing and validation of the public API: methods, terminations, linear solvers,
- * Options::is_valid, problem validation, discretization lookup and the Summary's report.
+ * Names, parsing and validation of the public API: methods, terminations, linear solvers, the
+ * options' bounds and Options::is_valid, problem validation, discretization lookup and the
+ * Summary's report.
  */
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "pardel/pardel.hpp"
@@ -217,27 +219,67 @@ const char* to_string(PointKind kind) {
   return "unknown";
 }
 
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/** A numeric member of Options: its bound and how to read it. */
+struct BoundedMember {
+  OptionBound bound;
+  double (*value)(const Options& options);
+};
+
+/** The bounds of the numeric options, in the order Options::is_valid checks them. */
+const BoundedMember kBoundedMembers[] = {
+    // name, low, included, high, included, 0 also valid, rule
+    {{"tol", 0, true, kInf, false, false, "must be a finite number >= 0 (0: the relative test with rtol)"},
+     [](const Options& o) { return o.tol; }},
+    {{"rtol", 0, false, 1, false, false, "must be in (0, 1)"}, [](const Options& o) { return o.rtol; }},
+    {{"max_iterations", 0, true, kInf, false, false, "must be >= 0 (0: evaluate the start only)"},
+     [](const Options& o) { return static_cast<double>(o.max_iterations); }},
+    {{"damping", 0, true, 1, false, false, "must be in [0, 1)"}, [](const Options& o) { return o.damping; }},
+    {{"newton_substeps", 1, true, 1000, true, false, "must be between 1 and 1000"},
+     [](const Options& o) { return static_cast<double>(o.newton_substeps); }},
+    {{"threads", 0, true, 4096, true, false, "must be between 0 (all cores) and 4096"},
+     [](const Options& o) { return static_cast<double>(o.threads); }},
+    {{"refine_start_N", 2, true, kInf, false, true, "must be 0 (off; auto keeps its own levels) or >= 2"},
+     [](const Options& o) { return static_cast<double>(o.refine_start_N); }},
+    {{"refine_factor", 1, false, 16, true, false, "must be in (1, 16]"},
+     [](const Options& o) { return o.refine_factor; }},
+    {{"clock_update_every", 1, true, kInf, false, false, "must be >= 1"},
+     [](const Options& o) { return static_cast<double>(o.clock_update_every); }},
+    {{"history_every", 1, true, kInf, false, false, "must be >= 1"},
+     [](const Options& o) { return static_cast<double>(o.history_every); }},
+    {{"refine_settle", 0, false, 1, false, false, "must be in (0, 1)"},
+     [](const Options& o) { return o.refine_settle; }},
+    {{"divergence_factor", 1, false, kInf, true, false, "must be > 1"},
+     [](const Options& o) { return o.divergence_factor; }},
+};
+
+}  // namespace
+
+bool OptionBound::accepts(double value) const {
+  if (zero_allowed && value == 0) return true;
+  const bool above = low_included ? value >= low : value > low;
+  const bool below = high_included ? value <= high : value < high;
+  return above && below;
+}
+
+const OptionBound* option_bound(std::string_view name) {
+  for (const BoundedMember& member : kBoundedMembers)
+    if (name == member.bound.name) return &member.bound;
+  return nullptr;
+}
+
 bool Options::is_valid(std::string* error) const {
   auto bad = [&](const char* name, const std::string& value, const char* rule) {
     if (error) *error = std::string("option ") + name + " = " + value + " is invalid: " + rule;
     return false;
   };
-  if (!(tol >= 0) || !std::isfinite(tol))
-    return bad("tol", number(tol), "must be a finite number >= 0 (0: the relative tolerance rtol)");
-  if (!(rtol > 0 && rtol < 1)) return bad("rtol", number(rtol), "must be in (0, 1)");
-  if (max_iterations < 0) return bad("max_iterations", std::to_string(max_iterations), "must be >= 0");
-  if (!(damping >= 0 && damping < 1)) return bad("damping", number(damping), "must be in [0, 1)");
-  if (newton_substeps < 1) return bad("newton_substeps", std::to_string(newton_substeps), "must be >= 1");
-  if (threads < 0) return bad("threads", std::to_string(threads), "must be >= 0 (0: all cores)");
-  if (refine_start_N < 0 || refine_start_N == 1)
-    return bad("refine_start_N", std::to_string(refine_start_N), "must be 0 (off) or >= 2");
-  if (!(refine_factor > 1) || !std::isfinite(refine_factor))
-    return bad("refine_factor", number(refine_factor), "must be a finite number > 1");
-  if (clock_update_every < 1) return bad("clock_update_every", std::to_string(clock_update_every), "must be >= 1");
-  if (history_every < 1) return bad("history_every", std::to_string(history_every), "must be >= 1");
-  if (!(refine_settle > 0 && refine_settle < 1))
-    return bad("refine_settle", number(refine_settle), "must be in (0, 1)");
-  if (!(divergence_factor > 1)) return bad("divergence_factor", number(divergence_factor), "must be > 1");
+  for (const BoundedMember& member : kBoundedMembers) {
+    const double value = member.value(*this);
+    if (!member.bound.accepts(value)) return bad(member.bound.name, number(value), member.bound.rule);
+  }
   if (method != Method::automatic && method != Method::jacobi && method != Method::jacobi_newton && method != Method::newton &&
       method != Method::multigrid && method != Method::hybrid)
     return bad("method", std::to_string(static_cast<int>(method)), "is not a known method");

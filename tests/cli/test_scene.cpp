@@ -1,6 +1,6 @@
 // Tests of the scene parser (pardel/app/scene.hpp): the catalogue of bad scenes in
 // tests/cli/bad_scenes (each names its expected location and message in its first two lines),
-// a full valid scene, --set overrides, suggestions and the initial guesses.
+// a full valid scene, --set overrides, the solver options' bounds, suggestions and the initial guesses.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -269,6 +269,31 @@ TEST(SceneOverrides, ErrorsNameTheOverride) {
   EXPECT_NE(error_of(kFuelNav, {"grid.N"}).find("expected KEY=VALUE"), std::string::npos);
   EXPECT_NE(error_of(kFuelNav, {"grid..N=3"}).find("is not a key path"), std::string::npos);
   EXPECT_NE(error_of(kFuelNav, {"model.x=3"}).find("model is a string, not a table"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Solver options: the bounds of pardel::Options (option_bound), at the key's location
+
+TEST(SceneSolverBounds, AreTheOptionsBoundsWithTheirRuleAndLocation) {
+  const std::string scene = std::string(kFuelNav) + "[solver]\nnewton_substeps = 1001\n";
+  EXPECT_EQ(error_of(scene), std::string("scene.toml:9:19: error: solver.newton_substeps ") +
+                                 option_bound("newton_substeps")->rule + ", got 1001");
+  EXPECT_EQ(error_of(kFuelNav, {"solver.refine.start_N=20", "solver.refine.factor=17"}),
+            "--set solver.refine.factor=17: error: solver.refine.factor must be in (1, 16], got 17");
+  EXPECT_EQ(error_of(kFuelNav, {"solver.refine.start_N=1"}),
+            "--set solver.refine.start_N=1: error: solver.refine.start_N must be 0 (off; auto keeps its own levels) "
+            "or >= 2, got 1");
+  // The values the bounds admit at their ends: tol = 0 is the relative test, max_iterations = 0
+  // evaluates the start, start_N = 0 turns a scene's refinement off.
+  const Scene edges = parse(std::string(kFuelNav) + "[solver]\ntol = 1e-8\nrefine = { start_N = 20 }\n",
+                            {"solver.tol=0", "solver.max_iterations=0", "solver.refine.start_N=0",
+                             "solver.newton_substeps=1000", "solver.threads=4096", "solver.refine.factor=16"});
+  EXPECT_EQ(edges.options.tol, 0);
+  EXPECT_EQ(edges.options.max_iterations, 0);
+  EXPECT_EQ(edges.options.refine_start_N, 0);
+  EXPECT_EQ(edges.options.newton_substeps, 1000);
+  EXPECT_EQ(edges.options.threads, 4096);
+  EXPECT_EQ(edges.options.refine_factor, 16);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -25,6 +25,16 @@ def test_bad_values_name_the_key(spring_lag):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, history_every=0)
 
 
+def test_bad_values_break_the_bounds_of_the_runtime_options(spring_lag):
+    with pytest.raises(pardel.PardelError, match=r"solver\.newton_substeps must be between 1 and 1000, got 1001"):
+        pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, newton_substeps=1001)
+    with pytest.raises(pardel.PardelError, match=r"threads: an integer in \[1, 4096\] was expected, got 4097"):
+        pardel.sweep("no_such_sweep.toml", threads=4097)
+    # An option outside the scene schema: Options::is_valid's message, with the same bound.
+    with pytest.raises(pardel.PardelError, match=r"option divergence_factor = 1 is invalid: must be > 1"):
+        pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, divergence_factor=1.0)
+
+
 def test_scene_errors_carry_file_line_and_column(tmp_path):
     scene = tmp_path / "bad.toml"
     scene.write_text('model = "fuel_nav"\n[grid]\nT = 30\nN = 200\n[boundary]\nq0 = [0, 0]\nqN = [6, 5]\n'

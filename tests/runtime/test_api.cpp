@@ -1,9 +1,10 @@
 /**
  * @file test_api.cpp
  * The public API's names and validation: method, termination and linear-solver names round-trip,
- * Options::is_valid names the bad option and its value, problems and trajectories with wrong
- * sizes or non-finite values are invalid_input with a message naming the field, discretizations
- * are found by name, and the Summary's brief report says how the solve ended.
+ * Options::is_valid names the bad option, its value and its bound's rule (option_bound), problems
+ * and trajectories with wrong sizes or non-finite values are invalid_input with a message naming
+ * the field, discretizations are found by name, and the Summary's brief report says how the solve
+ * ended.
  */
 #include <gtest/gtest.h>
 
@@ -88,6 +89,46 @@ TEST(Api, OptionsValidationNamesOptionAndValue) {
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
   EXPECT_NE(s.message.find("damping"), std::string::npos);
   EXPECT_EQ(traj.q, before);
+}
+
+TEST(Api, OptionBoundsAreCheckedByIsValidWithTheirRule) {
+  auto error_of = [](const pardel::Options& o) {
+    std::string e;
+    EXPECT_FALSE(o.is_valid(&e));
+    return e;
+  };
+  pardel::Options o;
+  o.newton_substeps = 1001;
+  EXPECT_EQ(error_of(o), "option newton_substeps = 1001 is invalid: must be between 1 and 1000");
+  o = {};
+  o.threads = 4097;
+  EXPECT_EQ(error_of(o), std::string("option threads = 4097 is invalid: ") + pardel::option_bound("threads")->rule);
+  o = {};
+  o.refine_factor = 16.5;
+  EXPECT_EQ(error_of(o), "option refine_factor = 16.5 is invalid: must be in (1, 16]");
+  o = {};
+  o.max_iterations = -1;
+  EXPECT_EQ(error_of(o), "option max_iterations = -1 is invalid: must be >= 0 (0: evaluate the start only)");
+  o = {};
+  o.tol = std::numeric_limits<double>::infinity();
+  EXPECT_NE(error_of(o).find("option tol = inf is invalid: must be a finite number >= 0"), std::string::npos);
+  // The ends that are included, and the zero of refine_start_N (off).
+  o = {};
+  o.tol = 0;
+  o.max_iterations = 0;
+  o.newton_substeps = 1000;
+  o.threads = 4096;
+  o.refine_factor = 16;
+  o.refine_start_N = 0;
+  std::string e;
+  EXPECT_TRUE(o.is_valid(&e)) << e;
+  const pardel::OptionBound* start = pardel::option_bound("refine_start_N");
+  ASSERT_NE(start, nullptr);
+  EXPECT_TRUE(start->accepts(0));
+  EXPECT_FALSE(start->accepts(1));
+  EXPECT_TRUE(start->accepts(2));
+  EXPECT_FALSE(pardel::option_bound("rtol")->accepts(std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_EQ(pardel::option_bound("method"), nullptr);
 }
 
 TEST(Api, ProblemValidationNamesTheField) {

@@ -472,8 +472,9 @@ int main(int argc, char** argv) {
   solve_cmd->add_option("--out", s.out, "Output folder (default: [output].dir, else out/<scene-stem>)");
   solve_cmd->add_option("--set", s.sets, "KEY=VALUE: override a scene key, e.g. solver.method=newton (repeatable)")
       ->allow_extra_args(false);
+  const pardel::OptionBound& threads_bound = *pardel::option_bound("threads");  // as solver.threads
   solve_cmd->add_option("--threads", s.threads, "Threads (0: all cores); overrides solver.threads")
-      ->check(CLI::Range(0, 4096));
+      ->check(CLI::Range(static_cast<int>(threads_bound.low), static_cast<int>(threads_bound.high)));
   solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
   solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
   solve_cmd->add_option("--certificate", s.certificate,

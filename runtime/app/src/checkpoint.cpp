@@ -228,7 +228,9 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
     if (!o.is_string()) rd.fail("key scene.overrides must be an array of strings");
     c.overrides.push_back(o.get<std::string>());
   }
-  c.threads = static_cast<int>(rd.integer(scene, "threads", "scene", -1, 4096));
+  // -1: no --threads; else within the bound of Options::threads.
+  const auto max_threads = static_cast<long>(option_bound("threads")->high);
+  c.threads = static_cast<int>(rd.integer(scene, "threads", "scene", -1, max_threads));
   const json& model = rd.at(body, "model", "body");
   c.model = rd.text(model, "name", "model");
   c.dim = static_cast<int>(rd.integer(model, "dim", "model", 1, 1 << 20));

@@ -198,6 +198,21 @@ class SceneReader {
     return node->as_integer()->get();
   }
 
+  /** A number (bounded_number) or an integer (bounded_integer) that must lie within the bound of
+   *  the member `option` of pardel::Options (option_bound), failing with that bound's rule. */
+  std::optional<double> bounded_number(const toml::table* parent, const std::string& key, const std::string& dotted,
+                                       std::string_view option) const {
+    const auto value = number(parent, key, dotted);
+    if (value) check_bound(*parent->get(key), dotted, option, *value, fmt::format("{}", *value));
+    return value;
+  }
+  std::optional<long long> bounded_integer(const toml::table* parent, const std::string& key, const std::string& dotted,
+                                           std::string_view option) const {
+    const auto value = integer(parent, key, dotted);
+    if (value) check_bound(*parent->get(key), dotted, option, static_cast<double>(*value), std::to_string(*value));
+    return value;
+  }
+
   std::optional<std::string> string(const toml::table* parent, const std::string& key, const std::string& dotted) const {
     if (!parent) return std::nullopt;
     const toml::node* node = parent->get(key);
@@ -230,6 +245,12 @@ class SceneReader {
   const std::string& file() const { return file_; }
 
  private:
+  void check_bound(const toml::node& node, const std::string& dotted, std::string_view option, double value,
+                   const std::string& shown) const {
+    const OptionBound* bound = option_bound(option);
+    if (!bound->accepts(value)) fail(node, dotted, fmt::format("{} {}, got {}", dotted, bound->rule, shown));
+  }
+
   std::string file_;
   std::map<std::string, std::string> origins_;
 };
@@ -559,36 +580,13 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
       r.fail(*solver->get("method"), "solver.method", message);
     }
   }
-  if (const auto tol = r.number(solver, "tol", "solver.tol")) {
-    if (!(*tol > 0)) r.fail(*solver->get("tol"), "solver.tol", fmt::format("solver.tol must be > 0, got {}", *tol));
-    options.tol = *tol;
-  }
-  if (const auto rtol = r.number(solver, "rtol", "solver.rtol")) {
-    if (!(*rtol > 0 && *rtol < 1))
-      r.fail(*solver->get("rtol"), "solver.rtol", fmt::format("solver.rtol must be in (0, 1), got {}", *rtol));
-    options.rtol = *rtol;
-  }
-  if (const auto max_it = r.integer(solver, "max_iterations", "solver.max_iterations")) {
-    if (*max_it < 1) {
-      r.fail(*solver->get("max_iterations"), "solver.max_iterations",
-             fmt::format("solver.max_iterations must be >= 1, got {}", *max_it));
-    }
+  if (const auto tol = r.bounded_number(solver, "tol", "solver.tol", "tol")) options.tol = *tol;
+  if (const auto rtol = r.bounded_number(solver, "rtol", "solver.rtol", "rtol")) options.rtol = *rtol;
+  if (const auto max_it = r.bounded_integer(solver, "max_iterations", "solver.max_iterations", "max_iterations"))
     options.max_iterations = static_cast<long>(*max_it);
-  }
-  if (const auto damping = r.number(solver, "damping", "solver.damping")) {
-    if (!(*damping >= 0 && *damping < 1)) {
-      r.fail(*solver->get("damping"), "solver.damping",
-             fmt::format("solver.damping must be in [0, 1), got {}", *damping));
-    }
-    options.damping = *damping;
-  }
-  if (const auto m = r.integer(solver, "newton_substeps", "solver.newton_substeps")) {
-    if (*m < 1 || *m > 1000) {
-      r.fail(*solver->get("newton_substeps"), "solver.newton_substeps",
-             fmt::format("solver.newton_substeps must be between 1 and 1000, got {}", *m));
-    }
+  if (const auto damping = r.bounded_number(solver, "damping", "solver.damping", "damping")) options.damping = *damping;
+  if (const auto m = r.bounded_integer(solver, "newton_substeps", "solver.newton_substeps", "newton_substeps"))
     options.newton_substeps = static_cast<int>(*m);
-  }
   if (const auto shift = r.string(solver, "newton_shift", "solver.newton_shift")) {
     if (!parse_newton_shift(*shift, &options.newton_shift)) {
       r.fail(*solver->get("newton_shift"), "solver.newton_shift",
@@ -601,58 +599,31 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
              fmt::format("unknown linear_solver '{}' (expected 'ldlt' or 'cyclic-reduction')", *ls));
     }
   }
-  if (const auto threads = r.integer(solver, "threads", "solver.threads")) {
-    if (*threads < 0 || *threads > 4096) {
-      r.fail(*solver->get("threads"), "solver.threads",
-             fmt::format("solver.threads must be between 0 (all cores) and 4096, got {}", *threads));
-    }
+  if (const auto threads = r.bounded_integer(solver, "threads", "solver.threads", "threads"))
     options.threads = static_cast<int>(*threads);
-  }
   if (const toml::table* refine = r.table(*solver, "refine", "solver.refine")) {
     r.check_keys(*refine, "solver.refine", {"start_N", "factor", "settle"});
-    const auto start = r.integer(refine, "start_N", "solver.refine.start_N");
+    const auto start = r.bounded_integer(refine, "start_N", "solver.refine.start_N", "refine_start_N");
     if (!start) r.fail(refine->source(), "solver.refine", "missing key 'solver.refine.start_N'");
-    if (*start < 2 || *start > problem.N) {
+    if (*start > problem.N) {
       r.fail(*refine->get("start_N"), "solver.refine.start_N",
-             fmt::format("solver.refine.start_N must be between 2 and grid.N = {}, got {}", problem.N, *start));
+             fmt::format("solver.refine.start_N must be at most grid.N = {}, got {}", problem.N, *start));
     }
     options.refine_start_N = static_cast<int>(*start);
-    if (const auto factor = r.number(refine, "factor", "solver.refine.factor")) {
-      if (!(*factor > 1 && *factor <= 16)) {
-        r.fail(*refine->get("factor"), "solver.refine.factor",
-               fmt::format("solver.refine.factor must be in (1, 16], got {}", *factor));
-      }
+    if (const auto factor = r.bounded_number(refine, "factor", "solver.refine.factor", "refine_factor"))
       options.refine_factor = *factor;
-    }
-    if (const auto settle = r.number(refine, "settle", "solver.refine.settle")) {
-      if (!(*settle > 0 && *settle < 1)) {
-        r.fail(*refine->get("settle"), "solver.refine.settle",
-               fmt::format("solver.refine.settle must be in (0, 1), got {}", *settle));
-      }
+    if (const auto settle = r.bounded_number(refine, "settle", "solver.refine.settle", "refine_settle"))
       options.refine_settle = *settle;
-    }
   }
-  if (const auto every = r.integer(solver, "history_every", "solver.history_every")) {
-    if (*every < 1) {
-      r.fail(*solver->get("history_every"), "solver.history_every",
-             fmt::format("solver.history_every must be >= 1, got {}", *every));
-    }
+  // Counts beyond 1e9 iterations all mean "never"; they are clamped so that they fit an int.
+  if (const auto every = r.bounded_integer(solver, "history_every", "solver.history_every", "history_every"))
     options.history_every = static_cast<long>(std::min<long long>(*every, 1000000000));
-  }
-  if (const auto factor = r.number(solver, "divergence_factor", "solver.divergence_factor")) {
-    if (!(*factor > 1)) {
-      r.fail(*solver->get("divergence_factor"), "solver.divergence_factor",
-             fmt::format("solver.divergence_factor must be > 1, got {}", *factor));
-    }
+  if (const auto factor =
+          r.bounded_number(solver, "divergence_factor", "solver.divergence_factor", "divergence_factor"))
     options.divergence_factor = *factor;
-  }
-  if (const auto every = r.integer(solver, "clock_update_every", "solver.clock_update_every")) {
-    if (*every < 1) {
-      r.fail(*solver->get("clock_update_every"), "solver.clock_update_every",
-             fmt::format("solver.clock_update_every must be >= 1, got {}", *every));
-    }
+  if (const auto every =
+          r.bounded_integer(solver, "clock_update_every", "solver.clock_update_every", "clock_update_every"))
     options.clock_update_every = static_cast<int>(std::min<long long>(*every, 1000000000));
-  }
   if (const auto clock = r.string(solver, "clock", "solver.clock")) {
     if (!parse_clock_mode(*clock, &problem.clock)) {
       const std::string suggestion = nearest_name(*clock, kClockNames);

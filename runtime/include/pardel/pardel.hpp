@@ -193,7 +193,7 @@ struct Options {
   double damping = 0;            ///< epsilon: q <- q + (1 - epsilon)(qbar - q)
   int newton_substeps = 1;       ///< m of the m-step Jacobi-Newton
   int threads = 0;               ///< 0: all cores
-  int refine_start_N = 0;        ///< coarse-to-fine: start at this N (0: off)
+  int refine_start_N = 0;        ///< coarse-to-fine: start at this N (0: off; auto keeps its own levels)
   double refine_factor = 1.2;    ///< growth of N per refinement
   int clock_update_every = 100;  ///< iterations between node-time updates under a clock
   long history_every = 1;        ///< record the history every this many iterations
@@ -211,9 +211,30 @@ struct Options {
    *  method; the iteration count and the history continue, the method's own state and the
    *  stopping rules' memory start afresh (not bit for bit), and Summary::message says so. */
   bool warm_start = false;
-  /** Checks the options; on failure writes a message naming the option and value. */
+  /** Checks the options against their bounds (option_bound); on failure writes a message naming
+   *  the option, its value and the rule it breaks. */
   bool is_valid(std::string* error) const;
 };
+
+/**
+ * The valid range of one numeric member of Options, stated once: Options::is_valid checks each
+ * member against it, and front ends (the scene reader, the command line) check their keys against
+ * the same bound and report the same rule. A value is valid when it lies between `low` and `high`
+ * (each end included or not, as the flags say; NaN never), or is 0 where `zero_allowed`.
+ */
+struct OptionBound {
+  const char* name;     ///< the member of Options, e.g. "refine_factor"
+  double low;           ///< lower end (-infinity: none)
+  bool low_included;
+  double high;          ///< upper end (+infinity: none)
+  bool high_included;
+  bool zero_allowed;    ///< 0 is valid too, outside [low, high] (refine_start_N: 0 is off)
+  const char* rule;     ///< the bound in words, as a predicate: "must be in (1, 16]"
+  bool accepts(double value) const;
+};
+/** The bound of the numeric member of Options of that name ("tol", "threads", ...); nullptr for
+ *  any other name (the enumerations method, linear_solver and newton_shift have none). */
+const OptionBound* option_bound(std::string_view name);
 
 /** Verdicts of the seed's convergence theory at one trajectory. */
 struct IntervalViolation {
