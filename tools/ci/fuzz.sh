@@ -53,18 +53,24 @@ seeds() {
   sed -n "s/^$1:INTERNAL=//p" "$build_dir/CMakeCache.txt" | tr ';' ' '
 }
 
-status=0
+failed=()
+failed_logs=()
+started="$build_dir/fuzz-started"
+touch "$started"
 run_fuzzer() {  # NAME RUNS DICT SEED_VARIABLE [MAX_SECONDS]
   local name=$1 runs=$2 dict=$3 seed_var=$4 seconds=${5:-$max_seconds}
   local corpus="$build_dir/corpus_${name#fuzz_}"
+  local log="$build_dir/$name${PARDEL_FUZZ_PARSE_ONLY:+-reader}.log"
   mkdir -p "$corpus" "$build_dir/artifacts"
   echo "== $name: $runs executions (at most $seconds s), max_len $max_len${PARDEL_FUZZ_PARSE_ONLY:+, reader only}"
   # shellcheck disable=SC2046
   if ! "$build_dir/$name" -runs="$runs" -max_total_time="$seconds" -max_len="$max_len" -timeout=10 \
       -rss_limit_mb=2048 -dict="$dict" -print_final_stats=1 \
-      -artifact_prefix="$build_dir/artifacts/$name-" "$corpus" $(seeds "$seed_var"); then
+      -artifact_prefix="$build_dir/artifacts/$name-" "$corpus" $(seeds "$seed_var") 2>&1 |
+      tee "$log"; then
     echo "fuzz.sh: $name FAILED; the input is in $build_dir/artifacts/" >&2
-    status=1
+    failed+=("$name${PARDEL_FUZZ_PARSE_ONLY:+ (reader only)}")
+    failed_logs+=("$log")
   fi
 }
 PARDEL_FUZZ_PARSE_ONLY=1 run_fuzzer fuzz_lag_parser "$lag_runs" tests/fuzz/lag.dict PARDEL_FUZZ_LAG_SEEDS
@@ -75,4 +81,19 @@ run_fuzzer fuzz_checkpoint_reader "$checkpoint_runs" tests/fuzz/checkpoint.dict 
 run_fuzzer fuzz_sweep_reader "$sweep_runs" tests/fuzz/sweep.dict PARDEL_FUZZ_SWEEP_SEEDS "$extra_max_seconds"
 run_fuzzer fuzz_scene_overrides "$overrides_runs" tests/fuzz/overrides.dict PARDEL_FUZZ_OVERRIDES_SEEDS \
   "$extra_max_seconds"
-exit $status
+# The summary comes last so that the tail of a long log names what failed, with each failing
+# input in base64 (replay it with: base64 -d > input; BUILD_DIR/NAME input).
+if ((${#failed[@]})); then
+  for log in "${failed_logs[@]}"; do
+    echo "fuzz.sh: the end of $log:" >&2
+    tail -n 60 "$log" >&2
+  done
+  echo "fuzz.sh: FAILED: ${failed[*]}" >&2
+  for artifact in "$build_dir"/artifacts/*; do
+    [[ -f $artifact && $artifact -nt $started ]] || continue
+    echo "fuzz.sh: $(basename "$artifact") ($(stat -c %s "$artifact") bytes, base64):" >&2
+    head -c 4096 "$artifact" | base64 >&2
+  done
+  exit 1
+fi
+echo "fuzz.sh: every fuzz run clean"
