@@ -3,9 +3,14 @@
  * The convergence certificate at a trajectory: the hypotheses of the seed's theorem
  * prp:discrete_positive_def interval by interval (H^{Ld}_k p.s.d., A_k = D11 or B_k = D22 p.d.),
  * the inertia of the full block-tridiagonal Hessian by block LDL^T (Sylvester's law of inertia),
- * and the spectral radius of the Jacobi iteration matrix J = -D^{-1} C by Lanczos on the
- * symmetric form L^{-1} C L^{-T} (D_k = L_k L_k^T), matrix-free and O(N) per step.
- * Knots and boundaries restrict every matrix to the free components.
+ * and the spectral radius rho of the Jacobi iteration matrix J = -D^{-1} C. The Hessian is first
+ * equilibrated by powers of two (exact; inertia and J's eigenvalues unchanged), since the jets of
+ * high-order models span many orders of magnitude. Where H is positive definite, 1 - rho is the
+ * smallest eigenvalue of D^{-1/2} H D^{-1/2}, found by inverse iteration through H's block
+ * Cholesky factorization (forming 1 - rho from a rho near 1 would cancel every digit), with its
+ * round-off level; otherwise rho comes from Lanczos on L^{-1} C L^{-T} (D_k = L_k L_k^T) or the
+ * power method on J^2. Matrix-free, O(N) per step. Knots and boundaries restrict every matrix to
+ * the free components.
  */
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
@@ -47,6 +52,34 @@ void restricted_eigs(const Eigen::MatrixXd& H, const std::vector<int>& idx, doub
   *scale = ev.cwiseAbs().maxCoeff();
 }
 
+/**
+ * Scales H symmetrically by a power of two per component, close to |H_aa|^(-1/2) (1 where the
+ * diagonal entry is zero): exact in floating point, a congruence (inertia unchanged) and a
+ * similarity of J. The blocks of order-gamma jets otherwise span h^(2 - 2 gamma) to 1/h.
+ */
+template <int D>
+void equilibrate(detail::BlockTridiagonal<D>& H, int d) {
+  const int n = H.blocks();
+  std::vector<double> s(static_cast<std::size_t>(n) * d, 1.0);
+  for (int i = 0; i < n; ++i)
+    for (int a = 0; a < d; ++a) {
+      const double x = std::fabs(H.diag(i)(a, a));
+      if (x > 0 && std::isfinite(x)) {
+        int e = 0;
+        std::frexp(x, &e);
+        s[static_cast<std::size_t>(i) * d + a] = std::ldexp(1.0, -e / 2);
+      }
+    }
+  for (int i = 0; i < n; ++i) {
+    const double* si = s.data() + static_cast<std::size_t>(i) * d;
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b) {
+        H.diag(i)(a, b) *= si[a] * si[b];
+        if (i + 1 < n) H.off(i)(a, b) *= si[a] * si[static_cast<std::size_t>(d) + b];
+      }
+  }
+}
+
 template <int D>
 void inertia_and_radius(Context& ctx, Certificate& c) {
   using Mat = Eigen::Matrix<double, D, D>;
@@ -55,9 +88,10 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
   H.resize(ctx.N, ctx.dim);
   H.assemble(ctx, 0.0);
   const int n = H.blocks(), d = ctx.dim;
+  equilibrate(H, d);
   // Block LDL^T with eigen-decomposed pivots: inertia(H) = sum of inertias of the pivots.
   long pos = 0, neg = 0, zero = 0;
-  Mat S = H.diag(0), Sinv = Mat::Zero(d, d);
+  Mat S = n > 0 ? H.diag(0) : Mat(), Sinv = Mat::Zero(d, d);
   for (int i = 0; i < n; ++i) {
     if (i > 0) S = H.diag(i) - H.off(i - 1).transpose() * Sinv * H.off(i - 1);
     Eigen::SelfAdjointEigenSolver<Mat> es(S);
@@ -85,7 +119,8 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
   c.hessian_positive_definite = neg == 0 && zero == 0;
 
   // Spectral radius of J = -D^{-1} C. With every D_k p.d., J is similar to the symmetric
-  // M = L^{-1} C L^{-T}; Lanczos on M. Otherwise the power method on J (an estimate).
+  // M = L^{-1} C L^{-T}, whose spectrum is symmetric about 0 (H is block tridiagonal), so
+  // rho = lambda_max(M) and 1 - rho = lambda_min(I + M) = lambda_min(L^{-1} H L^{-T}).
   // Constructed in place: a copy of an Eigen::LLT built with a size reads its uninitialized status.
   std::vector<Eigen::LLT<Mat>> chol;
   chol.reserve(static_cast<std::size_t>(n));
@@ -96,7 +131,11 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
     if (chol[static_cast<std::size_t>(i)].info() != Eigen::Success) all_pd = false;
   }
   const std::size_t len = static_cast<std::size_t>(n) * d;
-  if (len == 0) return;
+  if (len == 0) {  // no unknowns: J is empty
+    c.jacobi_one_minus_rho = 1;
+    c.spectral_radius_resolved = true;
+    return;
+  }
   std::vector<double> v(len), w(len), vprev(len, 0.0), z(len);
   unsigned long long seed = 0x9E3779B97F4A7C15ull;
   for (std::size_t i = 0; i < len; ++i) {
@@ -109,7 +148,77 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
     for (double x : a) s += x * x;
     return std::sqrt(s);
   };
+  auto dot = [&](const std::vector<double>& a, const std::vector<double>& b) {
+    double s = 0;
+    for (std::size_t i = 0; i < len; ++i) s += a[i] * b[i];
+    return s;
+  };
+  // The smallest shift sigma (0, then 2^-50 doubling up to 2^-12) for which H + sigma D, i.e. the
+  // diagonal blocks times 1 + sigma, has a block Cholesky factorization. A shift above round-off
+  // is needed only where H has an eigenvalue lambda_min(L^{-1} H L^{-T}) = 1 - rho < 0.
+  double sigma = 0;
+  bool factored = false;
   if (all_pd) {
+    for (int k = 0; k <= 39 && !factored; ++k) {
+      if (k > 0) {
+        const double scale = 1 + std::ldexp(1.0, k - 51);
+        sigma = scale - 1;  // exact
+        if (k > 1) {  // the unshifted H again: one rounding of each entry
+          H.assemble(ctx, 0.0);
+          equilibrate(H, d);
+        }
+        for (int i = 0; i < n; ++i) H.diag(i) *= scale;
+      }
+      factored = H.factor_ldlt();
+    }
+    if (!factored) {  // restore H for Lanczos
+      H.assemble(ctx, 0.0);
+      equilibrate(H, d);
+      sigma = 0;
+    }
+  }
+  if (factored) {
+    // H + sigma D p.d.: inverse iteration on K = (L^{-1} (H + sigma D) L^{-T})^{-1}, whose largest
+    // eigenvalue is 1 / (1 - rho + sigma) and well separated (the next is 1 / (lambda_2 + sigma)).
+    // theta, the Rayleigh quotient of K, rises to it: 1 / theta - sigma bounds 1 - rho from above.
+    // Round-off level of 1 - rho: entries of H off by a unit in their last place move it by up
+    // to eps |y|^T |H| |y| / y^T D y (y = L^{-T} v the generalized eigenvector, y^T D y = 1);
+    // block elimination over 3d terms a row: the factor 3d.
+    const double eps = std::numeric_limits<double>::epsilon();
+    double nv = norm(v);
+    for (double& x : v) x /= nv;
+    double theta = 0, previous = 0, roundoff = 0;
+    for (int j = 0; j < 1000; ++j) {
+      for (int i = 0; i < n; ++i) blk(z, i) = chol[static_cast<std::size_t>(i)].matrixL() * blk(v, i);
+      H.solve_ldlt(z.data(), w.data());
+      for (int i = 0; i < n; ++i) blk(w, i) = chol[static_cast<std::size_t>(i)].matrixU() * blk(w, i).eval();
+      theta = dot(v, w);
+      const double nw = norm(w);
+      if (!(theta > 0) || !std::isfinite(nw)) break;
+      // |y|^T |H| |y| at the current vector
+      for (int i = 0; i < n; ++i) blk(z, i) = chol[static_cast<std::size_t>(i)].matrixU().solve(blk(v, i));
+      double abs_form = 0;
+      for (int i = 0; i < n; ++i) {
+        const Vec yi = blk(z, i).cwiseAbs();
+        abs_form += yi.dot(H.diag(i).cwiseAbs() * yi);
+        if (i + 1 < n) abs_form += 2 * yi.dot(H.off(i).cwiseAbs() * blk(z, i + 1).cwiseAbs());
+      }
+      roundoff = 3.0 * d * eps * abs_form / (1 + sigma);
+      for (std::size_t i = 0; i < len; ++i) v[i] = w[i] / nw;
+      // Settled: to 1e-12, or to the round-off level of 1 - rho.
+      if (j > 0 && std::fabs(theta - previous) <= std::max(1e-12, roundoff * theta) * theta) {
+        c.spectral_radius_converged = true;
+        break;
+      }
+      previous = theta;
+    }
+    const double gap = theta > 0 ? 1 / theta - sigma : 0;
+    c.jacobi_one_minus_rho = gap;
+    c.jacobi_spectral_radius = 1 - gap;
+    c.jacobi_one_minus_rho_roundoff = roundoff;
+    c.spectral_radius_resolved = theta > 0 && std::fabs(gap) > roundoff;
+  } else if (all_pd) {
+    // H + 2^-12 D not p.d. (rho > 1 + 2^-12): Lanczos on M.
     // y = M x: z_j = L_j^{-T} x_j, y_k = L_k^{-1} (C_{k-1}^T z_{k-1} + C_k z_{k+1}).
     auto apply = [&](std::vector<double>& x, std::vector<double>& y) {
       for (int i = 0; i < n; ++i) blk(z, i) = chol[static_cast<std::size_t>(i)].matrixU().solve(blk(x, i));
@@ -157,6 +266,8 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
       b_prev = b;
     }
     c.jacobi_spectral_radius = estimate;
+    c.jacobi_one_minus_rho = 1 - estimate;
+    c.spectral_radius_resolved = true;
   } else {
     std::vector<Eigen::PartialPivLU<Mat>> lu;
     for (int i = 0; i < n; ++i) lu.emplace_back(H.diag(i));
@@ -184,6 +295,8 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
       previous = estimate;
     }
     c.jacobi_spectral_radius = estimate;
+    c.jacobi_one_minus_rho = 1 - estimate;
+    c.spectral_radius_resolved = true;
   }
 }
 
@@ -258,11 +371,15 @@ Certificate certify(const Problem& problem, const Trajectory& trajectory, int th
 
   // Not a hot path: one dynamic-size instantiation keeps the build light.
   inertia_and_radius<Eigen::Dynamic>(ctx, c);
-  const double rho = c.jacobi_spectral_radius;
+  // log(rho) as log1p(-(1 - rho)): rho near 1 would cancel the digits of 1 - rho. Where 1 - rho is
+  // below its round-off level, it is at most |1 - rho| + that level: a lower bound on the sweeps.
+  const double rho = c.jacobi_spectral_radius, gap = c.jacobi_one_minus_rho;
   if (c.residual <= tol)
     c.expected_iterations = 0;
-  else if (rho > 0 && rho < 1)
-    c.expected_iterations = std::log(tol / c.residual) / std::log(rho);
+  else if (!c.spectral_radius_resolved && c.jacobi_one_minus_rho_roundoff > 0)
+    c.expected_iterations = std::log(tol / c.residual) / std::log1p(-(std::fabs(gap) + c.jacobi_one_minus_rho_roundoff));
+  else if (rho > 0 && gap > 0)
+    c.expected_iterations = std::log(tol / c.residual) / std::log1p(-gap);
   else
     c.expected_iterations = std::numeric_limits<double>::infinity();
   return c;
@@ -300,11 +417,27 @@ std::string Certificate::report() const {
                                           : "NOT positive definite (no local convergence guarantee; Newton's "
                                             "minimization cannot stop at a saddle)");
   out += buf;
-  std::snprintf(buf, sizeof buf,
-                "Jacobi iteration matrix J = -D^-1 C: spectral radius %.9f%s; expected Jacobi-Newton sweeps to reach "
-                "%.1e: %.4g\n",
-                jacobi_spectral_radius, spectral_radius_converged ? "" : " (estimate, not settled)", tol,
-                expected_iterations);
+  if (!spectral_radius_resolved) {
+    std::snprintf(buf, sizeof buf,
+                  "Jacobi iteration matrix J = -D^-1 C: spectral radius 1 to within round-off: 1 - rho = %.2e is below "
+                  "its round-off level %.1e and not determined in double precision; Jacobi-Newton sweeps to reach "
+                  "%.1e: at least %.4g\n",
+                  jacobi_one_minus_rho, jacobi_one_minus_rho_roundoff, tol, expected_iterations);
+  } else if (jacobi_one_minus_rho_roundoff > 0) {
+    // enough decimals to show where rho leaves 1
+    const int digits = std::clamp(static_cast<int>(std::ceil(-std::log10(std::fabs(jacobi_one_minus_rho)))) + 2, 9, 16);
+    std::snprintf(buf, sizeof buf,
+                  "Jacobi iteration matrix J = -D^-1 C: spectral radius %.*f (1 - rho = %.6e, round-off level "
+                  "%.1e)%s; expected Jacobi-Newton sweeps to reach %.1e: %.4g\n",
+                  digits, jacobi_spectral_radius, jacobi_one_minus_rho, jacobi_one_minus_rho_roundoff,
+                  spectral_radius_converged ? "" : " (estimate, not settled: a lower bound)", tol, expected_iterations);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "Jacobi iteration matrix J = -D^-1 C: spectral radius %.9f%s; expected Jacobi-Newton sweeps to reach "
+                  "%.1e: %.4g\n",
+                  jacobi_spectral_radius, spectral_radius_converged ? "" : " (estimate, not settled)", tol,
+                  expected_iterations);
+  }
   out += buf;
   return out;
 }

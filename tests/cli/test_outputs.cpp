@@ -45,7 +45,8 @@ TEST(Outputs, CertificateJsonHasEveryFieldAndCapsViolations) {
   const auto j = certificate_json(c, 3);
   for (const char* key : {"theorem_holds", "all_intervals_psd", "all_A_pd", "all_B_pd", "hessian_positive_definite",
                           "inertia_positive", "inertia_negative", "inertia_zero", "jacobi_spectral_radius",
-                          "expected_iterations", "violations_total", "violations"}) {
+                          "jacobi_one_minus_rho", "jacobi_one_minus_rho_roundoff", "spectral_radius_resolved",
+                          "spectral_radius_converged", "expected_iterations", "violations_total", "violations"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["violations_total"], 5);

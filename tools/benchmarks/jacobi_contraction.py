@@ -3,7 +3,8 @@
 
 The problems are those of hermite_convergence.py (L = (x'''^2 + x^2)/2 and (x''''^2 + x^2)/2 on
 [0, 5], exact end jets, straight-line guess), discretized by hermite_gauss(s = order). For each N:
-  - rho_check: the Jacobi spectral radius `pardel check` reports (Lanczos, at the guess);
+  - 1 - rho_check: what `pardel check` reports (certificate.jacobi_one_minus_rho, by inverse
+    iteration at the guess), or its round-off level where it says that 1 - rho is not resolved;
   - rho_eig: the same radius from the assembled Hessian: the Lagrangian is quadratic, so the blocks
     D11, D12, D22 that `pardel kernels` returns are the same on every interval; H is assembled
     (free nodes 1..N-1), each node's jet scaled by h^k (which leaves J = -D^-1 C unchanged) and
@@ -43,8 +44,9 @@ def check(build, scene, N):
     try:
         j = json.loads(p.stdout)
     except json.JSONDecodeError:
-        return None, None, p.stderr.strip().splitlines()[0][:100]
-    return j["residual"], j["certificate"]["jacobi_spectral_radius"], ""
+        return None, None, None, None, p.stderr.strip().splitlines()[0][:100]
+    c = j["certificate"]
+    return j["residual"], c["jacobi_one_minus_rho"], c["jacobi_one_minus_rho_roundoff"], c["spectral_radius_resolved"], ""
 
 
 def one_minus_rho_eig(build, order, disc, N):
@@ -92,7 +94,7 @@ def measure(build, Ns, sweeps):
             scene = os.path.join(tmp, f"scene{order}.toml")
             hc.write_scene(scene, order, disc)
             for N in Ns:
-                r0, rho_check, err = check(build, scene, N)
+                r0, omr_check, omr_roundoff, resolved, err = check(build, scene, N)
                 rc, ns, _ = solve(build, scene, os.path.join(tmp, f"n{order}_{N}"),
                                   [f"grid.N={N}", "solver.method=newton"])
                 rcj, js, hist = solve(build, scene, os.path.join(tmp, f"j{order}_{N}"),
@@ -113,12 +115,14 @@ def measure(build, Ns, sweeps):
                        "newton_status": ns["status"], "newton_iterations": ns.get("iterations", ""),
                        "newton_seconds": ns.get("wall_seconds", ""),
                        "tol": tol, "r0": r0 if r0 is not None else "",
-                       "rho_check": rho_check if rho_check is not None else float("nan"),
+                       "one_minus_rho_check": omr_check if omr_check is not None else float("nan"),
+                       "check_roundoff": omr_roundoff if omr_roundoff is not None else float("nan"),
+                       "check_resolved": int(bool(resolved)),
                        "one_minus_rho_eig": omr, "predicted_sweeps": pred,
                        "jn_sweeps": js.get("iterations", ""), "jn_status": js["status"],
                        "jn_final_residual": js.get("residual", ""), "rho_hist": rho_hist, "note": err}
                 rows.append(row)
-                print(f"  order {order} N = {N}: 1-rho check {1 - row['rho_check']:.3e} eig {omr:.3e} "
+                print(f"  order {order} N = {N}: 1-rho check {row['one_minus_rho_check']:.3e} eig {omr:.3e} "
                       f"hist {1 - rho_hist:.3e}; newton {row['newton_iterations']} ({ns['status']}) {err}",
                       file=sys.stderr, flush=True)
     return rows
@@ -149,14 +153,18 @@ def report_and_plot(rows, png):
             ns = f(r, "newton_seconds")
             newton = (f"{r['newton_iterations']} ({ns:.1e} s)" if r["newton_status"] == "converged"
                       else r["newton_status"].split(":")[0] + " (rc 2)")
+            check = (f"{f(r, 'one_minus_rho_check'):.2e}" if int(r["check_resolved"])
+                     else f"not resolved (round-off level {f(r, 'check_roundoff'):.1e})")
             print(f"| {order} | {r['N']} | {newton} | "
-                  f"{1 - f(r, 'rho_check'):.2e} | {f(r, 'one_minus_rho_eig'):.2e} | {1 - f(r, 'rho_hist'):.2e} | "
+                  f"{check} | {f(r, 'one_minus_rho_eig'):.2e} | {1 - f(r, 'rho_hist'):.2e} | "
                   f"{f(r, 'predicted_sweeps'):.2e} | " + (f"{r['jn_sweeps']} sweeps: residual {f(r, 'r0'):.1e} → "
                   f"{f(r, 'jn_final_residual'):.1e} (tol {f(r, 'tol'):.1e})" if r["jn_sweeps"] != "" else "-") + " |")
         Ns = [int(r["N"]) for r in rs]
-        for key, style, label in (("one_minus_rho_eig", "o-", "assembled H"), ("rho_check", "s--", "pardel check"),
+        for key, style, label in (("one_minus_rho_eig", "o-", "assembled H"), ("one_minus_rho_check", "s--", "pardel check"),
                                   ("rho_hist", "^:", "last sweeps")):
-            ys = [f(r, key) if key == "one_minus_rho_eig" else 1 - f(r, key) for r in rs]
+            ys = [1 - f(r, key) if key == "rho_hist" else f(r, key) for r in rs]
+            if key == "one_minus_rho_check":  # only where pardel check resolves it
+                ys = [y if int(r["check_resolved"]) else float("nan") for y, r in zip(ys, rs)]
             p, n = fit(Ns, ys)
             print(f"order {order}, 1 - rho from {label}: fitted power N^{p:.2f} over {n} points (values > 1e-14)")
             ax.loglog(Ns, [y if y > 0 else float("nan") for y in ys], style, ms=4,

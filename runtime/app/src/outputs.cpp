@@ -92,6 +92,10 @@ nlohmann::ordered_json certificate_json(const Certificate& c, std::size_t max_vi
   j["inertia_negative"] = c.inertia_negative;
   j["inertia_zero"] = c.inertia_zero;
   j["jacobi_spectral_radius"] = c.jacobi_spectral_radius;
+  j["jacobi_one_minus_rho"] = c.jacobi_one_minus_rho;
+  j["jacobi_one_minus_rho_roundoff"] = c.jacobi_one_minus_rho_roundoff;
+  j["spectral_radius_resolved"] = c.spectral_radius_resolved;
+  j["spectral_radius_converged"] = c.spectral_radius_converged;
   j["expected_iterations"] = c.expected_iterations;
   j["violations_total"] = c.violations.size();
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
@@ -312,7 +316,9 @@ void print_solve_report(const Scene& scene, const Summary& summary, const Trajec
                              certificate.theorem_holds ? "holds" : "does not hold",
                              certificate.hessian_positive_definite ? "positive definite" : "not positive definite",
                              certificate.inertia_positive, certificate.inertia_negative, certificate.inertia_zero,
-                             format_double(certificate.jacobi_spectral_radius));
+                             certificate.spectral_radius_resolved
+                                 ? format_double(certificate.jacobi_spectral_radius)
+                                 : std::string("1 to within round-off"));
   std::cout << "output: " << out_dir << "\n";
 }
 

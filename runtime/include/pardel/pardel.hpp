@@ -257,8 +257,17 @@ struct Certificate {
   bool hessian_positive_definite = false;
   // Jacobi iteration matrix J = -D^{-1} C
   double jacobi_spectral_radius = 0;
+  /** 1 - rho, computed directly (the smallest eigenvalue of D^{-1/2} H D^{-1/2}, by inverse
+   *  iteration) where H + 2^-12 D is positive definite, not as 1 - jacobi_spectral_radius, whose
+   *  digits cancel when rho is near 1; elsewhere 1 - rho from the Lanczos or power estimate */
+  double jacobi_one_minus_rho = 0;
+  /** round-off level of jacobi_one_minus_rho (0 where it was not computed directly) */
+  double jacobi_one_minus_rho_roundoff = 0;
+  /** false when |1 - rho| is at or below its round-off level: rho is 1 to within double precision,
+   *  and expected_iterations is then a lower bound */
+  bool spectral_radius_resolved = false;
   double expected_iterations = 0;  ///< sweeps to reduce the residual by tol/initial residual
-  bool spectral_radius_converged = false;  ///< the Lanczos estimate settled (else a lower bound)
+  bool spectral_radius_converged = false;  ///< the estimate settled (else a lower bound on rho)
   long intervals_violating = 0;    ///< violations holds at most the first 100 of them
   double residual = 0;             ///< DEL residual at the trajectory
   double tol = 1e-10;              ///< the target residual used for expected_iterations
