@@ -1,6 +1,7 @@
 """`mpirun -np 2 pardel solve` against the plain `pardel solve` of the same scene: the seed's
 Jacobi-Newton writes the same trajectory.csv byte for byte (also under a clock: zermelo_tv with
-free final time), Newton the same trajectory to 1e-7; rank 0 alone writes the outputs and
+free final time, spacecraft_sundman with fixed total time, whose nodes move with their times), Newton
+the same trajectory to 1e-7; rank 0 alone writes the outputs and
 summary.json records the ranks."""
 import argparse
 import csv
@@ -39,6 +40,9 @@ def main():
         # free final time: node times from the clock, carried from rank to rank
         ("zermelo_tv", "zermelo_tv.toml", ["--set", "solver.method=jacobi-newton", "--set", "solver.max_iterations=300",
                                            "--set", "solver.clock_update_every=20"], 3, None),
+        # fixed total time: the nodes move to their new times, interpolated from nodes of both ranks
+        ("spacecraft_sundman", "spacecraft_sundman.toml", ["--set", "solver.method=jacobi-newton",
+                                                           "--set", "solver.max_iterations=300"], 3, None),
     ]
     for name, scene_file, sets, expected_code, tolerance in cases:
         scene = os.path.join(args.scenes, scene_file)

@@ -1,8 +1,9 @@
 /**
  * @file test_distributed.cpp
  * The domain-decomposed solve against the one-process pardel::solve on the same problem in the
- * same run (run by mpirun on 2 and 3 ranks): the seed's Jacobi methods bit for bit (a fixed number
- * of iterations and to convergence, with damping, knots, clocks and threads inside the ranks),
+ * same run (run by mpirun on 2 and 3 ranks, the clock tests also on 4): the seed's Jacobi methods
+ * bit for bit (a fixed number of iterations and to convergence, with damping, knots, clocks and
+ * threads inside the ranks; under fixed_total_time also when the clock moves nodes across ranks),
  * Newton and hybrid to the tolerance, the halo exchange and the rank-order sum, refusals, and a
  * NaN or an interruption on one rank ending every rank. The
  * acceptance test (LargeGrid.*: pendulum at N = 10^6) runs separately under a ctest label.
@@ -238,6 +239,59 @@ TEST(Clock, FixedTotalTimeBitForBit) {
     EXPECT_TRUE(uneven);
   }
   expect_bit_for_bit(b);
+}
+
+/** `problem` from its linear guess with node times crowded at the start (t_k = t0 + T (k/N)^3):
+ *  the clock's first placement (a solve of no iteration) moves interior nodes past the old nodes
+ *  that their rank holds, halos included, so their values come from other ranks' nodes; then a
+ *  solve of `iterations` iterations. Both bit for bit. */
+void expect_retimed_across_ranks(pardel::Problem problem, pardel::Options options, long iterations) {
+  problem.clock = pardel::ClockMode::fixed_total_time;
+  pardel::Trajectory guess = pardel::linear_guess(problem);
+  const int N = problem.N;
+  for (int k = 0; k < N; ++k) {
+    const double s = static_cast<double>(k) / N;
+    guess.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * s * s * s;
+  }
+  options.max_iterations = 0;
+  const Both placed = solve_both(problem, options, guess);
+  expect_bit_for_bit(placed);
+  if (world_rank() == 0) {
+    int crossed = 0;  // interior nodes whose new time lies outside the old times of their rank's nodes
+    for (int r = 0; r < world_size(); ++r) {
+      const pardel::mpi::NodeRange range = pardel::mpi::owned_nodes(N, world_size(), r);
+      const double lo = guess.t[static_cast<std::size_t>(std::max(range.first - 1, 0))];
+      const double hi = guess.t[static_cast<std::size_t>(std::min(range.last + 1, N))];
+      for (int k = std::max(range.first, 1); k <= std::min(range.last, N - 1); ++k) {
+        const double t = placed.one_traj.t[static_cast<std::size_t>(k)];
+        crossed += t < lo || t > hi;
+      }
+    }
+    EXPECT_GT(crossed, 0);
+    std::printf("%s: %d of %d interior nodes placed outside their rank's old times\n", problem.model->name, crossed,
+                N - 1);
+  }
+  options.max_iterations = iterations;
+  const Both b = solve_both(problem, options, guess);
+  if (world_rank() == 0)
+    std::printf("%s: %ld iterations, %s, residual %.3g\n", problem.model->name, b.one.iterations,
+                pardel::to_string(b.one.termination), b.one.residual);
+  expect_bit_for_bit(b);
+}
+
+TEST(Clock, FixedTotalTimeNodesMovedAcrossRanksBitForBit) {
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.clock_update_every = 5;
+  options.threads = 1;
+  // Order 1 (slopes from central differences) on 24 nodes: 6 per rank on 4 ranks.
+  expect_retimed_across_ranks(bundled_problem("zermelo_tv", "trapezoid", 1.0, 23, {1, 6}, {6, 2}), options, 150);
+  // Order 2 (the stored velocities as slopes): the spacecraft_sundman scene's model and boundary values.
+  expect_retimed_across_ranks(bundled_problem("spacecraft", "trapezoid(alpha=1)", 0.13761699442396208, 31,
+                                              {-0.00028185006780313756, 0, 0, -0.10294753382194759},
+                                              {0.0020378554360866549, 0.0015651707922623602, -0.019359200263837129,
+                                               0.025205716648293883}),
+                              options, 40);
 }
 
 // ---- Newton: to the tolerance
