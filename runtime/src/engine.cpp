@@ -259,7 +259,45 @@ double action_at(Context& ctx, const std::vector<double>& q) {
   return s;
 }
 
-void update_times(Context& ctx, const std::vector<double>& q) {
+void retime_nodes(const RetimeGrid& old, const double* t_new, int k_first, int k_last, double* q_new) {
+  const int d = old.dim, nc = old.ncoords;
+  const bool has_derivative = d >= 2 * nc;
+  auto t = [&](int j) { return old.t[j - old.j_first]; };
+  auto node = [&](int j) { return old.q + static_cast<std::size_t>(j - old.j_first) * d; };
+  auto slope = [&](int j, int i) {  // d q_i / dt by central differences of the old nodes
+    const int a = std::max(0, j - 1), b = std::min(old.N, j + 1);
+    return (node(b)[i] - node(a)[i]) / (t(b) - t(a));
+  };
+  int j = std::max(old.j_first, 0);
+  const int j_max = std::min(old.j_last, old.N) - 1;  // the last interval whose both ends are given
+  for (int k = k_first; k <= k_last; ++k) {
+    const double tk = t_new[k - k_first];
+    while (j < j_max && t(j + 1) <= tk) ++j;
+    const double dt = t(j + 1) - t(j);
+    const double u = dt > 0 ? std::clamp((tk - t(j)) / dt, 0.0, 1.0) : 0.0;
+    const double u2 = u * u, u3 = u2 * u;
+    const double h00 = 2 * u3 - 3 * u2 + 1, h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2, h11 = u3 - u2;
+    const double a00 = 6 * u2 - 6 * u, a10 = 3 * u2 - 4 * u + 1, a11 = 3 * u2 - 2 * u;  // d/du of the basis
+    const double* a = node(j);
+    const double* b = node(j + 1);
+    double* q = q_new + static_cast<std::size_t>(k - k_first) * d;
+    for (int i = 0; i < d; ++i) {
+      if (has_derivative && i < nc) {
+        q[i] = h00 * a[i] + h10 * a[nc + i] * dt + h01 * b[i] + h11 * b[nc + i] * dt;
+      } else if (has_derivative && i < 2 * nc) {
+        const int c = i - nc;
+        q[i] = dt > 0 ? (a00 * (a[c] - b[c]) + a10 * a[i] * dt + a11 * b[i] * dt) / dt : a[i];
+      } else if (has_derivative) {
+        q[i] = (1 - u) * a[i] + u * b[i];
+      } else {
+        q[i] = h00 * a[i] + h10 * slope(j, i) * dt + h01 * b[i] + h11 * slope(j + 1, i) * dt;
+      }
+    }
+  }
+}
+
+void update_times(Context& ctx, Positions positions) {
+  const std::vector<double>& q = ctx.q;
   if (ctx.clock == ClockMode::none || ctx.model->clock == nullptr) return;
   const int d = ctx.dim, N = ctx.N;
   const double hs = ctx.T / N;
@@ -282,12 +320,24 @@ void update_times(Context& ctx, const std::vector<double>& q) {
       c[kk] = ctx.model->clock(hs, ctx.t[kk], q.data() + kk * d, q.data() + (kk + 1) * d, p);
       total += c[kk];
     }
+    std::vector<double>& t_old = ctx.node_max;  // N+1 scratch
+    if (positions == Positions::follow_times) {
+      t_old = ctx.t;
+      ctx.q_old = ctx.q;
+    }
     ctx.t[0] = ctx.t0;
     for (int k = 0; k < N; ++k) {
       const std::size_t kk = static_cast<std::size_t>(k);
       ctx.t[kk + 1] = ctx.t[kk] + ctx.T * c[kk] / total;
     }
     ctx.t[static_cast<std::size_t>(N)] = ctx.t0 + ctx.T;
+    if (positions == Positions::follow_times) {
+      const RetimeGrid old{t_old.data(), ctx.q_old.data(), 0, N, N, d, ctx.model->ncoords};
+      // Interior nodes only; a component held fixed (is_free 0) keeps its value.
+      retime_nodes(old, ctx.t.data() + 1, 1, N - 1, ctx.q.data() + d);
+      for (std::size_t i = static_cast<std::size_t>(d); i < static_cast<std::size_t>(N) * d; ++i)
+        if (!ctx.is_free[i]) ctx.q[i] = ctx.q_old[i];
+    }
     for (int k = 0; k < N; ++k) {
       const std::size_t kk = static_cast<std::size_t>(k);
       ctx.hk[kk] = ctx.t[kk + 1] - ctx.t[kk];
@@ -319,7 +369,7 @@ bool context_at(const Problem& problem, const Trajectory& trajectory, int thread
       if (problem.clock == ClockMode::fixed_total_time)
         for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
     } else {
-      update_times(ctx, ctx.q);
+      update_times(ctx, Positions::stay);
     }
   }
   return true;

@@ -66,6 +66,7 @@ struct Context {
 
   std::vector<double> q;       ///< current iterate, (N+1)*dim
   std::vector<double> q_next;  ///< next iterate written by a method
+  std::vector<double> q_old;   ///< the iterate before a re-placement of the nodes (fixed_total_time)
 
   // Interval arrays at q (which kernel filled them: `evaluated`).
   std::vector<double> Ld, D1, D2, D11, D12, D22;
@@ -129,8 +130,34 @@ double sum_action(const Context& ctx);
 /** Discrete action at q through the action kernel (parallel evaluation, fixed-order sum). */
 double action_at(Context& ctx, const std::vector<double>& q);
 
-/** Recomputes node times (and kernel steps) from q with the model's clock; no-op without a clock. */
-void update_times(Context& ctx, const std::vector<double>& q);
+/** Whether the positions move with the node times when a clock places the nodes anew. */
+enum class Positions {
+  stay,          ///< each node keeps its values and takes the new time (the trajectory is given as is)
+  follow_times,  ///< fixed_total_time: the trajectory in time is kept, interpolated at the new times
+};
+
+/** Recomputes node times (and kernel steps) from ctx.q with the model's clock; no-op without a
+ *  clock. Under fixed_total_time with Positions::follow_times the interior nodes are moved to the
+ *  new times (retime_nodes), so that a re-placement of the nodes changes the discretization of the
+ *  trajectory and not the trajectory itself; under free_final_time a node is a point of the path
+ *  parameter and keeps its values. */
+void update_times(Context& ctx, Positions positions);
+
+/** Old nodes j_first..j_last (global numbering on a grid of N intervals) of a trajectory: times
+ *  t[j - j_first], values q[(j - j_first) * dim ...]. */
+struct RetimeGrid {
+  const double* t;
+  const double* q;
+  int j_first, j_last, N, dim, ncoords;
+};
+
+/** The trajectory through the old nodes at the times t_new[0 .. k_last - k_first] of new nodes
+ *  k_first..k_last, written to q_new: cubic Hermite in time, with the stored first derivatives as
+ *  slopes when the state holds them (order >= 2; the derivatives are the interpolant's derivative)
+ *  and central differences of the old nodes otherwise. Each new time lies between the old ones of
+ *  nodes j_first and j_last, and the old nodes given reach one node beyond the intervals used on
+ *  each side (for the differences) unless at 0 or N. The same nodes give the same bits on any rank. */
+void retime_nodes(const RetimeGrid& old, const double* t_new, int k_first, int k_last, double* q_new);
 
 /** First node (0..N) with a non-finite value in q, or -1. */
 int first_non_finite_node(const Context& ctx, const std::vector<double>& q);

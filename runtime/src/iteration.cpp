@@ -225,7 +225,7 @@ void Iteration::finish(Termination termination, std::string message) {
   s_.message = std::move(message);
 }
 
-void OneProcess::update_times(Context& ctx) { detail::update_times(ctx, ctx.q); }
+void OneProcess::update_times(Context& ctx) { detail::update_times(ctx, Positions::follow_times); }
 
 void OneProcess::check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) {
   *node = outcome.next_checked ? outcome.next_non_finite_node : first_non_finite_node(ctx, ctx.q_next);

@@ -104,7 +104,10 @@ class Driver : private OwnedContext, public detail::Iteration {
       s_.message = message;
       return false;
     }
-    if (problem_.clock != ClockMode::none) detail::update_times(ctx_, ctx_.q);
+    if (problem_.clock != ClockMode::none) {
+      if (src.t.size() == ctx_.t.size()) ctx_.t = src.t;
+      detail::update_times(ctx_, detail::Positions::follow_times);
+    }
     if (!checked_regular_) {
       checked_regular_ = true;
       if (!detail::lagrangian_regular(ctx_, &message)) {
