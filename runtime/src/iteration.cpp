@@ -28,7 +28,7 @@ bool Iteration::run_level(bool last) {
   const bool clocked = ctx_.clock != ClockMode::none;
   for (;;) {
     if (clocked && level_.since_clock >= options_.clock_update_every) {
-      partition_.update_times(ctx_);
+      partition_.update_times(ctx_, Positions::follow_times);
       method_.times_changed();
       level_.since_clock = 0;
     }
@@ -36,8 +36,9 @@ bool Iteration::run_level(bool last) {
     if (bad >= 0) return non_finite_residual(bad);
     double r = ctx_.residual;
     if (clocked && r <= target_residual() && level_.since_clock > 0) {
-      // Declare convergence only with node times consistent with this trajectory.
-      partition_.update_times(ctx_);
+      // Declare convergence only with node times consistent with this trajectory: the nodes keep
+      // their values (moved along the trajectory, they would no longer be where the clock was read).
+      partition_.update_times(ctx_, Positions::stay);
       method_.times_changed();
       level_.since_clock = 0;
       bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
@@ -225,7 +226,7 @@ void Iteration::finish(Termination termination, std::string message) {
   s_.message = std::move(message);
 }
 
-void OneProcess::update_times(Context& ctx) { detail::update_times(ctx, Positions::follow_times); }
+void OneProcess::update_times(Context& ctx, Positions positions) { detail::update_times(ctx, positions); }
 
 void OneProcess::check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) {
   *node = outcome.next_checked ? outcome.next_non_finite_node : first_non_finite_node(ctx, ctx.q_next);

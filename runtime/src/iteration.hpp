@@ -20,8 +20,8 @@ namespace pardel::detail {
 class Partition {
  public:
   virtual ~Partition() = default;
-  /** Recomputes the node times of ctx from the clock at ctx.q. */
-  virtual void update_times(Context& ctx) = 0;
+  /** Recomputes the node times of ctx from the clock at ctx.q (engine.hpp update_times). */
+  virtual void update_times(Context& ctx, Positions positions) = 0;
   /** From this process's first node with a non-finite residual (-1: none) after an evaluation:
    *  the lowest over all processes, with ctx.residual made the global one. */
   virtual int agree_on_residual(Context& ctx, int local_bad) {
@@ -108,7 +108,7 @@ class Iteration {
 /** The partition of a solve in one process: every node here. */
 class OneProcess final : public Partition {
  public:
-  void update_times(Context& ctx) override;
+  void update_times(Context& ctx, Positions positions) override;
   void check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) override;
   double action(Context& ctx) override;
 };

@@ -5,12 +5,19 @@
  * the returned trajectory and the travel time is their total; under fixed_total_time the steps
  * are proportional to the clock and sum to T. In both, convergence is declared with times
  * consistent with the final trajectory: the DEL residual at the returned times is below tol.
+ * When the clock re-places the nodes under fixed_total_time, the nodes move along the trajectory
+ * (detail::retime_nodes): checked against a known function, with its convergence order.
  * The bundled zermelo_tv (time-varying wind) is solved when the build has it.
  */
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
+#include <vector>
+
+#include "engine.hpp"
 #include "hand_models.hpp"
 #include "pardel/pardel.hpp"
 
@@ -76,6 +83,63 @@ TEST(Clock, FixedTotalTimeStepsFollowTheClockAndSumToT) {
   EXPECT_LE(pardel::residual_norm(p, traj), 1e-10);
   // The steps are not uniform: the solution moves away from x = 0.
   EXPECT_GT(traj.t[p.N] - traj.t[p.N - 1], 1.2 * (traj.t[1] - traj.t[0]));
+}
+
+/** Max error of retime_nodes on q(t) = sin(3t) + t^2 (and, with_derivative, q' stored beside q)
+ *  from n uneven old intervals on [0, 1] to n other uneven ones. */
+double retime_error(int n, bool with_derivative) {
+  const int d = with_derivative ? 2 : 1;
+  auto f = [](double t) { return std::sin(3 * t) + t * t; };
+  auto df = [](double t) { return 3 * std::cos(3 * t) + 2 * t; };
+  std::vector<double> t_old(n + 1), q_old((n + 1) * d), t_new(n + 1);
+  for (int k = 0; k <= n; ++k) {
+    const double s = static_cast<double>(k) / n;
+    t_old[k] = s * s;                             // crowded at the start
+    t_new[k] = std::sin(1.5707963267948966 * s);  // crowded at the end
+    q_old[k * d] = f(t_old[k]);
+    if (with_derivative) q_old[k * d + 1] = df(t_old[k]);
+  }
+  const pardel::detail::RetimeGrid old{t_old.data(), q_old.data(), 0, n, n, d, 1};
+  std::vector<double> q_new((n - 1) * d);
+  pardel::detail::retime_nodes(old, t_new.data() + 1, 1, n - 1, q_new.data());
+  double err = 0;
+  for (int k = 1; k < n; ++k) {
+    err = std::max(err, std::fabs(q_new[(k - 1) * d] - f(t_new[k])));
+    if (with_derivative) err = std::max(err, std::fabs(q_new[(k - 1) * d + 1] - df(t_new[k])));
+  }
+  return err;
+}
+
+TEST(Clock, RetimedNodesFollowTheTrajectoryInTime) {
+  // Cubic Hermite: positions O(h^4) with exact slopes (order >= 2 models store q'), the stored
+  // derivative O(h^3); central-difference slopes on an uneven grid give O(h^2) (order-1 models).
+  const double e1 = retime_error(200, true), e2 = retime_error(400, true);
+  EXPECT_LT(e1, 1e-5);
+  EXPECT_GT(std::log2(e1 / e2), 2.7) << e1 << " " << e2;
+  const double f1 = retime_error(200, false), f2 = retime_error(400, false);
+  EXPECT_LT(f1, 1e-3);
+  EXPECT_GT(std::log2(f1 / f2), 1.8) << f1 << " " << f2;
+}
+
+TEST(Clock, FixedTotalTimeUpdateKeepsTheSolvedTrajectory) {
+  // Solved with the clock, then the nodes re-placed once more from the solution: the trajectory
+  // hardly moves (it did move by O(1) of the step when nodes kept their values at new times).
+  pardel::Problem problem = forced_problem(pardel::ClockMode::fixed_total_time);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.clock_update_every = 3;
+  pardel::Trajectory tr = pardel::linear_guess(problem);
+  const pardel::Summary s = pardel::solve(problem, options, tr);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  pardel::detail::Context ctx;
+  std::string error;
+  ASSERT_TRUE(pardel::detail::context_at(problem, tr, 1, ctx, &error)) << error;
+  const std::vector<double> before = ctx.q;
+  pardel::detail::update_times(ctx, pardel::detail::Positions::follow_times);
+  double moved = 0, step = 0;
+  for (std::size_t k = 0; k < before.size(); ++k) moved = std::max(moved, std::fabs(ctx.q[k] - before[k]));
+  for (std::size_t k = 0; k + 1 < before.size(); ++k) step = std::max(step, std::fabs(before[k + 1] - before[k]));
+  EXPECT_LT(moved, 0.05 * step);
 }
 
 TEST(Clock, WithoutClockTheForcedParticleMatchesItsExactDiscreteSolution) {

@@ -80,6 +80,7 @@ namespace {
 
 using pardel::detail::Context;
 using pardel::detail::Evaluated;
+using pardel::detail::Positions;
 using pardel::detail::StepOutcome;
 using detail::Layout;
 
@@ -259,10 +260,10 @@ void retime_owned_nodes(Local& local, const std::vector<double>& t_old) {
  * continues the sums over its intervals and passes its last two times on), so every addition
  * happens in the one-process order and the times are the same bit for bit. Under
  * fixed_total_time the clock is first evaluated on every rank's intervals and totalled in node
- * order, and the interior nodes then move to their new times (retime_owned_nodes); under
- * free_final_time a node keeps its values.
+ * order, and with Positions::follow_times the interior nodes then move to their new times
+ * (retime_owned_nodes); under free_final_time a node keeps its values.
  */
-void update_times_distributed(Local& local) {
+void update_times_distributed(Local& local, Positions positions) {
   Context& ctx = local.ctx;
   if (ctx.clock == ClockMode::none || ctx.model->clock == nullptr) return;
   const Layout& L = local.layout;
@@ -301,7 +302,8 @@ void update_times_distributed(Local& local) {
     const double send[2] = {ctx.t[static_cast<std::size_t>(Nl - 1)], ctx.t[static_cast<std::size_t>(Nl)]};
     MPI_Send(send, 2, MPI_DOUBLE, L.rank + 1, 104, local.comm);
   }
-  if (ctx.clock == ClockMode::fixed_total_time) retime_owned_nodes(local, t_old);
+  if (ctx.clock == ClockMode::fixed_total_time && positions == Positions::follow_times)
+    retime_owned_nodes(local, t_old);
   for (int j = 0; j < Nl; ++j) {
     const std::size_t jj = static_cast<std::size_t>(j);
     ctx.hk[jj] = ctx.clock == ClockMode::free_final_time ? hs : ctx.t[jj + 1] - ctx.t[jj];
@@ -597,7 +599,7 @@ class DistributedHybrid : public pardel::detail::Method_ {
 class RankPartition final : public pardel::detail::Partition {
  public:
   explicit RankPartition(Local& local) : local_(local) {}
-  void update_times(Context&) override { update_times_distributed(local_); }
+  void update_times(Context&, Positions positions) override { update_times_distributed(local_, positions); }
   int agree_on_residual(Context&, int local_bad) override { return globalize_residual(local_, local_bad); }
   /** Whether no rank's iterate failed; otherwise `outcome` becomes the failure of the lowest failing rank. */
   bool agree_on_outcome(StepOutcome& outcome) override {
@@ -763,7 +765,7 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
   trajectory.t.clear();
   trajectory.t.shrink_to_fit();
   std::unique_ptr<pardel::detail::Method_> method = make_method(options, local);
-  if (problem.clock != ClockMode::none) update_times_distributed(local);
+  if (problem.clock != ClockMode::none) update_times_distributed(local, Positions::follow_times);
   method->reset(local.ctx);
   RankPartition partition(local);
   Driver driver(options, *method, partition, local, summary);
