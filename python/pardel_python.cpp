@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -57,8 +58,24 @@ std::vector<std::string> bundled_names() {
   return names;
 }
 
-/** A bundled name, or a .lag path compiled on first use (the CLI's resolver). */
-const pardel_model* resolve_spec(const std::string& spec) { return pardel::resolve_model(spec); }
+/** pardel.ModelWarning (a UserWarning), set when the module is initialized. */
+PyObject* g_model_warning = nullptr;
+
+/** A bundled name, or a .lag path compiled on first use (the CLI's resolver). The generator's
+ *  warnings about a .lag model (model_warnings: kept with its cache entry, so also when an earlier
+ *  process compiled it) are issued as a pardel.ModelWarning, once per model and process. Every
+ *  caller holds the GIL (models are resolved before a solve or sweep releases it). */
+const pardel_model* resolve_spec(const std::string& spec) {
+  const pardel_model* model = pardel::resolve_model(spec);
+  static std::vector<const pardel_model*> reported;
+  if (model && std::find(reported.begin(), reported.end(), model) == reported.end()) {
+    reported.push_back(model);
+    const std::string warnings = pardel::model_warnings(model);
+    // -1: a warnings filter made it an exception, which propagates (a scene reports it as its error)
+    if (!warnings.empty() && PyErr_WarnEx(g_model_warning, warnings.c_str(), 1) != 0) throw py::error_already_set();
+  }
+  return model;
+}
 
 /** A compiled model as Python sees it; the pointer lives as long as the process. */
 struct ModelHandle {
@@ -417,7 +434,10 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
 }
 
 /** `pardel check`: the certificate, residual and action at a trajectory (the scene's guess when
- *  q is None), as JSON text in the layout of `pardel check --json`. */
+ *  q is None), as JSON text in the layout of `pardel check --json`, whose certificate dictionary
+ *  (app::certificate_json) gains the members of pardel::Certificate it leaves out, so that Python
+ *  sees every one: free_components, intervals_violating (violations_total counts the violations
+ *  listed, at most 100), residual, tol, error, and report (the text `pardel check` prints). */
 std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
   Trajectory trajectory = initial_trajectory(scene, q, t);
   if (!q.is_none()) scene.problem.N = trajectory.N;
@@ -434,7 +454,14 @@ std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
   j["N"] = trajectory.N;
   j["residual"] = residual;
   j["action"] = action;
-  j["certificate"] = app::certificate_json(certificate, static_cast<std::size_t>(-1));
+  nlohmann::ordered_json c = app::certificate_json(certificate, static_cast<std::size_t>(-1));
+  c["free_components"] = certificate.free_components;
+  c["intervals_violating"] = certificate.intervals_violating;
+  c["residual"] = certificate.residual;
+  c["tol"] = certificate.tol;
+  c["error"] = certificate.error;
+  c["report"] = certificate.report();
+  j["certificate"] = std::move(c);
   return j.dump();
 }
 
@@ -638,6 +665,13 @@ PYBIND11_MODULE(_pardel, m) {
   static py::exception<InputError> input_error(m, "PardelError", PyExc_ValueError);
   static py::exception<SceneError> scene_error(m, "SceneError", input_error.ptr());
   static py::exception<ModelLoadError> model_error(m, "ModelError", input_error.ptr());
+  g_model_warning = PyErr_NewExceptionWithDoc(
+      "pardel.ModelWarning",
+      "A warning of the generator about a model compiled from a .lag file (a W = d2L/dq'dq' singular "
+      "on part of the domain, a discretization that is not regular, ...), as pardel-gen prints it.",
+      PyExc_UserWarning, nullptr);
+  if (!g_model_warning) throw py::error_already_set();
+  m.attr("ModelWarning") = py::reinterpret_borrow<py::object>(g_model_warning);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

@@ -16,7 +16,7 @@ import os
 import numpy as np
 
 from . import _pardel
-from ._pardel import ModelError, PardelError, SceneError
+from ._pardel import ModelError, ModelWarning, PardelError, SceneError
 
 # An installed package compiles .lag files with the installed pardel-gen and render script, which
 # `cmake --install` names in _installed.py; the build tree's package uses the build tree's.
@@ -28,7 +28,7 @@ if _INSTALLED_TOOLCHAIN:
     _pardel.set_loader_toolchain(**_INSTALLED_TOOLCHAIN)
 
 __all__ = [
-    "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError",
+    "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError", "ModelWarning",
     "model", "models", "solve", "load_scene", "solve_scene", "check", "kernels", "lag_cache_dir",
     "sweep", "SweepResult", "SweepVariant", "SweepSolution",
 ]
@@ -315,7 +315,9 @@ def sweep(path, overrides=(), *, threads=None, out=None):
 
 def check(scene, q=None):
     """`pardel check`: the seed's convergence certificate at a trajectory (q an array or a Result;
-    None: the scene's initial guess), as the dictionary of `pardel check --json`."""
+    None: the scene's initial guess), as the dictionary of `pardel check --json`; its "certificate"
+    also holds free_components, intervals_violating, residual, tol, error and report (the text of
+    `pardel check`), the members of pardel::Certificate that --json leaves out."""
     arr, t = _guess_arrays(q)
     return json.loads(_pardel.check_scene(scene._core, arr, t))
 

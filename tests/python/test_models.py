@@ -1,6 +1,11 @@
 """Models from Python: bundled names, .lag files and .lag text (compiled through the model loader),
 their description, kernels checked against finite differences of Ld, and .lag errors raised with
-FILE:LINE:COL as the command line prints them."""
+FILE:LINE:COL as the command line prints them; the generator's warnings as pardel.ModelWarning."""
+import os
+import subprocess
+import sys
+import warnings
+
 import numpy as np
 import pytest
 
@@ -69,3 +74,48 @@ def test_invalid_lag_file_in_solve_is_a_scene_error(tmp_path):
 def test_unknown_model_lists_the_compiled_ones():
     with pytest.raises(pardel.ModelError, match=r"unknown model 'fuel_nab' \(compiled models: .*fuel_nav"):
         pardel.model("fuel_nab")
+
+
+# W = d2L/dq'dq' = diag(s, 1): singular on the line s = 0 only; pardel-gen accepts the model with
+# a warning, which must reach the user although the model compiles.
+FOLD_LAG = """\
+# W = diag(s, 1): singular on the line s = 0 only
+model fold_plane
+coords r s
+L = 1/2*(s*r'^2 + s'^2) - 1/2*(r^2 + s^2)
+discretizations midpoint
+"""
+FOLD_WARNING = ("fold.lag:4:5: warning: model 'fold_plane': W = d2L/dq'dq' (the Hessian of L in r', s') is "
+                "singular on part of the domain: det W = s changes sign between sample points and vanishes "
+                "near s = 0")
+
+
+def test_generator_warnings_are_issued_once_per_model(tmp_path):
+    path = tmp_path / "fold.lag"
+    path.write_text(FOLD_LAG)
+    with pytest.warns(pardel.ModelWarning) as record:
+        m = pardel.model(str(path))
+    assert m.name == "fold_plane"
+    messages = [str(w.message) for w in record if issubclass(w.category, pardel.ModelWarning)]
+    assert len(messages) == 1
+    assert messages[0].startswith("%s:4:5: warning: " % path)
+    assert FOLD_WARNING in messages[0]
+    assert "\n  L = 1/2*(s*r'^2 + s'^2) - 1/2*(r^2 + s^2)\n      ^" in messages[0]
+    assert issubclass(pardel.ModelWarning, UserWarning)
+    # once per model and process: solving with it warns no more
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", pardel.ModelWarning)
+        r = pardel.solve(path, q0=[0, 1], qN=[0.5, 1.5], T=1.0, N=20)
+    assert r.status == "converged"
+    # a new process finds the model in the cache and warns again
+    code = "import warnings, pardel; warnings.simplefilter('always'); pardel.model(%r)" % str(path)
+    done = subprocess.run([sys.executable, "-c", code], env=os.environ.copy(), capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.count("ModelWarning: %s:4:5: warning: model 'fold_plane'" % path) == 1, done.stderr
+
+
+def test_a_regular_model_issues_no_warning():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", pardel.ModelWarning)
+        calm = pardel.model("model calm_line\ncoords x\nL = x'^2/2 - x^2/2\n")
+    assert calm.name == "calm_line"

@@ -1,8 +1,12 @@
 """Scenes from Python: load_scene + solve_scene give what pardel.solve gives for the same problem,
 overrides apply, and check() returns the certificate of `pardel check`."""
+import json
+import math
 import os
+import subprocess
 
 import numpy as np
+import pytest
 
 import pardel
 
@@ -53,3 +57,75 @@ def test_check_returns_the_certificate(tmp_path, spring_lag):
     assert c["residual"] < 1e-8
     assert c["certificate"]["hessian_positive_definite"] is True
     assert c["certificate"]["inertia_positive"] == 2 * 29
+
+
+def spring_jacobi_gap(omega, T, N):
+    """1 - rho of block Jacobi for the midpoint rule of L = x'^2/2 - omega^2 x^2/2 on N intervals,
+    both ends fixed: H is tridiagonal Toeplitz, diagonal 2 (1/h - h w^2/4), off-diagonal
+    -(1/h + h w^2/4), so J = -D^{-1} C has eigenvalues (1/h + h w^2/4)/(1/h - h w^2/4) cos(k pi/N)."""
+    h = T / N
+    a, b = 1 / h + h * omega ** 2 / 4, 1 / h - h * omega ** 2 / 4
+    return 1 - a / b * math.cos(math.pi / N)
+
+
+def test_check_reports_every_member_of_the_certificate(tmp_path, spring_lag):
+    # The spring's coordinates decouple: J's spectral radius is that of x (a = 1.2 > b = 0.7),
+    # known in closed form; H is the same at every trajectory (L is quadratic).
+    scene_path, _ = write_scene(tmp_path, spring_lag)
+    scene = pardel.load_scene(scene_path)
+    r = pardel.solve_scene(scene)
+    c = pardel.check(scene, r)["certificate"]
+    truth = spring_jacobi_gap(1.2, 2.0, 30)
+    assert spring_jacobi_gap(0.7, 2.0, 30) > truth > 0
+    assert c["spectral_radius_resolved"] is True
+    assert c["spectral_radius_converged"] is True
+    assert abs(c["jacobi_one_minus_rho"] - truth) <= 1e-8 * truth
+    assert c["jacobi_spectral_radius"] == pytest.approx(1 - truth, abs=1e-12)
+    # the round-off level of 1 - rho: a few units of eps times |y|^T |H| |y| ~ 2
+    assert 0 < c["jacobi_one_minus_rho_roundoff"] < 1e-13
+    assert c["free_components"] == 2 * 29
+    # Every interval Hessian [[alpha, beta], [beta, alpha]], alpha = 1/h - h w^2/4 = A_k = B_k,
+    # beta = -1/h - h w^2/4, per coordinate, has the eigenvalue alpha + beta = -h w^2/2 < 0: the
+    # theorem's hypothesis fails on the 28 intervals whose two nodes are both free (the end
+    # intervals are restricted to one node, 1 x 1 blocks alpha > 0), though H is positive definite.
+    h = 2.0 / 30
+    assert c["intervals_violating"] == 28 and c["violations_total"] == 28
+    assert [v["k"] for v in c["violations"]] == list(range(1, 29))
+    for v in c["violations"]:
+        assert v["hessian_psd"] is False and v["A_pd"] is True and v["B_pd"] is True
+        assert v["min_eig_hessian"] == pytest.approx(-h * 1.2 ** 2 / 2, rel=1e-9)
+        assert v["min_eig_A"] == pytest.approx(1 / h - h * 1.2 ** 2 / 4, rel=1e-9)  # the x row of D11
+        assert v["min_eig_B"] == v["min_eig_A"]
+    assert c["all_intervals_psd"] is False and c["all_A_pd"] is True and c["theorem_holds"] is False
+    assert c["hessian_positive_definite"] is True and c["inertia_negative"] == c["inertia_zero"] == 0
+    assert c["error"] == ""
+    assert c["tol"] == 1e-10  # certify's default target
+    assert c["residual"] < 1e-8
+    assert c["expected_iterations"] == 0  # the residual is already below tol
+    assert "(58 free components)" in c["report"]
+    assert "28 interval(s) violate a hypothesis" in c["report"]
+    assert "(1 - rho = %.6e, round-off level" % c["jacobi_one_minus_rho"] in c["report"]
+
+
+def test_check_agrees_with_the_command_line(tmp_path, spring_lag):
+    cli = os.environ.get("PARDEL_CLI")
+    if not cli:
+        pytest.skip("PARDEL_CLI (the pardel command line) is not set")
+    scene_path, _ = write_scene(tmp_path, spring_lag)
+    from_python = pardel.check(pardel.load_scene(scene_path))
+    done = subprocess.run([cli, "check", str(scene_path), "--json"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    from_cli = json.loads(done.stdout)
+    assert from_python["N"] == from_cli["N"] and from_python["residual"] == from_cli["residual"]
+    for key, value in from_cli["certificate"].items():
+        assert from_python["certificate"][key] == value, key
+    for key in ("jacobi_one_minus_rho", "jacobi_one_minus_rho_roundoff", "spectral_radius_resolved"):
+        assert key in from_cli["certificate"]
+    truth = spring_jacobi_gap(1.2, 2.0, 30)
+    assert abs(from_cli["certificate"]["jacobi_one_minus_rho"] - truth) <= 1e-8 * truth
+    # what the dictionary of `pardel check --json` leaves out, Python adds
+    extra = set(from_python["certificate"]) - set(from_cli["certificate"])
+    assert extra == {"free_components", "intervals_violating", "residual", "tol", "error", "report"}
+    text = subprocess.run([cli, "check", str(scene_path)], capture_output=True, text=True)
+    assert text.returncode == 0, text.stderr
+    assert text.stdout.endswith(from_python["certificate"]["report"])

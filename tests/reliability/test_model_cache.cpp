@@ -5,7 +5,8 @@
 // the cache, damaged entries (truncated or missing shared object, missing model name), a cache
 // folder that is a file, the relocation variables, and an edited file. Each must end with the
 // right kernels or a message (exit status 2), a cache holding only complete entries, no crash, no
-// hang.
+// hang. The generator's warnings about a model it accepts reach stderr, from a fresh build and from
+// the cache, once per run.
 #include <gtest/gtest.h>
 
 #include <csignal>
@@ -187,6 +188,77 @@ TEST_F(ModelCache, EditedFileIsCompiledAgain) {
   EXPECT_EQ(o.status, 0) << o.output;
   EXPECT_EQ(o.output.find(kExpectedLd), std::string::npos) << "the old kernels were used: " << o.output;
   EXPECT_EQ(entries(cache_).size(), 2u);
+}
+
+// A model whose W = d2L/dq'dq' = diag(s, 1) is singular on the line s = 0 only: the generator
+// accepts it with a warning, which must reach the user although the build succeeds.
+const std::string kFoldModel =
+    "# W = diag(s, 1): singular on the line s = 0 only\n"
+    "model fold_plane\n"
+    "coords r s\n"
+    "L = 1/2*(s*r'^2 + s'^2) - 1/2*(r^2 + s^2)\n"
+    "discretizations midpoint\n";
+const char* kFoldWarning =
+    "fold.lag:4:5: warning: model 'fold_plane': W = d2L/dq'dq' (the Hessian of L in r', s') is singular on "
+    "part of the domain: det W = s changes sign between sample points and vanishes near s = 0";
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+std::vector<std::string> fold_kernel_args(const fs::path& lag) {
+  return {"kernels", "--model", lag.string(), "--disc", "midpoint", "--h", "0.5", "--t0", "0", "--t1", "0.5",
+          "--q0", "0,1", "--q1", "0.5,1.25"};
+}
+
+TEST_F(ModelCache, GeneratorWarningsAreReportedOnBuildAndOnReuse) {
+  const fs::path fold = dir_ / "fold.lag";
+  write_text(fold, kFoldModel);
+  const Outcome built = run_pardel(fold_kernel_args(fold), dir_ / "built.log", in_cache());
+  ASSERT_EQ(built.status, 0) << built.output;
+  EXPECT_EQ(count(built.output, kFoldWarning), 1u) << built.output;
+  EXPECT_NE(built.output.find(fold.string() + ":4:5: warning: "), std::string::npos) << "the file: " << built.output;
+  EXPECT_NE(built.output.find("\n  L = 1/2*(s*r'^2 + s'^2) - 1/2*(r^2 + s^2)\n      ^\n"), std::string::npos)
+      << "the source line and caret: " << built.output;
+  EXPECT_NE(built.output.find("\"Ld\": "), std::string::npos) << built.output;
+  const auto names = entries(cache_);
+  ASSERT_EQ(names.size(), 1u);
+  EXPECT_NE(read_text(cache_ / names[0] / "warnings.txt").find(kFoldWarning), std::string::npos);
+
+  // From the cache: the same warning, once.
+  const Outcome reused = run_pardel(fold_kernel_args(fold), dir_ / "reused.log", in_cache());
+  ASSERT_EQ(reused.status, 0) << reused.output;
+  EXPECT_EQ(count(reused.output, kFoldWarning), 1u) << reused.output;
+
+  // An entry written before warnings.txt was kept: the warning is read from the generator's log.
+  fs::remove(cache_ / names[0] / "warnings.txt");
+  const Outcome old_entry = run_pardel(fold_kernel_args(fold), dir_ / "old_entry.log", in_cache());
+  ASSERT_EQ(old_entry.status, 0) << old_entry.output;
+  EXPECT_EQ(count(old_entry.output, kFoldWarning), 1u) << old_entry.output;
+  EXPECT_EQ(entries(cache_).size(), 1u);
+}
+
+TEST_F(ModelCache, SolveReportsTheGeneratorsWarningOnce) {
+  const fs::path fold = dir_ / "fold.lag";
+  write_text(fold, kFoldModel);
+  const fs::path scene = dir_ / "fold.toml";
+  write_text(scene,
+             "model = \"fold.lag\"\ndiscretization = \"midpoint\"\n[grid]\nT = 1.0\nN = 20\n"
+             "[boundary]\nq0 = [0, 1]\nqN = [0.5, 1.5]\n");
+  const Outcome o = run_pardel({"solve", scene.string(), "--out", (dir_ / "out").string(), "--threads", "1",
+                                "--no-plot", "--quiet"},
+                               dir_ / "solve.log", in_cache());
+  EXPECT_EQ(o.status, 0) << o.output;
+  EXPECT_EQ(count(o.output, kFoldWarning), 1u) << o.output;
+}
+
+TEST_F(ModelCache, ARegularModelPrintsNoWarning) {
+  const Outcome o = kernels(in_cache());
+  ASSERT_EQ(o.status, 0) << o.output;
+  EXPECT_EQ(o.output.find("warning"), std::string::npos) << o.output;
+  expect_one_complete_entry(cache_);
 }
 
 }  // namespace

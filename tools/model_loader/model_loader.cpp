@@ -1,4 +1,5 @@
-// Resolves models by name or compiles a .lag file into a cached shared object and loads it.
+// Resolves models by name or compiles a .lag file into a cached shared object and loads it; the
+// generator's warnings are kept with the cache entry and handed to callers by model_warnings.
 #include "pardel/model_loader.hpp"
 
 #include <dlfcn.h>
@@ -130,6 +131,8 @@ void build_into(const fs::path& lag, const fs::path& dir, const LoaderToolchain&
                    lag.filename().string()},
                   log) != 0)
     fail("pardel-gen failed on " + lag.string(), true);
+  // What the generator printed on success is its warnings; kept with the entry for every load.
+  std::ofstream(tmp / "warnings.txt") << (fs::exists(log) ? trim(read_file(log)) : std::string());
   if (run_program({tools.python, tools.render_script, ir.string(), "--out-dir", tmp.string()},
                   log) != 0)
     fail("rendering the kernels of " + lag.string() + " failed");
@@ -149,7 +152,76 @@ void build_into(const fs::path& lag, const fs::path& dir, const LoaderToolchain&
 }
 #endif
 
+/**
+ * The generator's warnings kept with the cache entry `dir`: warnings.txt, or, in an entry written
+ * before it was kept, the generator's diagnostics at the head of log.txt (each "...: warning:
+ * model '...'" line with the source line and caret under it).
+ */
+std::string cached_warnings(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir / "warnings.txt", ec)) return trim(read_file(dir / "warnings.txt"));
+  if (!fs::exists(dir / "log.txt", ec)) return {};
+  std::istringstream log(read_file(dir / "log.txt"));
+  std::string line, out;
+  bool inside = false;
+  while (std::getline(log, line)) {
+    if (line.find(": warning: model '") != std::string::npos) {
+      inside = true;
+    } else if (!inside || line.empty() || line[0] != ' ') {
+      inside = false;
+      continue;
+    }
+    out += line + "\n";
+  }
+  return trim(out);
+}
+
+/**
+ * `warnings` with the file of each of the generator's diagnostics ("FILE:LINE:COL: warning: model
+ * ...") replaced by `path`: one cache entry serves every copy of the same text, and its warnings
+ * name the file it was first compiled from.
+ */
+std::string relocated(const std::string& warnings, const std::string& path) {
+  std::istringstream in(warnings);
+  std::string line, out;
+  while (std::getline(in, line)) {
+    const std::size_t w = line.find(": warning: model '");
+    if (w != std::string::npos) {
+      std::size_t p = w;  // back over ":LINE:COL" to the colon after FILE
+      int colons = 0;
+      while (p > 0) {
+        const char c = line[p - 1];
+        if (c == ':') {
+          if (++colons == 2) {
+            --p;
+            break;
+          }
+        } else if (c < '0' || c > '9') {
+          break;
+        }
+        --p;
+      }
+      if (colons == 2) line = path + line.substr(p);
+    }
+    out += line + "\n";
+  }
+  return trim(out);
+}
+
+std::mutex warnings_mutex;
+std::map<const pardel_model*, std::string>& warnings_by_model() {
+  static std::map<const pardel_model*, std::string> warnings;
+  return warnings;
+}
+
 }  // namespace
+
+std::string model_warnings(const pardel_model* model) {
+  std::lock_guard<std::mutex> lock(warnings_mutex);
+  const auto& warnings = warnings_by_model();
+  const auto it = warnings.find(model);
+  return it == warnings.end() ? std::string() : it->second;
+}
 
 LoaderToolchain loader_toolchain() {
 #ifdef PARDEL_LOADER_GEN
@@ -248,6 +320,10 @@ const pardel_model* resolve_model(const std::string& name_or_path) {
     build_into(lag, dir, tools);
     descriptor = load(&why);
     if (!descriptor) throw ModelLoadError(why);
+  }
+  {
+    std::lock_guard<std::mutex> warnings_lock(warnings_mutex);
+    warnings_by_model()[descriptor] = relocated(cached_warnings(dir), lag.string());
   }
   loaded.emplace(key, descriptor);
   return descriptor;

@@ -66,11 +66,20 @@ bool looks_like_path(const std::string& spec) {
   return spec.find('/') != std::string::npos || (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
 }
 
-/** A bundled name (nullptr if unknown) or a .lag path (compiled on first use when the loader is linked). */
+/** A bundled name (nullptr if unknown) or a .lag path (compiled on first use when the loader is
+ *  linked). The generator's warnings about a .lag model (kept with its cache entry, so also when it
+ *  was compiled by an earlier run) go to stderr, once per model, on rank 0 alone under mpirun. */
 const pardel_model* resolve_model_spec(const std::string& spec) {
   if (!looks_like_path(spec)) return find_model(spec);
 #ifdef PARDEL_HAVE_MODEL_LOADER
-  return pardel::resolve_model(spec);
+  const pardel_model* model = pardel::resolve_model(spec);
+  static std::vector<const pardel_model*> reported;
+  if (model && std::find(reported.begin(), reported.end(), model) == reported.end()) {
+    reported.push_back(model);
+    const std::string warnings = pardel::model_warnings(model);
+    if (!warnings.empty() && pardel::mpi::world_rank() == 0) std::cerr << warnings << "\n" << std::flush;
+  }
+  return model;
 #else
   throw std::runtime_error("this build cannot load .lag files (no model loader); use a bundled model");
 #endif

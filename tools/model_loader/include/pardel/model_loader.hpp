@@ -29,6 +29,16 @@ class ModelLoadError : public std::runtime_error {
  */
 const pardel_model* resolve_model(const std::string& name_or_path);
 
+/**
+ * The warnings pardel-gen printed when it generated `model` from its .lag file, as it prints them
+ * ("FILE:LINE:COL: warning: model 'NAME': ..." with the source line and a caret; FILE is the path
+ * resolve_model was given), one diagnostic after another; empty for a bundled model, a model without warnings
+ * or a pointer resolve_model did not return. They are kept with the cache entry, so a model loaded
+ * from the cache has them too. The loader prints nothing: its callers report them (the command
+ * line on stderr, the Python module as a pardel.ModelWarning), once per model and process.
+ */
+std::string model_warnings(const pardel_model* model);
+
 /** True when this build can compile .lag files at run time (pardel-gen and a compiler found). */
 bool can_compile_lag_files();
 
