@@ -1,9 +1,9 @@
 /**
  * @file solve.cpp
- * The solve in one process, for every method: validation, coarse-to-fine refinement (levels,
- * nested iteration's extrapolated starts), resume and warm starts, the result and the point
- * assessment, around the iteration at each level (iteration.hpp: node-time updates, stopping
- * rules, history). A method only supplies evaluate/iterate.
+ * The solve in one process, for every method: validation, the loop over the levels of
+ * coarse-to-fine refinement (levels.hpp: which grids, where each starts), resume and warm starts,
+ * the result and the point assessment, around the iteration at each level (iteration.hpp:
+ * node-time updates, stopping rules, history). A method only supplies evaluate/iterate.
  */
 #include <algorithm>
 #include <chrono>
@@ -15,62 +15,12 @@
 #include "assessment.hpp"
 #include "engine.hpp"
 #include "iteration.hpp"
+#include "levels.hpp"
 
 namespace pardel {
 namespace {
 
 using detail::Context;
-
-/** Whether every knot lies on an interior node of the uniform grid with n intervals. */
-bool knots_on_grid(const Problem& problem, int n) {
-  for (const Knot& knot : problem.knots) {
-    const double s = (knot.t - problem.t0) / problem.T * n;
-    const long k = std::lround(s);
-    if (std::fabs(s - static_cast<double>(k)) > 1e-9 * std::max(1.0, std::fabs(s)) || k <= 0 || k >= n) return false;
-  }
-  return true;
-}
-
-/** The coarsest grid of the automatic method's grid sequencing, and the ratio of successive grids.
- *  Each level takes one Newton step from the extrapolated coarser solution on well-posed problems,
- *  so the levels below N cost 1/(kAutoRatio - 1) of the finest one: a third at ratio 4, against as
- *  much as the finest level at ratio 2 (docs/benchmarks.md has the measurements). */
-constexpr int kAutoCoarseN = 200;
-constexpr int kAutoRatio = 4;
-
-/** Grid sequencing of the automatic method: N, N/4, N/16, ... (each rounded up to a grid that
- *  holds the knots) down to between kAutoCoarseN and kAutoRatio kAutoCoarseN, coarsest first;
- *  {N} when N <= kAutoRatio kAutoCoarseN. */
-std::vector<int> automatic_levels(const Problem& problem) {
-  std::vector<int> down{problem.N};
-  int n = problem.N;
-  while (n > kAutoRatio * kAutoCoarseN) {
-    int next = (n + kAutoRatio - 1) / kAutoRatio;
-    while (next < n && !knots_on_grid(problem, next)) ++next;
-    if (next >= n) break;
-    down.push_back(next);
-    n = next;
-  }
-  return std::vector<int>(down.rbegin(), down.rend());
-}
-
-/** Grid sizes of coarse-to-fine refinement, ending at problem.N. */
-std::vector<int> refinement_levels(const Problem& problem, const Options& options, bool automatic) {
-  std::vector<int> levels;
-  const int N = problem.N;
-  if (automatic && options.refine_start_N <= 0) return automatic_levels(problem);
-  if (options.refine_start_N <= 0 || options.refine_start_N >= N) return {N};
-  int n = options.refine_start_N;
-  while (n < N && !knots_on_grid(problem, n)) ++n;
-  while (n < N) {
-    levels.push_back(n);
-    int next = std::max(n + 1, static_cast<int>(std::ceil(n * options.refine_factor)));
-    while (next < N && !knots_on_grid(problem, next)) ++next;
-    n = next;
-  }
-  levels.push_back(N);
-  return levels;
-}
 
 /** Owns the context of a one-process solve (a base, so that it exists before Iteration's). */
 struct OwnedContext {
@@ -225,22 +175,6 @@ class Driver : private OwnedContext, public detail::Iteration {
   bool checked_regular_ = false;
 };
 
-/**
- * The start of a finer level of nested iteration: the two previous levels' solutions resampled to
- * N and extrapolated in h = T/N under the discretization's error model q(h) = q* + C h^p, i.e.
- * q_N = q_c + (q_c - q_cc) (h^p - h_c^p) / (h_c^p - h_cc^p). Fixed values (boundaries, knots) agree
- * on every level and stay exact.
- */
-Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, const Trajectory& coarser, int N) {
-  Trajectory start = resample(problem, coarse, N);
-  const Trajectory other = resample(problem, coarser, N);
-  const double p = problem.discretization->consistency_order;
-  const double hf = std::pow(1.0 / N, p), hc = std::pow(1.0 / coarse.N, p), hcc = std::pow(1.0 / coarser.N, p);
-  const double w = (hf - hc) / (hc - hcc);
-  for (std::size_t i = 0; i < start.q.size(); ++i) start.q[i] += w * (start.q[i] - other.q[i]);
-  return start;
-}
-
 std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, std::string* message) {
   switch (options.method) {
     case Method::jacobi: return detail::make_jacobi(options, dim);
@@ -332,7 +266,7 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
     summary.message = error;
     return summary;
   }
-  const std::vector<int> levels = refinement_levels(problem, options, automatic);
+  const std::vector<int> levels = detail::refinement_levels(problem, options, automatic);
   if (resume || warm) {
     if (!check_state(problem, options, resume ? *resume : *warm, levels, &error)) {
       summary.termination = Termination::invalid_input;
@@ -342,11 +276,8 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   }
   Driver driver(problem, options, *method, summary);
   driver.reserve(levels.back());
-  // Newton's nested iteration starts a level from the extrapolation of the solutions of the two
-  // levels before it (both converged to tol); not under a clock, whose node times differ per level.
-  const bool extrapolate = options.method == Method::newton && problem.clock == ClockMode::none;
-  Trajectory previous_level, coarser_level;  // solutions of levels l-1 and l-2 (N = 0: none)
-  if (resume) previous_level = resume->previous_level;
+  detail::LevelStarts starts(problem, options);
+  if (resume) starts.previous() = resume->previous_level;
   std::size_t l = 0;
   if (warm)  // the first level at or above the state's N
     while (l + 1 < levels.size() && levels[l] < warm->N) ++l;
@@ -359,12 +290,9 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
     } else if (warm && l == first_level) {
       entered = driver.enter_level(warm->trajectory, levels[l]);
       if (entered) driver.continue_count(*warm);
-    } else if (previous_level.N == 0) {
-      entered = driver.enter_level(trajectory, levels[l]);
-    } else if (extrapolate && coarser_level.N > 0 && previous_level.N > coarser_level.N) {
-      entered = driver.enter_level(extrapolated_start(problem, previous_level, coarser_level, levels[l]), levels[l]);
     } else {
-      entered = driver.enter_level(previous_level, levels[l]);
+      entered = starts.enter(trajectory, levels[l],
+                             [&driver](const Trajectory& from, int N) { return driver.enter_level(from, N); });
     }
     if (!entered) {
       summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -373,11 +301,7 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
     const bool settled = driver.run_level(last);
     if (settled && !last) {
       const Context& ctx = driver.context();
-      coarser_level = std::move(previous_level);
-      previous_level.N = ctx.N;
-      previous_level.dim = ctx.dim;
-      previous_level.t = ctx.t;
-      previous_level.q = ctx.q;
+      starts.settled(Trajectory{ctx.N, ctx.dim, ctx.t, ctx.q});
       continue;
     }
     break;
@@ -385,7 +309,7 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   driver.write_result(trajectory);
   if (summary.termination == Termination::interrupted) {
     driver.capture(summary.state, static_cast<int>(l));
-    if (extrapolate) summary.state.previous_level = previous_level;
+    if (starts.extrapolates()) summary.state.previous_level = starts.previous();
   }
   // What the returned point is: from Newton's factorization at a minimum where it stopped, else
   // from a new one, the method's storage released first so as not to add to the peak memory.
@@ -394,8 +318,7 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
     detail::assess(driver.context(), summary.point);
   }
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (summary.termination != Termination::converged && trajectory.N != problem.N)
-    summary.message += " (stopped at the refinement level N = " + std::to_string(trajectory.N) + ")";
+  detail::note_stopped_level(problem, trajectory.N, summary);
   if (warm)
     summary.message += std::string(" (warm start from iteration ") + std::to_string(warm->iteration) + " of " +
                        to_string(warm->method) + " at N = " + std::to_string(warm->N) + ")";

@@ -4,7 +4,9 @@
  * same run (run by mpirun on 2 and 3 ranks, the clock tests also on 4): the seed's Jacobi methods
  * bit for bit (a fixed number of iterations and to convergence, with damping, knots, clocks and
  * threads inside the ranks; under fixed_total_time also when the clock moves nodes across ranks),
- * Newton and hybrid to the tolerance, the halo exchange and the rank-order sum, refusals, and a
+ * Newton and hybrid to the tolerance, the levels of refinement and of the automatic method's grid
+ * sequencing (those of one process, from the first that fits the ranks), the halo exchange and the
+ * rank-order sum, refusals, and a
  * NaN or an interruption on one rank ending every rank. The
  * acceptance test (LargeGrid.*: pendulum at N = 10^6) runs separately under a ctest label.
  */
@@ -98,6 +100,14 @@ double max_abs_difference(const std::vector<double>& a, const std::vector<double
   double m = 0;
   for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
   return m;
+}
+
+/** The grids of the levels a solve ran, in order (the N of its history records). */
+std::vector<int> level_Ns(const pardel::Summary& s) {
+  std::vector<int> levels;
+  for (const pardel::IterationRecord& rec : s.history)
+    if (levels.empty() || levels.back() != rec.N) levels.push_back(rec.N);
+  return levels;
 }
 
 // ---- the decomposition itself
@@ -241,6 +251,27 @@ TEST(Clock, FixedTotalTimeBitForBit) {
   expect_bit_for_bit(b);
 }
 
+TEST(Clock, FixedTotalTimeRefinementBitForBit) {
+  // Levels 15, 30, 60 (4 nodes per rank on 4 ranks at the first): each level starts from the
+  // previous level's solution and node times, gathered on every rank, as in one process.
+  auto problem = bundled_problem("zermelo_tv", "trapezoid", 1.0, 60, {1, 6}, {6, 2});
+  problem.clock = pardel::ClockMode::fixed_total_time;
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.refine_start_N = 15;
+  options.refine_factor = 2;
+  options.clock_update_every = 7;
+  options.max_iterations = 2000;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  if (world_rank() == 0)
+    std::printf("%ld iterations, %s, residual %.3g\n", b.one.iterations, pardel::to_string(b.one.termination),
+                b.one.residual);
+  EXPECT_EQ(level_Ns(b.one), (std::vector<int>{15, 30, 60}));
+  EXPECT_EQ(level_Ns(b.dist), level_Ns(b.one));
+  expect_bit_for_bit(b);
+}
+
 /** `problem` from its linear guess with node times crowded at the start (t_k = t0 + T (k/N)^3):
  *  the clock's first placement (a solve of no iteration) moves interior nodes past the old nodes
  *  that their rank holds, halos included, so their values come from other ranks' nodes; then a
@@ -343,6 +374,103 @@ TEST(Hybrid, FuelNavAgreesToTheTolerance) {
   expect_newton_agrees(b, options.tol, 1e-7);
 }
 
+// ---- levels: coarse-to-fine refinement and the automatic method's grid sequencing, as in one process
+
+TEST(Levels, JacobiNewtonRefinementWithKnotsBitForBit) {
+  // Every level's solution is gathered on every rank and resampled there as in one process, so the
+  // seed's method stays bit for bit across levels: 30, 60, 120 (grids that hold the knots).
+  const auto problem = interp_fuel(120);
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.refine_start_N = 30;
+  options.refine_factor = 2;
+  options.max_iterations = 4000;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  EXPECT_EQ(level_Ns(b.one), (std::vector<int>{30, 60, 120}));
+  EXPECT_EQ(level_Ns(b.dist), level_Ns(b.one));
+  expect_bit_for_bit(b);
+}
+
+TEST(Levels, NewtonRefinementAgreesToTheTolerance) {
+  // Levels 50, 100, 200: the last starts from the extrapolation of the two before it.
+  const auto problem = fuel_nav(200);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.refine_start_N = 50;
+  options.refine_factor = 2;
+  options.tol = 1e-10;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  EXPECT_EQ(level_Ns(b.one), (std::vector<int>{50, 100, 200}));
+  EXPECT_EQ(level_Ns(b.dist), level_Ns(b.one));
+  expect_newton_agrees(b, options.tol, 1e-7);  // as Newton.FuelNavAgreesToTheTolerance on one grid
+}
+
+TEST(Levels, AutomaticSequencesGridsAsInOneProcess) {
+  // N = 12800: the automatic method's levels 800, 3200, 12800 (the finest from the extrapolation).
+  // The pendulum of LargeGrid.*, well conditioned: both iterates lie within |H^{-1}|_inf |r|_inf of
+  // the discrete solution, |H^{-1}|_inf <= T^2 / (8 h) / (1 - g T^2 / pi^2) for this Hessian.
+  const int N = 12800;
+  const double T = 0.5, g = 9.81, h = T / N;
+  const auto problem = bundled_problem("pendulum", "midpoint", T, N, {0.0}, {1.0});
+  pardel::Options options;  // Method::automatic, rtol
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  ASSERT_EQ(b.one.termination, pardel::Termination::converged) << b.one.message;
+  ASSERT_EQ(b.dist.termination, pardel::Termination::converged) << b.dist.message;
+  EXPECT_EQ(b.dist.method, pardel::Method::newton);
+  EXPECT_EQ(level_Ns(b.one), (std::vector<int>{800, 3200, 12800}));
+  EXPECT_EQ(level_Ns(b.dist), level_Ns(b.one));
+  EXPECT_EQ(b.dist.N, N);
+  EXPECT_EQ(b.dist_traj.N, N);
+  const double q_tol = T * T / (8 * h) / (1 - g * T * T / (M_PI * M_PI)) * (b.one.residual + b.dist.residual);
+  // The action is stationary: the iterates' difference moves it at second order, the rounding of
+  // two sums of N terms by at most N eps sum |Ld_k| (here sum |Ld_k| ~ |action|).
+  EXPECT_NEAR(b.dist.action, b.one.action, N * std::numeric_limits<double>::epsilon() * (1 + std::fabs(b.one.action)));
+  if (world_rank() == 0) {
+    ASSERT_EQ(b.one_traj.q.size(), b.dist_traj.q.size());
+    const double dq = max_abs_difference(b.one_traj.q, b.dist_traj.q);
+    EXPECT_LE(dq, q_tol);
+    std::printf("automatic, N = %d: iterations %ld and %ld, max |q difference| %.3g (bound %.3g)\n", N,
+                b.one.iterations, b.dist.iterations, dq, q_tol);
+  }
+}
+
+TEST(Levels, StartAtTheFirstLevelThatFitsTheRanks) {
+  // refine_start_N = 4: one process runs 4, 8, 16, ...; over 2 or 3 ranks a level needs N + 1 >= 3
+  // ranks nodes, so the distributed solve starts at 8 and then runs the same levels.
+  const auto problem = fuel_nav(100);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.refine_start_N = 4;
+  options.refine_factor = 2;
+  options.tol = 1e-10;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  const std::vector<int> one = level_Ns(b.one);
+  EXPECT_EQ(one, (std::vector<int>{4, 8, 16, 32, 64, 100}));
+  if (world_size() > 1 && world_size() <= 3)
+    EXPECT_EQ(level_Ns(b.dist), std::vector<int>(one.begin() + 1, one.end()));
+  expect_newton_agrees(b, options.tol, 1e-7);
+}
+
+TEST(Levels, StoppedOnACoarseLevelSaysSo) {
+  const auto problem = fuel_nav(200);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.refine_start_N = 50;
+  options.max_iterations = 3;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  EXPECT_EQ(b.dist.termination, pardel::Termination::max_iterations) << b.dist.message;
+  EXPECT_EQ(b.dist.message, b.one.message);
+  EXPECT_NE(b.dist.message.find("(stopped at the refinement level N = 50)"), std::string::npos) << b.dist.message;
+  EXPECT_EQ(b.dist.N, 50);
+  EXPECT_EQ(b.dist_traj.N, 50);
+  if (world_rank() == 0) EXPECT_EQ(b.dist_traj.q.size(), b.one_traj.q.size());
+}
+
 // ---- refusals and failures
 
 // ---- the point assessment over ranks: the kind and inertia of the one-process assessment
@@ -391,12 +519,6 @@ TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   auto s = pardel::mpi::solve_distributed(problem, multigrid, guess);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
   EXPECT_NE(s.message.find("solver.method = multigrid"), std::string::npos) << s.message;
-  pardel::Options refine;
-  refine.refine_start_N = 20;
-  guess = pardel::linear_guess(problem);
-  s = pardel::mpi::solve_distributed(problem, refine, guess);
-  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
-  EXPECT_NE(s.message.find("solver.refine"), std::string::npos) << s.message;
   pardel::SolverState state;
   pardel::Options resume;
   resume.resume_from = &state;

@@ -40,7 +40,9 @@ NodeRange owned_nodes(int N, int ranks, int rank);
 /**
  * Whether solve_distributed can run this problem with these options on `ranks` ranks (always true
  * for one rank). On false, `message` names the scene key or option that cannot be distributed
- * (solver.method, solver.refine, a resumed checkpoint, or grid.N too small for the ranks).
+ * (solver.method, a resumed checkpoint, or grid.N too small for the ranks). Refinement levels and
+ * the automatic method's grid sequencing are distributed; levels too small for the ranks are
+ * skipped (the solve starts at the first level on which every rank owns 3 nodes).
  */
 bool distributed_supported(const Problem& problem, const Options& options, int ranks, std::string* message);
 

@@ -9,7 +9,10 @@
  * carried from rank to rank; under fixed_total_time the nodes then move to their new times,
  * interpolated from the old nodes that the ranks exchange (an Alltoallv). Newton's
  * block-tridiagonal solves (also those of hybrid) are distributed by the Schur-complement split
- * of schur_solver.hpp.
+ * of schur_solver.hpp. The levels of coarse-to-fine refinement and of the automatic method's grid
+ * sequencing are the one-process solve's (levels.hpp): each level but the last is set up from the
+ * whole start trajectory, which every rank holds, and its solution is gathered on every rank to
+ * start the next; the last level releases the whole trajectory before it iterates.
  */
 #include "pardel/distributed.hpp"
 
@@ -32,6 +35,7 @@
 #include "../assessment.hpp"
 #include "../engine.hpp"
 #include "../iteration.hpp"
+#include "../levels.hpp"
 #include "../trust_region.hpp"
 #include "decomposition.hpp"
 #include "schur_solver.hpp"
@@ -47,6 +51,13 @@ NodeRange owned_nodes(int N, int ranks, int rank) {
   return range;
 }
 
+namespace {
+
+/** Whether every one of `ranks` ranks owns at least 3 of the N + 1 nodes. */
+bool fits_ranks(int N, int ranks) { return static_cast<long>(N) + 1 >= 3L * ranks; }
+
+}  // namespace
+
 bool distributed_supported(const Problem& problem, const Options& options, int ranks, std::string* message) {
   if (ranks <= 1) return true;
   auto fail = [&](std::string text) {
@@ -60,9 +71,7 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
   if (options.resume_from != nullptr)
     return fail("resuming a checkpoint (pardel solve --resume, Options::resume_from)" + over +
                 ": a checkpoint continues a one-process solve; resume it without mpirun");
-  if (options.refine_start_N > 0)
-    return fail("solver.refine (coarse-to-fine refinement)" + over + "; remove solver.refine or run on one rank");
-  if (static_cast<long>(problem.N) + 1 < 3L * ranks)
+  if (!fits_ranks(problem.N, ranks))
     return fail("grid.N = " + std::to_string(problem.N) + " is too small for " + std::to_string(ranks) +
                 " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks)");
   return true;
@@ -99,12 +108,14 @@ struct Local {
   int owned_unknowns() const { return u1 - u0 + 1; }
 };
 
-/** Builds the local context of `local.layout` from the full initial guess; false with `message`
- *  for a knot off the grid (the same test and text as the one-process constraints). */
-bool setup_local(const Problem& problem, int threads, const Trajectory& guess, Local& local, std::string* message) {
+/** Builds the local context of `local.layout` (a grid of N intervals, a level of the solve) from
+ *  the full initial guess on that grid; false with `message` for a knot off the grid (the same
+ *  test and text as the one-process constraints). */
+bool setup_local(const Problem& problem, int N, int threads, const Trajectory& guess, Local& local,
+                 std::string* message) {
   const Layout& L = local.layout;
   Context& ctx = local.ctx;
-  const int N = problem.N, Nl = L.local_intervals();
+  const int Nl = L.local_intervals();
   pardel::detail::setup_context(problem, Nl, threads, ctx);
   const std::size_t d = static_cast<std::size_t>(ctx.dim);
   // Node times and steps of the whole grid (the same expressions as setup_context at N); under a
@@ -157,6 +168,45 @@ bool setup_local(const Problem& problem, int threads, const Trajectory& guess, L
   local.u0 = std::max(L.first, 1);
   local.u1 = std::min(L.last, N - 1);
   return true;
+}
+
+/** The whole iterate of the current level and its node times in `out`, from the owned nodes of
+ *  every rank: on every rank (`everywhere`) or on rank 0 alone, the other ranks' `out` emptied.
+ *  Collective. */
+void gather_trajectory(const Local& local, bool everywhere, Trajectory& out) {
+  const Layout& L = local.layout;
+  const Context& ctx = local.ctx;
+  const int d = ctx.dim;
+  const std::size_t R = static_cast<std::size_t>(L.ranks), n1 = static_cast<std::size_t>(L.N) + 1;
+  std::vector<int> counts(R), displs(R);
+  for (int r = 0; r < L.ranks; ++r) {
+    const NodeRange range = owned_nodes(L.N, L.ranks, r);
+    counts[static_cast<std::size_t>(r)] = range.last - range.first + 1;
+    displs[static_cast<std::size_t>(r)] = range.first;
+  }
+  if (everywhere || L.rank == 0) {
+    out.t.assign(n1, 0.0);
+    out.q.assign(n1 * static_cast<std::size_t>(d), 0.0);
+  } else {
+    std::vector<double>().swap(out.t);
+    std::vector<double>().swap(out.q);
+  }
+  const int owned = L.last - L.first + 1;
+  const double* t = ctx.t.data() + L.local(L.first);
+  const double* q = ctx.q.data() + static_cast<std::size_t>(L.local(L.first)) * static_cast<std::size_t>(d);
+  MPI_Datatype node_type;
+  MPI_Type_contiguous(d, MPI_DOUBLE, &node_type);
+  MPI_Type_commit(&node_type);
+  if (everywhere) {
+    MPI_Allgatherv(t, owned, MPI_DOUBLE, out.t.data(), counts.data(), displs.data(), MPI_DOUBLE, local.comm);
+    MPI_Allgatherv(q, owned, node_type, out.q.data(), counts.data(), displs.data(), node_type, local.comm);
+  } else {
+    MPI_Gatherv(t, owned, MPI_DOUBLE, out.t.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, local.comm);
+    MPI_Gatherv(q, owned, node_type, out.q.data(), counts.data(), displs.data(), node_type, 0, local.comm);
+  }
+  MPI_Type_free(&node_type);
+  out.N = L.N;
+  out.dim = d;
 }
 
 /** The discrete action at the local iterate through the action kernel, summed in node order over all ranks. */
@@ -555,8 +605,8 @@ void assess_distributed(const Options& options, Local& local, PointAssessment& o
 template <int D>
 class DistributedHybrid : public pardel::detail::Method_ {
  public:
-  DistributedHybrid(const Options& o, Local& local)
-      : local_(local), sweeps_(pardel::detail::make_jacobi_newton(o, local.ctx.dim)), newton_(o, local) {}
+  DistributedHybrid(const Options& o, int dim, Local& local)
+      : local_(local), sweeps_(pardel::detail::make_jacobi_newton(o, dim)), newton_(o, local) {}
 
   void reset(Context& ctx) override {
     sweeps_->reset(ctx);
@@ -593,8 +643,6 @@ class DistributedHybrid : public pardel::detail::Method_ {
   int since_check_ = 0;
 };
 
-/** The one-process driver of solve.cpp on one level without a clock, every decision taken from
- *  values reduced over all ranks (so all ranks take the same branch). */
 /** The nodes of this rank: reductions, agreement on failures and the halo exchange over all ranks. */
 class RankPartition final : public pardel::detail::Partition {
  public:
@@ -650,60 +698,34 @@ class RankPartition final : public pardel::detail::Partition {
   Local& local_;
 };
 
-/** The distributed solve: one level (no refinement) of the shared iteration over this rank's nodes. */
+/** The distributed solve: the shared iteration over this rank's nodes, at each level. */
 class Driver : public pardel::detail::Iteration {
  public:
   Driver(const Options& options, pardel::detail::Method_& method, RankPartition& partition, Local& local,
          Summary& summary)
       : pardel::detail::Iteration(options, method, partition, local.ctx, summary), local_(local) {}
 
-  /** Fills the summary's numbers (the same on every rank) and gathers the iterate on rank 0. */
-  void write_result(const Problem& problem, Trajectory& out) {
+  /** Fills the summary's numbers (the same on every rank) and gathers the iterate of the current
+   *  level on rank 0. */
+  void write_result(Trajectory& out) {
     const Layout& L = local_.layout;
-    s_.N = problem.N;
+    s_.N = L.N;
     s_.iterations = iteration_;
     s_.residual = ctx_.residual;
     s_.action = global_action(local_, ctx_.q);
     s_.final_time = ctx_.t.back();  // t_N, held by the last rank
     MPI_Bcast(&s_.final_time, 1, MPI_DOUBLE, L.ranks - 1, local_.comm);
     s_.residual_floor = ctx_.residual_floor;
-    if (s_.history.empty() || s_.history.back().iteration != iteration_) {
+    if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != L.N) {
       IterationRecord rec;
       rec.iteration = iteration_;
-      rec.N = problem.N;
+      rec.N = L.N;
       rec.residual = s_.residual;
       rec.action = s_.action;
       rec.seconds = seconds();
       s_.history.push_back(rec);
     }
-    // Gather the owned nodes (and their times) on rank 0.
-    const int d = ctx_.dim;
-    std::vector<int> counts, displs;
-    if (L.rank == 0) {
-      counts.resize(static_cast<std::size_t>(L.ranks));
-      displs.resize(static_cast<std::size_t>(L.ranks));
-      for (int r = 0; r < L.ranks; ++r) {
-        const NodeRange range = owned_nodes(problem.N, L.ranks, r);
-        counts[static_cast<std::size_t>(r)] = range.last - range.first + 1;
-        displs[static_cast<std::size_t>(r)] = range.first;
-      }
-      out.t.assign(static_cast<std::size_t>(problem.N) + 1, 0.0);
-    } else {
-      out.t.clear();
-      out.t.shrink_to_fit();
-    }
-    const int owned = L.last - L.first + 1;
-    MPI_Gatherv(ctx_.t.data() + L.local(L.first), owned, MPI_DOUBLE, out.t.data(), counts.data(), displs.data(),
-                MPI_DOUBLE, 0, local_.comm);
-    MPI_Datatype node_type;
-    MPI_Type_contiguous(d, MPI_DOUBLE, &node_type);
-    MPI_Type_commit(&node_type);
-    if (L.rank == 0) out.q.assign((static_cast<std::size_t>(problem.N) + 1) * static_cast<std::size_t>(d), 0.0);
-    MPI_Gatherv(ctx_.q.data() + static_cast<std::size_t>(L.local(L.first)) * d, owned, node_type, out.q.data(),
-                counts.data(), displs.data(), node_type, 0, local_.comm);
-    MPI_Type_free(&node_type);
-    out.N = problem.N;
-    out.dim = d;
+    gather_trajectory(local_, false, out);
     s_.wall_seconds = seconds();
   }
 
@@ -711,8 +733,7 @@ class Driver : public pardel::detail::Iteration {
   Local& local_;
 };
 
-std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, Local& local) {
-  const int dim = local.ctx.dim;
+std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, int dim, Local& local) {
   switch (options.method) {
     case Method::jacobi: return pardel::detail::make_jacobi(options, dim);
     case Method::jacobi_newton: return pardel::detail::make_jacobi_newton(options, dim);
@@ -722,7 +743,7 @@ std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, Loc
       });
     case Method::hybrid:
       return pardel::detail::dispatch_dim(dim, [&](auto D) -> std::unique_ptr<pardel::detail::Method_> {
-        return std::make_unique<DistributedHybrid<decltype(D)::value>>(options, local);
+        return std::make_unique<DistributedHybrid<decltype(D)::value>>(options, dim, local);
       });
     default: return nullptr;
   }
@@ -731,9 +752,10 @@ std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, Loc
 Summary solve_over_ranks(const Problem& problem, const Options& requested, Trajectory& trajectory, int ranks,
                          int rank) {
   const auto start = std::chrono::steady_clock::now();
-  // The automatic method over ranks is Newton on the requested grid (no grid sequencing).
+  // The automatic method is Newton with grid sequencing, as in one process.
+  const bool automatic = requested.method == Method::automatic;
   Options options = requested;
-  if (options.method == Method::automatic) options.method = Method::newton;
+  if (automatic) options.method = Method::newton;
   Summary summary;
   summary.method = options.method;
   summary.N = problem.N;
@@ -749,28 +771,51 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
     summary.wall_seconds = elapsed();
     return summary;
   }
+  // The one-process levels from the first on which every rank owns 3 nodes (the last one does).
+  std::vector<int> levels = pardel::detail::refinement_levels(problem, options, automatic);
+  levels.erase(levels.begin(),
+               std::find_if(levels.begin(), levels.end(), [ranks](int n) { return fits_ranks(n, ranks); }));
   Local local;
-  local.layout = detail::make_layout(problem.N, ranks, rank);
   local.comm = MPI_COMM_WORLD;
-  const bool constrained = setup_local(problem, summary.threads, trajectory, local, &error);
-  if (!detail::all_true(constrained, MPI_COMM_WORLD)) {
-    summary.termination = Termination::invalid_input;
-    summary.message = error;
-    summary.wall_seconds = elapsed();
-    return summary;
-  }
-  // From here on a rank holds O(N / ranks) values.
-  trajectory.q.clear();
-  trajectory.q.shrink_to_fit();
-  trajectory.t.clear();
-  trajectory.t.shrink_to_fit();
-  std::unique_ptr<pardel::detail::Method_> method = make_method(options, local);
-  if (problem.clock != ClockMode::none) update_times_distributed(local, Positions::follow_times);
-  method->reset(local.ctx);
+  std::unique_ptr<pardel::detail::Method_> method = make_method(options, problem.model->dim, local);
   RankPartition partition(local);
   Driver driver(options, *method, partition, local, summary);
-  driver.run_level(true);
-  driver.write_result(problem, trajectory);
+  pardel::detail::LevelStarts starts(problem, options);
+  Trajectory resampled;
+  // Sets up this rank's context at the level of N intervals from `from`, a whole trajectory that
+  // every rank holds (resampled to N when it lies on another grid).
+  auto enter_level = [&](const Trajectory& from, int N) {
+    const Trajectory& src = from.N == N ? from : (resampled = resample(problem, from, N));
+    local.layout = detail::make_layout(N, ranks, rank);
+    const bool constrained = setup_local(problem, N, summary.threads, src, local, &error);
+    return detail::all_true(constrained, MPI_COMM_WORLD);
+  };
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const bool last = l + 1 == levels.size();
+    if (!starts.enter(trajectory, levels[l], enter_level)) {
+      summary.termination = Termination::invalid_input;
+      summary.message = error;
+      summary.wall_seconds = elapsed();
+      return summary;
+    }
+    resampled = Trajectory{};
+    if (last) {
+      // From here on a rank holds O(N / ranks) values.
+      std::vector<double>().swap(trajectory.q);
+      std::vector<double>().swap(trajectory.t);
+      starts.release();
+    }
+    if (problem.clock != ClockMode::none) update_times_distributed(local, Positions::follow_times);
+    method->reset(local.ctx);
+    const bool settled = driver.run_level(last);
+    if (!settled || last) break;
+    // The level's solution on every rank: the start of the next level.
+    Trajectory solution;
+    gather_trajectory(local, true, solution);
+    starts.settled(std::move(solution));
+  }
+  driver.write_result(trajectory);
+  pardel::detail::note_stopped_level(problem, trajectory.N, summary);
   // What the returned point is; the method's storage is released first, as in one process.
   method.reset();
   if (summary.termination != Termination::invalid_input && summary.termination != Termination::non_finite)

@@ -1,0 +1,98 @@
+/**
+ * @file levels.hpp
+ * Internal: the grid levels of a solve, written once for the one-process solve (solve.cpp) and
+ * the solve over MPI ranks (mpi/distributed.cpp): which grids coarse-to-fine refinement and the
+ * automatic method's grid sequencing visit, and where each level after the first starts (the
+ * previous level's solution, or Newton's extrapolation from the two previous levels).
+ */
+#ifndef PARDEL_RUNTIME_LEVELS_HPP
+#define PARDEL_RUNTIME_LEVELS_HPP
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "pardel/pardel.hpp"
+
+namespace pardel::detail {
+
+/** Whether every knot lies on an interior node of the uniform grid with n intervals. */
+bool knots_on_grid(const Problem& problem, int n);
+
+/** The coarsest grid of the automatic method's grid sequencing, and the ratio of successive grids.
+ *  Each level takes one Newton step from the extrapolated coarser solution on well-posed problems,
+ *  so the levels below N cost 1/(kAutoRatio - 1) of the finest one: a third at ratio 4, against as
+ *  much as the finest level at ratio 2 (docs/benchmarks.md has the measurements). */
+constexpr int kAutoCoarseN = 200;
+constexpr int kAutoRatio = 4;
+
+/** Grid sequencing of the automatic method: N, N/4, N/16, ... (each rounded up to a grid that
+ *  holds the knots) down to between kAutoCoarseN and kAutoRatio kAutoCoarseN, coarsest first;
+ *  {N} when N <= kAutoRatio kAutoCoarseN. */
+std::vector<int> automatic_levels(const Problem& problem);
+
+/** Grid sizes of coarse-to-fine refinement (Options::refine_start_N, refine_factor; with
+ *  `automatic` and no refine_start_N, automatic_levels), coarsest first, ending at problem.N. */
+std::vector<int> refinement_levels(const Problem& problem, const Options& options, bool automatic);
+
+/**
+ * The start of a finer level of nested iteration: the two previous levels' solutions resampled to
+ * N and extrapolated in h = T/N under the discretization's error model q(h) = q* + C h^p, i.e.
+ * q_N = q_c + (q_c - q_cc) (h^p - h_c^p) / (h_c^p - h_cc^p). Fixed values (boundaries, knots) agree
+ * on every level and stay exact.
+ */
+Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, const Trajectory& coarser, int N);
+
+/**
+ * The solutions of the levels settled so far (the last two) and the start of the next level
+ * from them. Newton's nested iteration starts a level from the extrapolation of the solutions of
+ * the two levels before it (both converged to tol); not under a clock, whose node times differ
+ * per level; every other level starts from the previous level's solution, the first from the guess.
+ */
+class LevelStarts {
+ public:
+  LevelStarts(const Problem& problem, const Options& options)
+      : problem_(problem), extrapolate_(options.method == Method::newton && problem.clock == ClockMode::none) {}
+
+  /** Whether a level starts from the extrapolation of the two before it (Newton without a clock). */
+  bool extrapolates() const { return extrapolate_; }
+
+  /** Returns enter(start, N) with the start of the level with N intervals: `guess` while no level
+   *  has settled, then the previous level's solution or the extrapolation. An extrapolated start
+   *  lives only for the call. */
+  template <class Enter>
+  bool enter(const Trajectory& guess, int N, Enter&& enter) const {
+    if (previous_.N == 0) return enter(guess, N);
+    if (extrapolate_ && coarser_.N > 0 && previous_.N > coarser_.N)
+      return enter(extrapolated_start(problem_, previous_, coarser_, N), N);
+    return enter(previous_, N);
+  }
+
+  /** A level has settled with this solution (on its grid, with its node times). */
+  void settled(Trajectory solution) {
+    coarser_ = std::move(previous_);
+    previous_ = std::move(solution);
+  }
+
+  /** The previous level's solution (N = 0: none); a resumed solve restores it. */
+  Trajectory& previous() { return previous_; }
+
+  /** Releases both solutions (once the last level has been entered). */
+  void release() {
+    previous_ = Trajectory{};
+    coarser_ = Trajectory{};
+  }
+
+ private:
+  const Problem& problem_;
+  bool extrapolate_;
+  Trajectory previous_, coarser_;  // solutions of levels l-1 and l-2 (N = 0: none)
+};
+
+/** Appends to a summary that did not converge the note that it stopped at the refinement level
+ *  N = `reached` below problem.N (nothing when reached == problem.N). */
+void note_stopped_level(const Problem& problem, int reached, Summary& summary);
+
+}  // namespace pardel::detail
+
+#endif  // PARDEL_RUNTIME_LEVELS_HPP
