@@ -60,6 +60,7 @@ struct Context {
   double t0 = 0, T = 1;
   std::vector<double> t;   ///< N+1 node times
   std::vector<double> hk;  ///< N steps passed to the kernels (T/N, or t_{k+1}-t_k under fixed_total_time)
+  std::vector<double> t_kept, hk_kept;  ///< t and hk before a clock update that checks convergence
   std::vector<unsigned char> is_free;  ///< (N+1)*dim: 1 where the component is an unknown
   std::vector<int> free_count;         ///< N+1: free components of each node
   long free_total = 0;

@@ -15,7 +15,7 @@ namespace pardel::detail {
 namespace {
 
 std::string format(const char* fmt, double a, double b = 0, double c = 0) {
-  char buf[256];
+  char buf[512];
   std::snprintf(buf, sizeof buf, fmt, a, b, c);
   return buf;
 }
@@ -26,6 +26,8 @@ bool Iteration::run_level(bool last) {
   if (!resumed_level_) level_ = LevelCounters{};
   resumed_level_ = false;
   const bool clocked = ctx_.clock != ClockMode::none;
+  bool recheck_times = false;  // the nodes moved to the clock's times at the tolerance: check them again
+  int placements = 0;          // such moves since the last step
   for (;;) {
     if (clocked && level_.since_clock >= options_.clock_update_every) {
       partition_.update_times(ctx_, Positions::follow_times);
@@ -35,14 +37,31 @@ bool Iteration::run_level(bool last) {
     int bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
     if (bad >= 0) return non_finite_residual(bad);
     double r = ctx_.residual;
-    if (clocked && r <= target_residual() && level_.since_clock > 0) {
-      // Declare convergence only with node times consistent with this trajectory: the nodes keep
-      // their values (moved along the trajectory, they would no longer be where the clock was read).
+    if (clocked && r <= target_residual() && (level_.since_clock > 0 || recheck_times)) {
+      // Declare convergence only with node times consistent with this trajectory: the times the
+      // clock gives at these nodes, which keep their values (moved along the trajectory, they would
+      // no longer be where the clock was read).
+      recheck_times = false;
+      ctx_.t_kept = ctx_.t;
+      ctx_.hk_kept = ctx_.hk;
       partition_.update_times(ctx_, Positions::stay);
       method_.times_changed();
       level_.since_clock = 0;
       bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
-      if (bad >= 0) return non_finite_residual(bad);
+      if (bad >= 0 || !(ctx_.residual <= target_residual())) {
+        // The times had not settled (the DEL residual at the clock's times is above the target):
+        // back to the previous times, from which the nodes move along the trajectory to the
+        // clock's times; the times are checked again when the residual is at the target.
+        std::swap(ctx_.t, ctx_.t_kept);
+        std::swap(ctx_.hk, ctx_.hk_kept);
+        ctx_.evaluated = Evaluated::nothing;
+        partition_.update_times(ctx_, Positions::follow_times);
+        bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
+        if (bad >= 0) return non_finite_residual(bad);
+        if (times_unsettled(++placements)) return false;
+        recheck_times = true;
+        continue;
+      }
       r = ctx_.residual;
     }
     if (level_.level_it == 0) level_.r_level0 = r;
@@ -73,7 +92,20 @@ bool Iteration::run_level(bool last) {
     ++iteration_;
     ++level_.level_it;
     ++level_.since_clock;
+    placements = 0;
   }
+}
+
+/** At the tolerance under a clock, the nodes moved to the clock's times `placements` times
+ *  without a step in between, and the times still do not match the trajectory. */
+bool Iteration::times_unsettled(int placements) {
+  if (placements < kMaxPlacements) return false;
+  finish(Termination::stalled,
+         format("stalled: the node times do not settle: at the tolerance, %.0f re-placements of the nodes at the "
+                "times of the model's clock in a row each left the DEL residual at the clock's times above the "
+                "target %.3g (the last iterate, moved to the clock's times, is returned)",
+                static_cast<double>(kMaxPlacements), target_residual()));
+  return true;
 }
 
 /** At the tolerance where the method accepts to stop (Newton not at a saddle): the last level
@@ -195,8 +227,17 @@ bool Iteration::non_finite_residual(int node) {
 
 std::string Iteration::converged_message(double r, double target) const {
   if (options_.tol > 0) return format("DEL residual %.3g <= tol %.3g", r, target);
-  return format("DEL residual %.3g <= %.3g = max(rtol x scale of the DEL terms %.3g, 10 x round-off level)", r, target,
-                ctx_.residual_scale);
+  std::string message = format(
+      "DEL residual %.3g <= %.3g = max(rtol x scale of the DEL terms %.3g, 10 x round-off level)", r, target,
+      ctx_.residual_scale);
+  // Where the round-off level sets the target far above rtol, say how little the equations are resolved.
+  const double relative = ctx_.residual_scale > 0 ? target / ctx_.residual_scale : 0;
+  if (relative > kRoundOffDominates * options_.rtol)
+    message += format("; the round-off level dominates: at this N the DEL equations are resolved only to %.2g of "
+                      "their scale (rtol %.2g), and the answer is uncertain accordingly; a smaller N resolves them "
+                      "better",
+                      relative, options_.rtol);
+  return message;
 }
 
 bool Iteration::should_record() {

@@ -77,6 +77,11 @@ class Iteration {
   bool intermediate_level_settled(bool last, double r, double target, bool* settled);
   bool answer_at_tolerance(bool last, double r, double target, bool* settled);
   bool stalled_at_round_off(double r, double target);
+  bool times_unsettled(int placements);
+  /** Re-placements of the nodes at the tolerance, in a row, before times_unsettled(). */
+  static constexpr int kMaxPlacements = 20;
+  /** A converged message warns where the round-off level sets the target above this many rtol. */
+  static constexpr double kRoundOffDominates = 100;
   bool reached_max_iterations(double r, double target);
   bool diverged(double r);
   /** Ends the level on a method's failed step or a non-finite or exploding next iterate. */

@@ -125,6 +125,8 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
   e.solve = context_bytes(N, d) + method_bytes(options.method, cyclic, N, d) + trajectories;
   // Context::q_old: the iterate before a re-placement of the nodes (engine.cpp update_times).
   if (problem.clock == ClockMode::fixed_total_time) e.solve += (N + 1) * d * 8;
+  // Context::t_kept, hk_kept: the node times and steps before a convergence check's clock update.
+  if (problem.clock != ClockMode::none) e.solve += (2 * N + 1) * 8;
   // The point assessment (assessment.cpp): the solve's context and trajectories, the Hessian and
   // four vectors of the inverse subspace iteration.
   const double n = std::max(N - 1, 0.0);

@@ -85,6 +85,37 @@ TEST(Clock, FixedTotalTimeStepsFollowTheClockAndSumToT) {
   EXPECT_GT(traj.t[p.N] - traj.t[p.N - 1], 1.2 * (traj.t[1] - traj.t[0]));
 }
 
+TEST(Clock, TimesCheckedAtTheToleranceSettleWithoutDeformingThePath) {
+  // No periodic update: the iteration first converges at uniform times, far from the clock's. The
+  // check at the tolerance finds the residual at the clock's times above it, moves the nodes along
+  // the trajectory instead of deforming it, and iterates on: the answer is the same coupled
+  // solution (times from the clock of the returned nodes, DEL residual below tol) as with updates
+  // every 5 iterations.
+  auto p = forced_problem(pardel::ClockMode::fixed_total_time);
+  p.params = {4.0};  // a clock that varies by a factor 5 along the path
+  std::vector<pardel::Trajectory> answers;
+  for (int every : {5, 1000000}) {
+    auto traj = pardel::linear_guess(p);
+    pardel::Options opt;
+    opt.tol = 1e-10;
+    opt.method = pardel::Method::newton;
+    opt.clock_update_every = every;
+    const auto s = pardel::solve(p, opt, traj);
+    ASSERT_TRUE(s.converged()) << "every " << every << ": " << s.brief_report();
+    double total = 0;
+    for (int k = 0; k < p.N; ++k) total += clock_value(p, traj, k);
+    for (int k = 0; k < p.N; ++k)
+      ASSERT_NEAR(traj.t[k + 1] - traj.t[k], p.T * clock_value(p, traj, k) / total, 1e-12) << "interval " << k;
+    EXPECT_LE(pardel::residual_norm(p, traj), 1e-10);
+    answers.push_back(traj);
+  }
+  EXPECT_GT(answers[0].t[p.N] - answers[0].t[p.N - 1], 2 * (answers[0].t[1] - answers[0].t[0]));
+  for (int k = 0; k <= p.N; ++k) {
+    EXPECT_NEAR(answers[0].t[k], answers[1].t[k], 1e-8) << "node " << k;
+    EXPECT_NEAR(answers[0].node(k)[0], answers[1].node(k)[0], 1e-8) << "node " << k;
+  }
+}
+
 /** Max error of retime_nodes on q(t) = sin(3t) + t^2 (and, with_derivative, q' stored beside q)
  *  from n uneven old intervals on [0, 1] to n other uneven ones. */
 double retime_error(int n, bool with_derivative) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "hand_models.hpp"
 #include "pardel/pardel.hpp"
@@ -63,6 +64,26 @@ TEST(Newton, HarmonicMatchesExactDiscreteSolution) {
     const double exact = 0.3 * std::cos(k * th) + (-0.7 - 0.3 * std::cos(40 * th)) * std::sin(k * th) / std::sin(40 * th);
     EXPECT_NEAR(traj.node(k)[0], exact, 1e-11) << "node " << k;
   }
+}
+
+TEST(Newton, ConvergedMessageSaysWhenTheRoundOffLevelSetsTheTarget) {
+  // The harmonic oscillator's discrete solution is known: with the default rtol its DEL equations
+  // are resolved to rtol and the message says nothing more; with rtol far below double precision
+  // the target is 10x the round-off level, and the message says how little that resolves.
+  const auto problem = hand_problem(hand::harmonic, 1.0, 2.0, 40, 0.3, -0.7);
+  auto traj = pardel::linear_guess(problem);
+  const auto plain = pardel::solve(problem, pardel::Options{}, traj);
+  ASSERT_TRUE(plain.converged()) << plain.brief_report();
+  EXPECT_EQ(plain.message.find("round-off level dominates"), std::string::npos) << plain.message;
+  pardel::Options tight;
+  tight.rtol = 1e-30;
+  traj = pardel::linear_guess(problem);
+  const auto s = pardel::solve(problem, tight, traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  EXPECT_NE(s.message.find("the round-off level dominates: at this N the DEL equations are resolved only to"),
+            std::string::npos)
+      << s.message;
+  EXPECT_NE(s.message.find("(rtol 1e-30)"), std::string::npos) << s.message;
 }
 
 TEST(Newton, BratuMatchesExactSolution) {
