@@ -42,14 +42,18 @@ TEST(Outputs, CertificateJsonHasEveryFieldAndCapsViolations) {
     v.min_eig_hessian = -k;
     c.violations.push_back(v);
   }
+  c.intervals_violating = 5;
+  c.free_components = 12;
   const auto j = certificate_json(c, 3);
   for (const char* key : {"theorem_holds", "all_intervals_psd", "all_A_pd", "all_B_pd", "hessian_positive_definite",
                           "inertia_positive", "inertia_negative", "inertia_zero", "jacobi_spectral_radius",
                           "jacobi_one_minus_rho", "jacobi_one_minus_rho_roundoff", "spectral_radius_resolved",
-                          "spectral_radius_converged", "expected_iterations", "violations_total", "violations"}) {
+                          "spectral_radius_converged", "expected_iterations", "violations_total", "violations",
+                          "free_components", "intervals_violating", "residual", "tol", "error"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["violations_total"], 5);
+  EXPECT_EQ(j["free_components"], 12);
   ASSERT_EQ(j["violations"].size(), 3u);
   EXPECT_EQ(j["violations"][2]["k"], 2);
   EXPECT_EQ(j["violations"][2]["min_eig_hessian"], -2.0);

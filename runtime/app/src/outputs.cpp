@@ -6,6 +6,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -97,7 +98,8 @@ nlohmann::ordered_json certificate_json(const Certificate& c, std::size_t max_vi
   j["spectral_radius_resolved"] = c.spectral_radius_resolved;
   j["spectral_radius_converged"] = c.spectral_radius_converged;
   j["expected_iterations"] = c.expected_iterations;
-  j["violations_total"] = c.violations.size();
+  // Every violating interval (Certificate::violations lists at most the first 100 of them).
+  j["violations_total"] = std::max<long>(c.intervals_violating, static_cast<long>(c.violations.size()));
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < c.violations.size() && i < max_violations; ++i) {
     const auto& v = c.violations[i];
@@ -110,6 +112,11 @@ nlohmann::ordered_json certificate_json(const Certificate& c, std::size_t max_vi
                     {"min_eig_B", v.min_eig_B}});
   }
   j["violations"] = list;
+  j["free_components"] = c.free_components;
+  j["intervals_violating"] = c.intervals_violating;
+  j["residual"] = c.residual;
+  j["tol"] = c.tol;
+  j["error"] = c.error;
   return j;
 }
 
