@@ -272,6 +272,29 @@ TEST(PardelSolve, ExitCodeSaysHowItEnded) {
   EXPECT_FALSE(fs::exists(dir / "mg"));
 }
 
+TEST(PardelSolve, ThreadsOptionFailsAsTheSceneKeyDoes) {
+  // --threads of solve and sweep is held to solver.threads' bound and worded as a --set of that key.
+  TempDir dir;
+  app::write_file_atomic(dir / "small.toml", kSmallScene);
+  app::write_file_atomic(dir / "sweep.toml", "scene = \"small.toml\"\n");
+  const std::string rule = option_bound("threads")->rule;
+  const Result set = pardel("solve '" + (dir / "small.toml") + "' --quiet --no-plot --set solver.threads=5000");
+  EXPECT_EQ(set.code, 2);
+  EXPECT_NE(set.err.find("--set solver.threads=5000: error: solver.threads " + rule + ", got 5000"), std::string::npos)
+      << set.err;
+  for (const std::string command : {"solve '" + (dir / "small.toml") + "'", "sweep '" + (dir / "sweep.toml") + "'"}) {
+    for (const std::string value : {"5000", "-1", "99999999999999999999", "2.5", "abc"}) {
+      const Result r = pardel(command + " --out '" + (dir / "out") + "' --quiet --no-plot --threads " + value);
+      EXPECT_EQ(r.code, 2) << command;
+      const bool integer = value.find_first_not_of("-0123456789") == std::string::npos;
+      EXPECT_EQ(r.err, "--threads " + value + ": error: --threads " + (integer ? rule : "must be an integer") +
+                           ", got " + value + "\n")
+          << command;
+      EXPECT_FALSE(fs::exists(dir / "out")) << command;
+    }
+  }
+}
+
 TEST(PardelSolve, DrawsBothPlots) {
   TempDir dir;
   app::write_file_atomic(dir / "small.toml", kSmallScene);

@@ -131,7 +131,7 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"threads_float", "", kGrid, kBoundary, "[solver]\nthreads = 1e3\n", {},
              "solver.threads must be an integer, got a floating-point number"},
         Case{"option_threads_minus_one", "", kGrid, kBoundary, "", {"--threads", "-1"},
-             "--threads: Value -1 not in range 0 to 4096"},
+             "--threads -1: error: --threads must be between 0 (all cores) and 4096, got -1"},
         Case{"option_threads_huge", "", kGrid, kBoundary, "", {"--threads", "99999999999999999999"}, "--threads"},
         // Damping and tolerances at their edges.
         Case{"damping_one", "", kGrid, kBoundary, "[solver]\ndamping = 1.0\n", {},

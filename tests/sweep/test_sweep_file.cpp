@@ -156,7 +156,7 @@ TEST(SweepFileErrors, UnknownNestedKeySuggestsTheNearest) {
 
 TEST(SweepFileErrors, UnrelatedKeyListsTheValidOnes) {
   EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n[grouping]\nzzzzzz = 1\n"),
-            kName + ":3:1: error: unknown key 'grouping.zzzzzz' (valid keys in grouping: action_tol, distance_tol)");
+            kName + ":3:1: error: unknown key 'grouping.zzzzzz' (valid keys in [grouping]: action_tol, distance_tol)");
 }
 
 TEST(SweepFileErrors, MissingScene) {
@@ -178,6 +178,11 @@ TEST(SweepFileErrors, TomlSyntaxErrorHasItsPosition) {
 TEST(SweepFileErrors, NonAsciiOutsideStrings) {
   EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n\xc3\xa9 = 1\n"),
             kName + ":2:1: error: non-ASCII character outside a string or comment");
+}
+
+TEST(SweepFile, ByteOrderMarkIsSkippedAsInAScene) {
+  EXPECT_EQ(parse("\xef\xbb\xbfscene = \"../zermelo_1.toml\"\n").variant_count(), 1);
+  EXPECT_EQ(error_of("\xef\xbb\xbfscene = 1\n"), kName + ":1:9: error: scene must be a string, got an integer 1");
 }
 
 TEST(SweepFileErrors, RandomGuessesNeedBoxOrSpread) {
@@ -204,7 +209,7 @@ TEST(SweepFileErrors, BadRandomValues) {
 
 TEST(SweepFileErrors, BadListedGuess) {
   EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n[[guesses]]\npoints = [[0,0],[1,\"a\"],[6,2]]\n"),
-            kName + ":3:20: error: guesses[0].points[1][1] must be a number, got a string");
+            kName + ":3:20: error: guesses[0].points[1][1] must be a number, got a string \"a\"");
   EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\n[[guesses]]\npoints = [[0,0]]\n"),
             kName + ":3:10: error: guesses[0].points must be an array of at least 2 points (model zermelo has "
                     "coords x, y)");

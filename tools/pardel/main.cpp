@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -450,6 +451,25 @@ int run_check(const CheckArgs& args) {
   return 0;
 }
 
+/**
+ * The text of --threads (of `solve` and `sweep`), checked as the scene reader checks solver.threads:
+ * an integer within option_bound("threads"), else a SceneError (exit code 2) in the words of a
+ * --set of that key: "--threads 5000: error: --threads must be between 0 (all cores) and 4096, got
+ * 5000". A CLI11 transform: returns the text unchanged.
+ */
+std::string checked_threads_text(const std::string& text) {
+  const pardel::OptionBound& bound = *pardel::option_bound("threads");
+  const auto error = [&text](const std::string& what) {
+    return SceneError(fmt::format("--threads {}: error: --threads {}, got {}", text, what, text));
+  };
+  long long value = 0;
+  const char* end = text.data() + text.size();
+  const auto [stop, code] = std::from_chars(text.data(), end, value);
+  if (stop != end || (code != std::errc() && code != std::errc::result_out_of_range)) throw error("must be an integer");
+  if (code == std::errc::result_out_of_range || !bound.accepts(static_cast<double>(value))) throw error(bound.rule);
+  return text;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -481,9 +501,8 @@ int main(int argc, char** argv) {
   solve_cmd->add_option("--out", s.out, "Output folder (default: [output].dir, else out/<scene-stem>)");
   solve_cmd->add_option("--set", s.sets, "KEY=VALUE: override a scene key, e.g. solver.method=newton (repeatable)")
       ->allow_extra_args(false);
-  const pardel::OptionBound& threads_bound = *pardel::option_bound("threads");  // as solver.threads
-  solve_cmd->add_option("--threads", s.threads, "Threads (0: all cores); overrides solver.threads")
-      ->check(CLI::Range(static_cast<int>(threads_bound.low), static_cast<int>(threads_bound.high)));
+  // Checked as solver.threads is: checked_threads_text, attached below with sweep's --threads.
+  solve_cmd->add_option("--threads", s.threads, "Threads (0: all cores); overrides solver.threads");
   solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
   solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
   solve_cmd->add_option("--certificate", s.certificate,
@@ -504,6 +523,9 @@ int main(int argc, char** argv) {
   check->add_flag("--json", c.json, "Print JSON");
 
   const SweepCommand sweep_cmd(app);
+  for (CLI::App* command : {solve_cmd, app.get_subcommand("sweep")}) {
+    command->get_option("--threads")->transform(checked_threads_text);
+  }
 
   // Under mpirun with more than one rank, an error seen by some ranks only would leave the others
   // waiting for them: every error ends the whole job (the message is printed first).
@@ -516,6 +538,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& error) {
     const int code = app.exit(error);
     return code == 0 ? 0 : fail(kExitUsage);
+  } catch (const SceneError& error) {  // a value checked as its scene key is (--threads)
+    std::fprintf(stderr, "%s\n", error.what());
+    return fail(kExitUsage);
   }
 
   try {

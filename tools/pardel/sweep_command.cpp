@@ -74,9 +74,8 @@ SweepCommand::SweepCommand(CLI::App& app) {
   command_->add_option("--out", args_.out, "Output folder (default: [output].dir, else out/<sweep-stem>)");
   command_->add_option("--set", args_.sets, "KEY=VALUE: override a key of the base scene for every variant (repeatable)")
       ->allow_extra_args(false);
-  const pardel::OptionBound& threads_bound = *pardel::option_bound("threads");  // as solver.threads
-  command_->add_option("--threads", args_.threads, "Threads per variant (0: all cores); overrides solver.threads")
-      ->check(CLI::Range(static_cast<int>(threads_bound.low), static_cast<int>(threads_bound.high)));
+  // Checked as solver.threads is by the transform that pardel's main attaches (checked_threads_text).
+  command_->add_option("--threads", args_.threads, "Threads per variant (0: all cores); overrides solver.threads");
   command_->add_flag("--quiet", args_.quiet, "Nothing on stdout");
   command_->add_flag("--no-plot", args_.no_plot, "Do not draw sweep.png");
 }

@@ -10,10 +10,8 @@
 #include <map>
 #include <sstream>
 
-#define TOML_EXCEPTIONS 1
-#include <toml++/toml.h>
-
 #include "pardel/app/trajectory_io.hpp"
+#include "toml_read.hpp"
 
 namespace pardel::app {
 
@@ -82,47 +80,24 @@ const std::vector<std::string> kMethodNames = {"auto", "jacobi", "jacobi-newton"
 const std::vector<std::string> kClockNames = {"none", "free_final_time", "fixed_total_time"};
 const std::vector<std::string> kGuessKinds = {"linear", "polyline", "csv"};
 
-std::string type_name(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a floating-point number";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::table: return "a table";
-    case toml::node_type::date: return "a date";
-    case toml::node_type::time: return "a time";
-    case toml::node_type::date_time: return "a date-time";
-    default: return "nothing";
-  }
-}
-
-std::string show_value(const toml::node& node) {
-  if (const auto* s = node.as_string()) return fmt::format("\"{}\"", s->get());
-  if (node.is_table()) return "{...}";
-  std::ostringstream out;
-  node.visit([&](const auto& v) { out << v; });
-  std::string text = out.str();
-  if (text.size() > 60) text = text.substr(0, 57) + "...";
-  return text;
-}
-
-std::string join(const std::vector<std::string>& names, const char* separator = ", ") {
-  std::string out;
-  for (std::size_t i = 0; i < names.size(); ++i) out += (i ? separator : "") + names[i];
-  return out;
-}
+using detail::join;
+using detail::resolve_relative;
+using detail::type_name;
 
 /** Walks a parsed scene, checking each key; every error names the key and where it came from. */
-class SceneReader {
+class SceneReader : public detail::TomlReader {
  public:
   SceneReader(const std::string& file, std::map<std::string, std::string> origins)
-      : file_(file), origins_(std::move(origins)) {}
+      : TomlReader(file), origins_(std::move(origins)) {}
+
+  using TomlReader::integer;
+  using TomlReader::number;
+  using TomlReader::string;
 
   /** "FILE:LINE:COL", or the --set that supplied the key, or the file alone. */
-  std::string where(const toml::source_region& source, const std::string& dotted) const {
+  std::string where(const toml::source_region& source, const std::string& dotted) const override {
     if (source.begin.line > 0 && source.path && source.path->rfind("--set", 0) != 0) {
-      return fmt::format("{}:{}:{}", file_, source.begin.line, source.begin.column);
+      return TomlReader::where(source, dotted);
     }
     // An element (boundary.q0[1]) comes from wherever its array came from.
     std::string prefix = dotted.substr(0, dotted.find('['));
@@ -133,69 +108,22 @@ class SceneReader {
       if (dot == std::string::npos) break;
       prefix.resize(dot);
     }
-    return file_;
+    return file();
   }
 
-  [[noreturn]] void fail(const toml::source_region& source, const std::string& dotted,
-                         const std::string& message) const {
-    throw SceneError(fmt::format("{}: error: {}", where(source, dotted), message));
-  }
-  [[noreturn]] void fail(const toml::node& node, const std::string& dotted, const std::string& message) const {
-    fail(node.source(), dotted, message);
-  }
-
-  /** Every key of `table` must be in `allowed`; the first that is not is an error. */
-  void check_keys(const toml::table& table, const std::string& prefix, const std::vector<std::string>& allowed,
-                  const std::string& note = "") const {
-    for (auto&& [key, node] : table) {
-      const std::string name(key.str());
-      if (std::find(allowed.begin(), allowed.end(), name) != allowed.end()) continue;
-      const std::string dotted = prefix.empty() ? name : prefix + "." + name;
-      const std::string suggestion = nearest_name(name, allowed);
-      std::string message = fmt::format("unknown key '{}'", dotted);
-      if (!suggestion.empty()) {
-        message += fmt::format("; did you mean '{}'?", prefix.empty() ? suggestion : prefix + "." + suggestion);
-      } else if (!allowed.empty()) {
-        message += fmt::format(" (valid keys{}: {})", prefix.empty() ? "" : " in [" + prefix + "]", join(allowed));
-      }
-      if (!note.empty()) message += " " + note;
-      const toml::source_region& source = key.source().begin.line > 0 ? key.source() : node.source();
-      fail(source, dotted, message);
-    }
-  }
-
-  const toml::table* table(const toml::table& parent, const std::string& key, const std::string& dotted) const {
-    const toml::node* node = parent.get(key);
-    if (!node) return nullptr;
-    if (!node->is_table()) fail(*node, dotted, fmt::format("{} must be a table, got {}", dotted, type_name(*node)));
-    return node->as_table();
-  }
-
-  double number(const toml::node& node, const std::string& dotted) const {
-    if (node.is_integer()) return static_cast<double>(node.as_integer()->get());
-    if (node.is_floating_point()) {
-      const double v = node.as_floating_point()->get();
-      if (!std::isfinite(v)) fail(node, dotted, fmt::format("{} must be a finite number, got {}", dotted, show_value(node)));
-      return v;
-    }
-    fail(node, dotted, fmt::format("{} must be a number, got {} {}", dotted, type_name(node), show_value(node)));
-  }
-
+  /** The optional keys: parent[key] read as number(), integer() or string(); nullopt when the
+   *  table or the key is absent. */
   std::optional<double> number(const toml::table* parent, const std::string& key, const std::string& dotted) const {
-    if (!parent) return std::nullopt;
-    const toml::node* node = parent->get(key);
-    if (!node) return std::nullopt;
-    return number(*node, dotted);
+    const toml::node* node = find(parent, key);
+    return node ? std::optional<double>(number(*node, dotted)) : std::nullopt;
   }
-
   std::optional<long long> integer(const toml::table* parent, const std::string& key, const std::string& dotted) const {
-    if (!parent) return std::nullopt;
-    const toml::node* node = parent->get(key);
-    if (!node) return std::nullopt;
-    if (!node->is_integer()) {
-      fail(*node, dotted, fmt::format("{} must be an integer, got {} {}", dotted, type_name(*node), show_value(*node)));
-    }
-    return node->as_integer()->get();
+    const toml::node* node = find(parent, key);
+    return node ? std::optional<long long>(integer(*node, dotted)) : std::nullopt;
+  }
+  std::optional<std::string> string(const toml::table* parent, const std::string& key, const std::string& dotted) const {
+    const toml::node* node = find(parent, key);
+    return node ? std::optional<std::string>(string(*node, dotted)) : std::nullopt;
   }
 
   /** A number (bounded_number) or an integer (bounded_integer) that must lie within the bound of
@@ -213,45 +141,17 @@ class SceneReader {
     return value;
   }
 
-  std::optional<std::string> string(const toml::table* parent, const std::string& key, const std::string& dotted) const {
-    if (!parent) return std::nullopt;
-    const toml::node* node = parent->get(key);
-    if (!node) return std::nullopt;
-    if (!node->is_string()) {
-      fail(*node, dotted, fmt::format("{} must be a string, got {} {}", dotted, type_name(*node), show_value(*node)));
-    }
-    return node->as_string()->get();
-  }
-
-  /** An array of exactly `size` numbers; `what` explains the expected size. */
-  std::vector<double> vector(const toml::node& node, const std::string& dotted, std::size_t size,
-                             const std::string& what) const {
-    const toml::array* array = node.as_array();
-    if (!array) {
-      fail(node, dotted, fmt::format("{} must be an array of {} numbers ({}), got {} {}", dotted, size, what,
-                                     type_name(node), show_value(node)));
-    }
-    if (array->size() != size) {
-      fail(node, dotted, fmt::format("{} has {} value{}; expected {} ({})", dotted, array->size(),
-                                     array->size() == 1 ? "" : "s", size, what));
-    }
-    std::vector<double> values;
-    for (std::size_t i = 0; i < array->size(); ++i) {
-      values.push_back(number(*array->get(i), fmt::format("{}[{}]", dotted, i)));
-    }
-    return values;
-  }
-
-  const std::string& file() const { return file_; }
-
  private:
+  static const toml::node* find(const toml::table* parent, const std::string& key) {
+    return parent ? parent->get(key) : nullptr;
+  }
+
   void check_bound(const toml::node& node, const std::string& dotted, std::string_view option, double value,
                    const std::string& shown) const {
     const OptionBound* bound = option_bound(option);
     if (!bound->accepts(value)) fail(node, dotted, fmt::format("{} {}, got {}", dotted, bound->rule, shown));
   }
 
-  std::string file_;
   std::map<std::string, std::string> origins_;
 };
 
@@ -315,17 +215,6 @@ std::string apply_override(toml::table& root, const std::string& assignment) {
   const toml::node& value = *snippet.get("value");
   value.visit([&](const auto& v) { table->insert_or_assign(path.back(), v); });
   return dotted;
-}
-
-std::string resolve_relative(const std::string& scene_path, const std::string& path) {
-  namespace fs = std::filesystem;
-  try {
-    const fs::path p(path);
-    if (p.is_absolute()) return path;
-    return (fs::path(scene_path).parent_path() / p).lexically_normal().string();
-  } catch (const std::exception&) {
-    return path;
-  }
 }
 
 bool looks_like_path(const std::string& spec) {
@@ -763,17 +652,7 @@ void read_output(const SceneReader& r, const toml::table& root, Scene& scene) {
 
 Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
                   const ModelResolver& resolve, const std::vector<std::string>& model_names) {
-  // A UTF-8 byte-order mark, which some editors write, is skipped (the ASCII filter below would
-  // refuse it); columns then count from the byte after it.
-  if (text.substr(0, 3) == "\xef\xbb\xbf") text.remove_prefix(3);
-  check_ascii_outside_strings(text, source_name);
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name);
-  } catch (const toml::parse_error& error) {
-    throw SceneError(fmt::format("{}:{}:{}: error: {}", source_name, error.source().begin.line,
-                                 error.source().begin.column, error.description()));
-  }
+  toml::table root = detail::parse_document(text, source_name);
   std::map<std::string, std::string> origins;
   for (const auto& assignment : overrides) {
     const std::string dotted = apply_override(root, assignment);

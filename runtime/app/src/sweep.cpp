@@ -15,11 +15,9 @@
 #include <random>
 #include <sstream>
 
-#define TOML_EXCEPTIONS 1
-#include <toml++/toml.h>
-
 #include "pardel/app/outputs.hpp"
 #include "pardel/app/trajectory_io.hpp"
+#include "toml_read.hpp"
 
 namespace pardel::app {
 
@@ -45,23 +43,9 @@ constexpr long long kMaxConfigurations = 10000;
 // (80 MB; count = 10^6 with interior_points = 1000 asked for 16 GB).
 constexpr long long kMaxRandomNumbers = 10000000;
 
-std::string join(const std::vector<std::string>& names, const char* separator = ", ") {
-  std::string out;
-  for (std::size_t i = 0; i < names.size(); ++i) out += (i ? separator : "") + names[i];
-  return out;
-}
-
-std::string type_name(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a floating-point number";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::table: return "a table";
-    default: return "a date or time";
-  }
-}
+using detail::join;
+using detail::resolve_relative;
+using detail::type_name;
 
 /** Integral values print as integers (so that grid.N = 80.0 from a range stays an integer key),
  *  others in the shortest text that reads back to the same double. */
@@ -87,78 +71,25 @@ std::string quote_toml_string(const std::string& text) {
 }
 
 /** Reads the sweep document; every error names FILE:LINE:COL. */
-class SweepReader {
+class SweepReader : public detail::TomlReader {
  public:
-  explicit SweepReader(std::string file) : file_(std::move(file)) {}
+  using TomlReader::TomlReader;
+  using TomlReader::fail;
+  using TomlReader::integer;
+  using TomlReader::where;
 
-  std::string where(const toml::source_region& source) const {
-    if (source.begin.line > 0) return fmt::format("{}:{}:{}", file_, source.begin.line, source.begin.column);
-    return file_;
-  }
-  std::string where(const toml::node& node) const { return where(node.source()); }
+  std::string where(const toml::node& node) const { return where(node.source(), ""); }
 
   [[noreturn]] void fail(const toml::source_region& source, const std::string& message) const {
-    throw SceneError(fmt::format("{}: error: {}", where(source), message));
+    fail(source, "", message);
   }
   [[noreturn]] void fail(const toml::node& node, const std::string& message) const { fail(node.source(), message); }
 
-  void check_keys(const toml::table& table, const std::string& prefix, const std::vector<std::string>& allowed) const {
-    for (auto&& [key, node] : table) {
-      const std::string name(key.str());
-      if (std::find(allowed.begin(), allowed.end(), name) != allowed.end()) continue;
-      const std::string dotted = prefix.empty() ? name : prefix + "." + name;
-      const std::string suggestion = nearest_name(name, allowed);
-      std::string message = fmt::format("unknown key '{}'", dotted);
-      if (!suggestion.empty()) {
-        message += fmt::format("; did you mean '{}'?", prefix.empty() ? suggestion : prefix + "." + suggestion);
-      } else {
-        message += fmt::format(" (valid keys{}: {})", prefix.empty() ? "" : " in " + prefix, join(allowed));
-      }
-      fail(key.source().begin.line > 0 ? key.source() : node.source(), message);
-    }
-  }
-
-  const toml::table* table(const toml::table& parent, const std::string& key, const std::string& dotted) const {
-    const toml::node* node = parent.get(key);
-    if (!node) return nullptr;
-    if (!node->is_table()) fail(*node, fmt::format("{} must be a table, got {}", dotted, type_name(*node)));
-    return node->as_table();
-  }
-
-  double number(const toml::node& node, const std::string& dotted) const {
-    if (node.is_integer()) return static_cast<double>(node.as_integer()->get());
-    if (node.is_floating_point()) {
-      const double v = node.as_floating_point()->get();
-      if (!std::isfinite(v)) fail(node, fmt::format("{} must be a finite number", dotted));
-      return v;
-    }
-    fail(node, fmt::format("{} must be a number, got {}", dotted, type_name(node)));
-  }
-
+  /** An integer from lo to hi. */
   long long integer(const toml::node& node, const std::string& dotted, long long lo, long long hi) const {
-    if (!node.is_integer()) fail(node, fmt::format("{} must be an integer, got {}", dotted, type_name(node)));
-    const long long v = node.as_integer()->get();
+    const long long v = integer(node, dotted);
     if (v < lo || v > hi) fail(node, fmt::format("{} must be between {} and {}, got {}", dotted, lo, hi, v));
     return v;
-  }
-
-  std::string string(const toml::node& node, const std::string& dotted) const {
-    if (!node.is_string()) fail(node, fmt::format("{} must be a string, got {}", dotted, type_name(node)));
-    return node.as_string()->get();
-  }
-
-  std::vector<double> point(const toml::node& node, const std::string& dotted, int ncoords,
-                            const std::string& coords) const {
-    const toml::array* array = node.as_array();
-    if (!array) fail(node, fmt::format("{} must be an array of {} numbers ({}), got {}", dotted, ncoords, coords,
-                                       type_name(node)));
-    if (static_cast<int>(array->size()) != ncoords) {
-      fail(node, fmt::format("{} has {} value{}; expected {} ({})", dotted, array->size(),
-                             array->size() == 1 ? "" : "s", ncoords, coords));
-    }
-    std::vector<double> values;
-    for (std::size_t i = 0; i < array->size(); ++i) values.push_back(number(*array->get(i), fmt::format("{}[{}]", dotted, i)));
-    return values;
   }
 
   /** A TOML value as text for --set (tables refused). */
@@ -177,15 +108,7 @@ class SweepReader {
     fail(node, fmt::format("{} must be a number, string, boolean or array, got {}", dotted, type_name(node)));
   }
 
- private:
-  std::string file_;
 };
-
-std::string resolve_relative(const std::string& base_file, const std::string& path) {
-  const fs::path p(path);
-  if (p.is_absolute()) return path;
-  return (fs::path(base_file).parent_path() / p).lexically_normal().string();
-}
 
 VaryAxis read_axis(const SweepReader& r, const toml::node& node, const std::string& name) {
   const toml::table* entry = node.as_table();
@@ -237,14 +160,7 @@ VaryAxis read_axis(const SweepReader& r, const toml::node& node, const std::stri
 Sweep parse_sweep(std::string_view text, const std::string& source_name,
                   const std::vector<std::string>& command_line_sets, const ModelResolver& resolve,
                   const std::vector<std::string>& model_names) {
-  check_ascii_outside_strings(text, source_name);
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name);
-  } catch (const toml::parse_error& error) {
-    throw SceneError(fmt::format("{}:{}:{}: error: {}", source_name, error.source().begin.line,
-                                 error.source().begin.column, error.description()));
-  }
+  const toml::table root = detail::parse_document(text, source_name);
   const SweepReader r(source_name);
   r.check_keys(root, "", kTopKeys);
   Sweep sweep;
@@ -365,7 +281,8 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
       }
       std::vector<std::vector<double>> polyline;
       for (std::size_t j = 0; j < list->size(); ++j) {
-        polyline.push_back(r.point(*list->get(j), fmt::format("{}.points[{}]", name, j), ncoords, coords_note));
+        polyline.push_back(r.vector(*list->get(j), fmt::format("{}.points[{}]", name, j),
+                                    static_cast<std::size_t>(ncoords), coords_note));
       }
       sweep.listed_guesses.push_back(std::move(polyline));
     }
@@ -400,8 +317,8 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
       const toml::node* hi = table->get("max");
       if (!lo || !hi) r.fail(*box, "random_guesses.box needs both min and max");
       spec.in_box = true;
-      spec.box_min = r.point(*lo, "random_guesses.box.min", ncoords, coords_note);
-      spec.box_max = r.point(*hi, "random_guesses.box.max", ncoords, coords_note);
+      spec.box_min = r.vector(*lo, "random_guesses.box.min", static_cast<std::size_t>(ncoords), coords_note);
+      spec.box_max = r.vector(*hi, "random_guesses.box.max", static_cast<std::size_t>(ncoords), coords_note);
       for (int i = 0; i < ncoords; ++i) {
         if (!(spec.box_min[i] <= spec.box_max[i])) {
           r.fail(*hi, fmt::format("random_guesses.box.max[{}] = {} is below min[{}] = {}", i, spec.box_max[i], i,
