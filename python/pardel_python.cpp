@@ -641,7 +641,7 @@ py::dict scene_info(const Scene& s) {
   py::list knots;
   for (const Knot& k : s.problem.knots) knots.append(py::make_tuple(k.t, vector(k.q)));
   out["knots"] = knots;
-  out["clock"] = app::to_string(s.problem.clock);
+  out["clock"] = to_string(s.problem.clock);
   out["method"] = to_string(s.options.method);
   out["tol"] = s.options.tol;
   out["rtol"] = s.options.rtol;

@@ -132,69 +132,75 @@ const pardel_discretization* find_discretization(const pardel_model& model, std:
   return nullptr;
 }
 
-const char* to_string(Method method) {
-  switch (method) {
-    case Method::automatic: return "auto";
-    case Method::jacobi: return "jacobi";
-    case Method::jacobi_newton: return "jacobi-newton";
-    case Method::newton: return "newton";
-    case Method::multigrid: return "multigrid";
-    case Method::hybrid: return "hybrid";
-  }
+namespace {
+
+/** One enum value and its name: each enum's names are one table of these. */
+template <class E>
+struct Named {
+  E value;
+  const char* name;
+};
+
+constexpr Named<Method> kMethods[] = {{Method::automatic, "auto"},         {Method::jacobi, "jacobi"},
+                                      {Method::jacobi_newton, "jacobi-newton"}, {Method::newton, "newton"},
+                                      {Method::multigrid, "multigrid"},     {Method::hybrid, "hybrid"}};
+constexpr Named<LinearSolver> kLinearSolvers[] = {{LinearSolver::block_ldlt, "ldlt"},
+                                                  {LinearSolver::cyclic_reduction, "cyclic-reduction"}};
+constexpr Named<NewtonShift> kNewtonShifts[] = {{NewtonShift::identity, "identity"},
+                                                {NewtonShift::difference, "difference"}};
+constexpr Named<ClockMode> kClockModes[] = {{ClockMode::none, "none"},
+                                            {ClockMode::free_final_time, "free_final_time"},
+                                            {ClockMode::fixed_total_time, "fixed_total_time"}};
+
+template <class E, std::size_t K>
+const char* name_in(const Named<E> (&table)[K], E value) {
+  for (const Named<E>& entry : table)
+    if (entry.value == value) return entry.name;
   return "unknown";
 }
 
-bool parse_method(std::string_view text, Method* method) {
-  static const Method all[] = {Method::automatic, Method::jacobi, Method::jacobi_newton, Method::newton, Method::multigrid,
-                               Method::hybrid};
-  for (Method m : all) {
-    if (text == to_string(m)) {
-      *method = m;
+template <class E, std::size_t K>
+bool in_table(const Named<E> (&table)[K], E value) {
+  for (const Named<E>& entry : table)
+    if (entry.value == value) return true;
+  return false;
+}
+
+template <class E, std::size_t K>
+bool parse_in(const Named<E> (&table)[K], std::string_view text, E* value) {
+  for (const Named<E>& entry : table) {
+    if (text == entry.name) {
+      *value = entry.value;
       return true;
     }
   }
   return false;
 }
 
-const char* to_string(LinearSolver solver) {
-  switch (solver) {
-    case LinearSolver::block_ldlt: return "ldlt";
-    case LinearSolver::cyclic_reduction: return "cyclic-reduction";
-  }
-  return "unknown";
+template <class E, std::size_t K>
+std::vector<std::string> names_in(const Named<E> (&table)[K]) {
+  std::vector<std::string> names;
+  for (const Named<E>& entry : table) names.emplace_back(entry.name);
+  return names;
 }
 
-bool parse_linear_solver(std::string_view text, LinearSolver* solver) {
-  if (text == "ldlt") {
-    *solver = LinearSolver::block_ldlt;
-    return true;
-  }
-  if (text == "cyclic-reduction") {
-    *solver = LinearSolver::cyclic_reduction;
-    return true;
-  }
-  return false;
-}
+}  // namespace
 
-const char* to_string(NewtonShift shift) {
-  switch (shift) {
-    case NewtonShift::identity: return "identity";
-    case NewtonShift::difference: return "difference";
-  }
-  return "unknown";
-}
+const char* to_string(Method method) { return name_in(kMethods, method); }
+bool parse_method(std::string_view text, Method* method) { return parse_in(kMethods, text, method); }
+std::vector<std::string> method_names() { return names_in(kMethods); }
 
-bool parse_newton_shift(std::string_view text, NewtonShift* shift) {
-  if (text == "identity") {
-    *shift = NewtonShift::identity;
-    return true;
-  }
-  if (text == "difference") {
-    *shift = NewtonShift::difference;
-    return true;
-  }
-  return false;
-}
+const char* to_string(LinearSolver solver) { return name_in(kLinearSolvers, solver); }
+bool parse_linear_solver(std::string_view text, LinearSolver* solver) { return parse_in(kLinearSolvers, text, solver); }
+std::vector<std::string> linear_solver_names() { return names_in(kLinearSolvers); }
+
+const char* to_string(NewtonShift shift) { return name_in(kNewtonShifts, shift); }
+bool parse_newton_shift(std::string_view text, NewtonShift* shift) { return parse_in(kNewtonShifts, text, shift); }
+std::vector<std::string> newton_shift_names() { return names_in(kNewtonShifts); }
+
+const char* to_string(ClockMode mode) { return name_in(kClockModes, mode); }
+bool parse_clock_mode(std::string_view text, ClockMode* mode) { return parse_in(kClockModes, text, mode); }
+std::vector<std::string> clock_mode_names() { return names_in(kClockModes); }
 
 const char* to_string(Termination termination) {
   switch (termination) {
@@ -280,12 +286,11 @@ bool Options::is_valid(std::string* error) const {
     const double value = member.value(*this);
     if (!member.bound.accepts(value)) return bad(member.bound.name, number(value), member.bound.rule);
   }
-  if (method != Method::automatic && method != Method::jacobi && method != Method::jacobi_newton && method != Method::newton &&
-      method != Method::multigrid && method != Method::hybrid)
+  if (!in_table(kMethods, method))
     return bad("method", std::to_string(static_cast<int>(method)), "is not a known method");
-  if (linear_solver != LinearSolver::block_ldlt && linear_solver != LinearSolver::cyclic_reduction)
+  if (!in_table(kLinearSolvers, linear_solver))
     return bad("linear_solver", std::to_string(static_cast<int>(linear_solver)), "is not a known linear solver");
-  if (newton_shift != NewtonShift::identity && newton_shift != NewtonShift::difference)
+  if (!in_table(kNewtonShifts, newton_shift))
     return bad("newton_shift", std::to_string(static_cast<int>(newton_shift)), "is not a known shift");
   return true;
 }

@@ -57,30 +57,24 @@ std::string boundary_prefix(int d) {
   }
 }
 
-bool parse_clock_mode(std::string_view text, ClockMode* mode) {
-  if (text == "none") *mode = ClockMode::none;
-  else if (text == "free_final_time") *mode = ClockMode::free_final_time;
-  else if (text == "fixed_total_time") *mode = ClockMode::fixed_total_time;
-  else return false;
-  return true;
-}
-
-const char* to_string(ClockMode mode) {
-  switch (mode) {
-    case ClockMode::none: return "none";
-    case ClockMode::free_final_time: return "free_final_time";
-    case ClockMode::fixed_total_time: return "fixed_total_time";
-  }
-  return "none";
-}
-
 namespace {
 
-const std::vector<std::string> kMethodNames = {"auto", "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"};
-const std::vector<std::string> kClockNames = {"none", "free_final_time", "fixed_total_time"};
+const std::vector<std::string> kMethodNames = method_names();
+const std::vector<std::string> kClockNames = clock_mode_names();
 const std::vector<std::string> kGuessKinds = {"linear", "polyline", "csv"};
 
 using detail::join;
+
+/** 'a' or 'b' / 'a', 'b' or 'c': the names a key accepts, as its error lists them. */
+std::string quoted_alternatives(const std::vector<std::string>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) out += i + 1 == names.size() ? " or " : ", ";
+    out += "'" + names[i] + "'";
+  }
+  return out;
+}
+
 using detail::resolve_relative;
 using detail::type_name;
 
@@ -479,13 +473,13 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   if (const auto shift = r.string(solver, "newton_shift", "solver.newton_shift")) {
     if (!parse_newton_shift(*shift, &options.newton_shift)) {
       r.fail(*solver->get("newton_shift"), "solver.newton_shift",
-             fmt::format("unknown newton_shift '{}' (expected 'identity' or 'difference')", *shift));
+             fmt::format("unknown newton_shift '{}' (expected {})", *shift, quoted_alternatives(newton_shift_names())));
     }
   }
   if (const auto ls = r.string(solver, "linear_solver", "solver.linear_solver")) {
     if (!parse_linear_solver(*ls, &options.linear_solver)) {
       r.fail(*solver->get("linear_solver"), "solver.linear_solver",
-             fmt::format("unknown linear_solver '{}' (expected 'ldlt' or 'cyclic-reduction')", *ls));
+             fmt::format("unknown linear_solver '{}' (expected {})", *ls, quoted_alternatives(linear_solver_names())));
     }
   }
   if (const auto threads = r.bounded_integer(solver, "threads", "solver.threads", "threads"))

@@ -44,6 +44,11 @@ enum class ClockMode {
                      ///< travel time t_N is an output (Zermelo with time-varying wind)
   fixed_total_time,  ///< Sundman adaptive step: t_{k+1} - t_k proportional to clock_k, summing to T
 };
+const char* to_string(ClockMode mode);
+/** Parses "none", "free_final_time", "fixed_total_time"; false if unknown. */
+bool parse_clock_mode(std::string_view text, ClockMode* mode);
+/** Every clock mode's name, in the order of the enum. */
+std::vector<std::string> clock_mode_names();
 
 /** An interpolation constraint (knot): q(t) = q at a grid node; only derivatives move there. */
 struct Knot {
@@ -107,6 +112,8 @@ enum class Method {
 const char* to_string(Method method);
 /** Parses "auto", "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"; false if unknown. */
 bool parse_method(std::string_view text, Method* method);
+/** Every method's name, in the order of the enum. */
+std::vector<std::string> method_names();
 
 /** How Newton-type methods solve the block-tridiagonal systems. */
 enum class LinearSolver {
@@ -116,6 +123,8 @@ enum class LinearSolver {
 const char* to_string(LinearSolver solver);
 /** Parses "ldlt", "cyclic-reduction"; false if unknown. */
 bool parse_linear_solver(std::string_view text, LinearSolver* solver);
+/** Every linear solver's name, in the order of the enum. */
+std::vector<std::string> linear_solver_names();
 
 /** The metric M of Newton's trust region |s|_M <= Delta (and of the shift H + lambda M). */
 enum class NewtonShift {
@@ -127,6 +136,8 @@ enum class NewtonShift {
 const char* to_string(NewtonShift shift);
 /** Parses "identity", "difference"; false if unknown. */
 bool parse_newton_shift(std::string_view text, NewtonShift* shift);
+/** Every trust-region metric's name, in the order of the enum. */
+std::vector<std::string> newton_shift_names();
 
 enum class Termination {
   converged,

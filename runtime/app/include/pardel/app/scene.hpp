@@ -82,10 +82,6 @@ std::string nearest_name(std::string_view word, const std::vector<std::string>& 
  *  then "d4_", "d5_", ...; the keys are this prefix followed by "0" or "N". */
 std::string boundary_prefix(int d);
 
-/** Parses a clock mode name ("none", "free_final_time", "fixed_total_time"). */
-bool parse_clock_mode(std::string_view text, ClockMode* mode);
-const char* to_string(ClockMode mode);
-
 /**
  * Refuses non-ASCII bytes outside strings and comments (SceneError naming FILE:LINE:COL) before
  * toml++ sees them: toml++ 3.3.0 reaches undefined behaviour on some non-ASCII code points where
