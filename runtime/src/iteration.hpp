@@ -70,6 +70,13 @@ class Iteration {
   Context& context() { return ctx_; }
   long iterations() const { return iteration_; }
 
+  // An interrupted solve's state (defined in levels.cpp, with the rest of resuming): its counters,
+  // history and wall time into `st`; back from it to resume the level (every counter) or for a
+  // warm start (the iteration count, the history and the wall time).
+  void capture_counters(SolverState& st) const;
+  void resume_counters(const SolverState& st);
+  void continue_count(const SolverState& st);
+
  protected:
   // The stopping rules, in the order they are tried; each returns true when it ends the level
   // (having set the summary or, on an intermediate level, settled it).

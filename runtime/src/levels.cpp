@@ -1,12 +1,16 @@
 /**
  * @file levels.cpp
  * The grid levels shared by the one-process and the distributed solve (levels.hpp): refinement
- * and grid-sequencing levels, nested iteration's extrapolated start.
+ * and grid-sequencing levels, nested iteration's extrapolated start, and resuming an interrupted
+ * solve: the checks of its state and the Iteration's counters captured and restored.
  */
 #include "levels.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+
+#include "iteration.hpp"
 
 namespace pardel::detail {
 
@@ -62,6 +66,117 @@ Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, 
 void note_stopped_level(const Problem& problem, int reached, Summary& summary) {
   if (summary.termination != Termination::converged && reached != problem.N)
     summary.message += " (stopped at the refinement level N = " + std::to_string(reached) + ")";
+}
+
+namespace {
+
+/** The state's iterate fits the problem at its N and is finite. */
+bool check_iterate(const Problem& problem, const SolverState& st, std::string* error) {
+  auto bad = [&](const std::string& msg) {
+    *error = "resume: " + msg;
+    return false;
+  };
+  if (st.N < 1) return bad("the saved grid has N = " + std::to_string(st.N));
+  Problem at_level = problem;
+  at_level.N = st.N;
+  std::string why;
+  if (!validate(at_level, st.trajectory, &why)) return bad("the saved trajectory does not fit the problem: " + why);
+  for (double v : st.trajectory.q)
+    if (!std::isfinite(v)) return bad("the saved trajectory has a non-finite value");
+  for (double v : st.trajectory.t)
+    if (!std::isfinite(v)) return bad("the saved node times have a non-finite value");
+  if (st.iteration < 0 || st.next_record < 0) return bad("negative iteration counters");
+  if (!(st.seconds >= 0 && st.seconds < 1e12)) return bad("the recorded wall time is not a duration in seconds");
+  return true;
+}
+
+}  // namespace
+
+bool check_state(const Problem& problem, const Options& options, const SolverState& st, const std::vector<int>& levels,
+                 std::string* error) {
+  auto bad = [&](const std::string& msg) {
+    *error = "resume: " + msg;
+    return false;
+  };
+  if (!st.valid) return bad("the solver state is empty (not captured from an interrupted solve)");
+  if (options.warm_start) return check_iterate(problem, st, error);
+  if (st.method != options.method)
+    return bad(std::string("the state is of method ") + to_string(st.method) + ", the options ask for " +
+               to_string(options.method) + " (a warm start continues from its iterate with another method)");
+  if (st.level < 0 || st.level >= static_cast<int>(levels.size()) || levels[static_cast<std::size_t>(st.level)] != st.N)
+    return bad("refinement level " + std::to_string(st.level) + " with N = " + std::to_string(st.N) +
+               " is not a level of this problem and options (grid.N " + std::to_string(problem.N) + ", " +
+               std::to_string(levels.size()) + " level(s) from N = " + std::to_string(levels.front()) + ")");
+  if (st.iteration < 0 || st.level_iteration < 0 || st.level_iteration > st.iteration || st.since_clock_update < 0 ||
+      st.next_record < 0 || st.best_iteration < 0 || st.best_iteration > st.iteration)
+    return bad("inconsistent iteration counters (iteration " + std::to_string(st.iteration) + ", at this level " +
+               std::to_string(st.level_iteration) + ")");
+  if (!check_iterate(problem, st, error)) return false;
+  std::string why;
+  if (st.previous_level.N > 0) {
+    Problem previous = problem;
+    previous.N = st.previous_level.N;
+    if (!validate(previous, st.previous_level, &why))
+      return bad("the saved solution of the previous refinement level does not fit the problem: " + why);
+  }
+  return true;
+}
+
+std::string method_state_misfit(const SolverState& st) {
+  return "resume: the solver state of method " + std::string(to_string(st.method)) + " has " +
+         std::to_string(st.method_state.size()) + " values that do not fit it";
+}
+
+void note_warm_start(const SolverState& warm, Summary& summary) {
+  summary.message += std::string(" (warm start from iteration ") + std::to_string(warm.iteration) + " of " +
+                     to_string(warm.method) + " at N = " + std::to_string(warm.N) + ")";
+}
+
+namespace {
+
+/** `seconds` as a duration of the steady clock (moves a solve's start back by a resumed wall time). */
+std::chrono::steady_clock::duration steady_seconds(double seconds) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+}  // namespace
+
+void Iteration::capture_counters(SolverState& st) const {
+  st.valid = true;
+  st.method = options_.method;
+  st.iteration = iteration_;
+  st.level_iteration = level_.level_it;
+  st.since_clock_update = level_.since_clock;
+  st.next_record = next_record_;
+  st.best_iteration = best_iteration_;
+  st.have_initial_residual = have_initial_;
+  st.initial_residual = r_initial_;
+  st.last_good_residual = last_good_residual_;
+  st.best_residual = best_residual_;
+  st.level_initial_residual = level_.r_level0;
+  st.level_checkpoint_residual = level_.r_checkpoint;
+  st.seconds = seconds();
+  st.history = s_.history;
+}
+
+void Iteration::continue_count(const SolverState& st) {
+  iteration_ = st.iteration;
+  next_record_ = st.next_record;
+  best_iteration_ = st.iteration;
+  r_initial_ = st.initial_residual;
+  have_initial_ = st.have_initial_residual;
+  s_.history = st.history;
+  start_ -= steady_seconds(st.seconds);
+}
+
+void Iteration::resume_counters(const SolverState& st) {
+  continue_count(st);
+  best_iteration_ = st.best_iteration;
+  last_good_residual_ = st.last_good_residual;
+  best_residual_ = st.best_residual;
+  level_ = LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
+                         st.level_checkpoint_residual};
+  resumed_level_ = true;
 }
 
 }  // namespace pardel::detail

@@ -3,7 +3,8 @@
  * Internal: the grid levels of a solve, written once for the one-process solve (solve.cpp) and
  * the solve over MPI ranks (mpi/distributed.cpp): which grids coarse-to-fine refinement and the
  * automatic method's grid sequencing visit, and where each level after the first starts (the
- * previous level's solution, or Newton's extrapolation from the two previous levels).
+ * previous level's solution, or Newton's extrapolation from the two previous levels), and the
+ * checks and counters of resuming an interrupted solve at a level (SolverState).
  */
 #ifndef PARDEL_RUNTIME_LEVELS_HPP
 #define PARDEL_RUNTIME_LEVELS_HPP
@@ -92,6 +93,19 @@ class LevelStarts {
 /** Appends to a summary that did not converge the note that it stopped at the refinement level
  *  N = `reached` below problem.N (nothing when reached == problem.N). */
 void note_stopped_level(const Problem& problem, int reached, Summary& summary);
+
+// ---- resuming an interrupted solve (Options::resume_from, warm_start), in one process or over ranks
+
+/** Checks an interrupted solve's state against the problem, the options and `levels` (the
+ *  one-process levels, refinement_levels): false with `error` ("resume: ...") if it does not fit. */
+bool check_state(const Problem& problem, const Options& options, const SolverState& st, const std::vector<int>& levels,
+                 std::string* error);
+
+/** The message of a method state that Method_::load_state refused. */
+std::string method_state_misfit(const SolverState& st);
+
+/** Appends to a warm start's summary from which state it started. */
+void note_warm_start(const SolverState& warm, Summary& summary);
 
 }  // namespace pardel::detail
 

@@ -87,62 +87,24 @@ class Driver : private OwnedContext, public detail::Iteration {
     method_.reset(ctx_);
     if (!method_.load_state(st.method_state)) {
       s_.termination = Termination::invalid_input;
-      s_.message = "resume: the solver state of method " + std::string(to_string(st.method)) + " has " +
-                   std::to_string(st.method_state.size()) + " values that do not fit it";
+      s_.message = detail::method_state_misfit(st);
       return false;
     }
-    iteration_ = st.iteration;
-    next_record_ = st.next_record;
-    r_initial_ = st.initial_residual;
-    last_good_residual_ = st.last_good_residual;
-    best_residual_ = st.best_residual;
-    best_iteration_ = st.best_iteration;
-    have_initial_ = st.have_initial_residual;
-    level_ = detail::LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
-                           st.level_checkpoint_residual};
-    resumed_level_ = true;
+    resume_counters(st);
     checked_regular_ = true;
-    s_.history = st.history;
-    start_ -= std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(st.seconds));
     return true;
-  }
-
-  /** A warm start: after enter_level from the state's iterate, the iteration count, the history
-   *  and the wall time continue the interrupted solve's. */
-  void continue_count(const SolverState& st) {
-    iteration_ = st.iteration;
-    next_record_ = st.next_record;
-    best_iteration_ = st.iteration;
-    r_initial_ = st.initial_residual;
-    have_initial_ = st.have_initial_residual;
-    s_.history = st.history;
-    start_ -= std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(st.seconds));
   }
 
   /** Everything resume_level needs, at the current iterate (after an interruption). */
   void capture(SolverState& st, int level) {
-    st.valid = true;
-    st.method = options_.method;
+    capture_counters(st);
     st.level = level;
     st.N = ctx_.N;
-    st.iteration = iteration_;
-    st.level_iteration = level_.level_it;
-    st.since_clock_update = level_.since_clock;
-    st.next_record = next_record_;
-    st.best_iteration = best_iteration_;
-    st.have_initial_residual = have_initial_;
-    st.initial_residual = r_initial_;
-    st.last_good_residual = last_good_residual_;
-    st.best_residual = best_residual_;
-    st.level_initial_residual = level_.r_level0;
-    st.level_checkpoint_residual = level_.r_checkpoint;
-    st.seconds = seconds();
     st.trajectory.N = ctx_.N;
     st.trajectory.dim = ctx_.dim;
     st.trajectory.t = ctx_.t;
     st.trajectory.q = ctx_.q;
     st.method_state = method_.save_state();
-    st.history = s_.history;
   }
 
   void write_result(Trajectory& out) {
@@ -188,57 +150,6 @@ std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, st
   return nullptr;
 }
 
-/** The state's iterate fits the problem at its N and is finite. */
-bool check_iterate(const Problem& problem, const SolverState& st, std::string* error) {
-  auto bad = [&](const std::string& msg) {
-    *error = "resume: " + msg;
-    return false;
-  };
-  if (st.N < 1) return bad("the saved grid has N = " + std::to_string(st.N));
-  Problem at_level = problem;
-  at_level.N = st.N;
-  std::string why;
-  if (!validate(at_level, st.trajectory, &why)) return bad("the saved trajectory does not fit the problem: " + why);
-  for (double v : st.trajectory.q)
-    if (!std::isfinite(v)) return bad("the saved trajectory has a non-finite value");
-  for (double v : st.trajectory.t)
-    if (!std::isfinite(v)) return bad("the saved node times have a non-finite value");
-  if (st.iteration < 0 || st.next_record < 0) return bad("negative iteration counters");
-  if (!(st.seconds >= 0 && st.seconds < 1e12)) return bad("the recorded wall time is not a duration in seconds");
-  return true;
-}
-
-/** Checks an interrupted solve's state against the problem, the options and the levels. */
-bool check_state(const Problem& problem, const Options& options, const SolverState& st, const std::vector<int>& levels,
-                 std::string* error) {
-  auto bad = [&](const std::string& msg) {
-    *error = "resume: " + msg;
-    return false;
-  };
-  if (!st.valid) return bad("the solver state is empty (not captured from an interrupted solve)");
-  if (options.warm_start) return check_iterate(problem, st, error);
-  if (st.method != options.method)
-    return bad(std::string("the state is of method ") + to_string(st.method) + ", the options ask for " +
-               to_string(options.method) + " (a warm start continues from its iterate with another method)");
-  if (st.level < 0 || st.level >= static_cast<int>(levels.size()) || levels[static_cast<std::size_t>(st.level)] != st.N)
-    return bad("refinement level " + std::to_string(st.level) + " with N = " + std::to_string(st.N) +
-               " is not a level of this problem and options (grid.N " + std::to_string(problem.N) + ", " +
-               std::to_string(levels.size()) + " level(s) from N = " + std::to_string(levels.front()) + ")");
-  if (st.iteration < 0 || st.level_iteration < 0 || st.level_iteration > st.iteration || st.since_clock_update < 0 ||
-      st.next_record < 0 || st.best_iteration < 0 || st.best_iteration > st.iteration)
-    return bad("inconsistent iteration counters (iteration " + std::to_string(st.iteration) + ", at this level " +
-               std::to_string(st.level_iteration) + ")");
-  if (!check_iterate(problem, st, error)) return false;
-  std::string why;
-  if (st.previous_level.N > 0) {
-    Problem previous = problem;
-    previous.N = st.previous_level.N;
-    if (!validate(previous, st.previous_level, &why))
-      return bad("the saved solution of the previous refinement level does not fit the problem: " + why);
-  }
-  return true;
-}
-
 }  // namespace
 
 Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
@@ -268,7 +179,7 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   }
   const std::vector<int> levels = detail::refinement_levels(problem, options, automatic);
   if (resume || warm) {
-    if (!check_state(problem, options, resume ? *resume : *warm, levels, &error)) {
+    if (!detail::check_state(problem, options, resume ? *resume : *warm, levels, &error)) {
       summary.termination = Termination::invalid_input;
       summary.message = error;
       return summary;
@@ -319,9 +230,7 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   }
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   detail::note_stopped_level(problem, trajectory.N, summary);
-  if (warm)
-    summary.message += std::string(" (warm start from iteration ") + std::to_string(warm->iteration) + " of " +
-                       to_string(warm->method) + " at N = " + std::to_string(warm->N) + ")";
+  if (warm) detail::note_warm_start(*warm, summary);
   return summary;
 }
 

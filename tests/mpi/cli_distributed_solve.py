@@ -2,14 +2,18 @@
 Jacobi-Newton writes the same trajectory.csv byte for byte (also under a clock: zermelo_tv with
 free final time, spacecraft_sundman with fixed total time, whose nodes move with their times), Newton
 the same trajectory to 1e-7; rank 0 alone writes the outputs and
-summary.json records the ranks."""
+summary.json records the ranks. Checkpoints: `mpirun -np 2 pardel solve` interrupted by SIGINT writes
+checkpoint.json, and its --resume, under mpirun or in one process, ends with the trajectory.csv of the
+uninterrupted run byte for byte."""
 import argparse
 import csv
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 
 
 def run(command):
@@ -21,6 +25,53 @@ def read_rows(path):
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
     return rows[0], [[float(v) for v in row] for row in rows[1:]]
+
+
+def interrupted_and_resumed(args):
+    """SIGINT to mpirun (which passes it on to the ranks as SIGTERM): rank 0 writes checkpoint.json;
+    `mpirun -np 2 pardel solve --resume DIR` and a one-process `pardel solve --resume` of a copy of
+    DIR both end with the trajectory of the uninterrupted run (Jacobi-Newton to max_iterations)."""
+    failures = []
+    scene = os.path.join(args.scenes, "fuel_nav.toml")
+    common = ["solve", scene, "--quiet", "--no-plot", "--threads", "1", "--set", "solver.method=jacobi-newton",
+              "--set", "solver.max_iterations=150000", "--set", "grid.N=400"]
+    mpirun = [args.mpirun, "-np", "2", "--oversubscribe"]
+    plain_dir = os.path.join(args.work, "resume_plain")
+    code, out, err = run(mpirun + [args.pardel] + common + ["--out", plain_dir])
+    if code != 3:
+        return [f"resume: the uninterrupted run exited {code}, expected 3\n{out}{err}"]
+    ranks_dir = os.path.join(args.work, "resume_np2")
+    started = time.time()
+    process = subprocess.Popen(mpirun + [args.pardel] + common + ["--out", ranks_dir], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    # The output folder is made just before the solve (and its signal handlers); then half a second.
+    while not os.path.isdir(ranks_dir) and process.poll() is None and time.time() - started < 60:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate()
+    checkpoint = os.path.join(ranks_dir, "checkpoint.json")
+    if not os.path.exists(checkpoint):
+        return [f"resume: no checkpoint.json after SIGINT at {time.time() - started:.1f} s (exit {process.returncode})"
+                f"\n{out}{err}"]
+    if "checkpoint written; continue with: pardel solve --resume" not in err:
+        failures.append(f"resume: the interrupted run did not report its checkpoint\n{out}{err}")
+    one_dir = os.path.join(args.work, "resume_one")
+    shutil.copytree(ranks_dir, one_dir)
+    expected = open(os.path.join(plain_dir, "trajectory.csv")).read()
+    for name, command, folder in [("mpirun -np 2 --resume", mpirun + [args.pardel], ranks_dir),
+                                  ("one-process --resume", [args.pardel], one_dir)]:
+        code, out, err = run(command + ["solve", "--resume", folder, "--quiet", "--no-plot"])
+        if code != 3:
+            failures.append(f"resume: {name} exited {code}, expected 3\n{out}{err}")
+            continue
+        if open(os.path.join(folder, "trajectory.csv")).read() != expected:
+            failures.append(f"resume: {name}: trajectory.csv differs from the uninterrupted run's")
+        if os.path.exists(os.path.join(folder, "checkpoint.json")):
+            failures.append(f"resume: {name} left its checkpoint.json behind")
+        with open(os.path.join(folder, "summary.json")) as f:
+            print(f"resume: {name} ended at iteration {json.load(f).get('iterations')}")
+    return failures
 
 
 def main():
@@ -81,6 +132,7 @@ def main():
             print(f"{name}: max |difference| of trajectory.csv = {worst:.3g}")
             if worst > tolerance:
                 failures.append(f"{name}: trajectories differ by {worst:.3g} > {tolerance}")
+    failures += interrupted_and_resumed(args)
     for failure in failures:
         print("FAIL:", failure)
     return 1 if failures else 0

@@ -6,8 +6,10 @@
  * threads inside the ranks; under fixed_total_time also when the clock moves nodes across ranks),
  * Newton and hybrid to the tolerance, the levels of refinement and of the automatic method's grid
  * sequencing (those of one process, from the first that fits the ranks), the halo exchange and the
- * rank-order sum, refusals, and a
- * NaN or an interruption on one rank ending every rank. The
+ * rank-order sum, refusals (a degenerate Lagrangian with the one-process message), a NaN or an
+ * interruption on one rank ending every rank, and checkpoints: the state of an interrupted solve
+ * over ranks is the one-process state, and resumed over ranks or in one process (so is a
+ * one-process state over ranks) it ends as the uninterrupted solve. The
  * acceptance test (LargeGrid.*: pendulum at N = 10^6) runs separately under a ctest label.
  */
 #include <gtest/gtest.h>
@@ -510,6 +512,375 @@ TEST(Point, MinimumSaddleAndKnotsAsInOneProcess) {
   expect_same_point(with_knots);
 }
 
+// ---- models written here: the sweep, gradient and action kernels from a full kernel
+
+using FullKernel = void (*)(double, double, double, const double*, const double*, const double*, double*, double*,
+                            double*, double*, double*, double*);
+template <FullKernel full>
+void sweep_of(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* D1,
+              double* D2, double* D11, double* D22) {
+  double Ld, D12;
+  full(h, t0, t1, q0, q1, p, &Ld, D1, D2, D11, &D12, D22);
+}
+template <FullKernel full>
+void grad_of(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* Ld,
+             double* D1, double* D2) {
+  double a, b, c;
+  full(h, t0, t1, q0, q1, p, Ld, D1, D2, &a, &b, &c);
+}
+template <FullKernel full>
+double action_of(double h, double t0, double t1, const double* q0, const double* q1, const double* p) {
+  double Ld, D1, D2;
+  grad_of<full>(h, t0, t1, q0, q1, p, &Ld, &D1, &D2);
+  return Ld;
+}
+
+// ---- checkpoints: an interrupted solve's state over ranks, resumed over ranks or in one process
+
+/** Sends rank 0's `v` to every rank. */
+template <class T>
+void broadcast_vector(std::vector<T>& v, MPI_Datatype type) {
+  long n = static_cast<long>(v.size());
+  MPI_Bcast(&n, 1, MPI_LONG, 0, MPI_COMM_WORLD);
+  v.resize(static_cast<std::size_t>(n));
+  MPI_Bcast(v.data(), static_cast<int>(n), type, 0, MPI_COMM_WORLD);
+}
+
+void broadcast_trajectory(pardel::Trajectory& tr) {
+  int sizes[2] = {tr.N, tr.dim};
+  MPI_Bcast(sizes, 2, MPI_INT, 0, MPI_COMM_WORLD);
+  tr.N = sizes[0];
+  tr.dim = sizes[1];
+  broadcast_vector(tr.t, MPI_DOUBLE);
+  broadcast_vector(tr.q, MPI_DOUBLE);
+}
+
+/** Rank 0's state on every rank (a distributed solve captures it on rank 0; the CLI's ranks each
+ *  read checkpoint.json). */
+void broadcast_state(pardel::SolverState& st) {
+  long counters[9] = {st.valid, static_cast<long>(st.method), st.level, st.N, st.iteration, st.level_iteration,
+                      st.since_clock_update, st.next_record, st.best_iteration};
+  MPI_Bcast(counters, 9, MPI_LONG, 0, MPI_COMM_WORLD);
+  st.valid = counters[0] != 0;
+  st.method = static_cast<pardel::Method>(counters[1]);
+  st.level = static_cast<int>(counters[2]);
+  st.N = static_cast<int>(counters[3]);
+  st.iteration = counters[4];
+  st.level_iteration = counters[5];
+  st.since_clock_update = counters[6];
+  st.next_record = counters[7];
+  st.best_iteration = counters[8];
+  double values[8] = {st.have_initial_residual ? 1.0 : 0.0, st.initial_residual, st.last_good_residual,
+                      st.best_residual, st.level_initial_residual, st.level_checkpoint_residual, st.seconds, 0};
+  MPI_Bcast(values, 8, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  st.have_initial_residual = values[0] != 0;
+  st.initial_residual = values[1];
+  st.last_good_residual = values[2];
+  st.best_residual = values[3];
+  st.level_initial_residual = values[4];
+  st.level_checkpoint_residual = values[5];
+  st.seconds = values[6];
+  broadcast_trajectory(st.trajectory);
+  broadcast_trajectory(st.previous_level);
+  broadcast_vector(st.method_state, MPI_DOUBLE);
+  std::vector<double> history;
+  for (const pardel::IterationRecord& r : st.history)
+    history.insert(history.end(), {static_cast<double>(r.iteration), static_cast<double>(r.N), r.residual, r.action,
+                                   r.seconds});
+  broadcast_vector(history, MPI_DOUBLE);
+  st.history.clear();
+  for (std::size_t i = 0; i + 4 < history.size(); i += 5)
+    st.history.push_back({static_cast<long>(history[i]), static_cast<int>(history[i + 1]), history[i + 2],
+                          history[i + 3], history[i + 4]});
+}
+
+/** Interrupts the solve by on_iteration at the record of iteration `at`: a distributed solve by
+ *  the last rank alone (`by_last_rank`), a solve in one process on every rank. */
+pardel::Options interrupted_at(pardel::Options options, long at, bool by_last_rank = false) {
+  const bool asks = !by_last_rank || world_rank() + 1 == world_size();
+  options.on_iteration = [asks, at](const pardel::IterationRecord& record) { return !(asks && record.iteration >= at); };
+  return options;
+}
+
+/** Both states hold the same iterate, level and counters (the one-process layout), bit for bit
+ *  (`tolerance` 0) or the iterates and the method's values to `tolerance`; the wall times aside. */
+void expect_same_state(const pardel::SolverState& a, const pardel::SolverState& b, double tolerance) {
+  EXPECT_TRUE(a.valid);
+  EXPECT_TRUE(b.valid);
+  EXPECT_EQ(a.method, b.method);
+  EXPECT_EQ(a.level, b.level);
+  EXPECT_EQ(a.N, b.N);
+  EXPECT_EQ(a.iteration, b.iteration);
+  EXPECT_EQ(a.level_iteration, b.level_iteration);
+  EXPECT_EQ(a.since_clock_update, b.since_clock_update);
+  EXPECT_EQ(a.next_record, b.next_record);
+  EXPECT_EQ(a.best_iteration, b.best_iteration);
+  EXPECT_EQ(a.have_initial_residual, b.have_initial_residual);
+  EXPECT_EQ(a.history.size(), b.history.size());
+  EXPECT_EQ(a.trajectory.N, b.trajectory.N);
+  ASSERT_EQ(a.trajectory.q.size(), b.trajectory.q.size());
+  ASSERT_EQ(a.trajectory.t.size(), b.trajectory.t.size());
+  ASSERT_EQ(a.method_state.size(), b.method_state.size());
+  EXPECT_EQ(a.previous_level.N, b.previous_level.N);
+  ASSERT_EQ(a.previous_level.q.size(), b.previous_level.q.size());
+  if (tolerance == 0) {
+    EXPECT_EQ(a.initial_residual, b.initial_residual);
+    EXPECT_EQ(a.best_residual, b.best_residual);
+    EXPECT_EQ(a.level_initial_residual, b.level_initial_residual);
+    EXPECT_EQ(a.trajectory.q, b.trajectory.q);
+    EXPECT_EQ(a.trajectory.t, b.trajectory.t);
+    EXPECT_EQ(a.method_state, b.method_state);
+    EXPECT_EQ(a.previous_level.q, b.previous_level.q);
+  } else {
+    EXPECT_LE(max_abs_difference(a.trajectory.q, b.trajectory.q), tolerance);
+    EXPECT_LE(max_abs_difference(a.previous_level.q, b.previous_level.q), tolerance);
+  }
+}
+
+/** A distributed solve interrupted at iteration `at`, its state (from rank 0) on every rank. */
+pardel::SolverState interrupted_over_ranks(const pardel::Problem& problem, const pardel::Options& options,
+                                           const pardel::Trajectory& guess, long at) {
+  pardel::Trajectory tr = guess;
+  pardel::Summary s = pardel::mpi::solve_distributed(problem, interrupted_at(options, at, true), tr);
+  EXPECT_EQ(s.termination, pardel::Termination::interrupted) << s.message;
+  EXPECT_EQ(s.iterations, at);
+  if (world_size() > 1 && world_rank() != 0) EXPECT_FALSE(s.state.valid);  // rank 0 holds the state
+  broadcast_state(s.state);
+  return s.state;
+}
+
+/** The uninterrupted distributed solve and the one resumed from `state`: the same iterations,
+ *  history and answer, bit for bit. */
+void expect_resumed_bit_for_bit(const pardel::Problem& problem, pardel::Options options,
+                                const pardel::Trajectory& guess, const pardel::SolverState& state) {
+  Both b;
+  b.one_traj = guess;  // the uninterrupted distributed solve, in the place of "one"
+  b.one = pardel::mpi::solve_distributed(problem, options, b.one_traj);
+  options.resume_from = &state;
+  b.dist = pardel::mpi::solve_distributed(problem, options, b.dist_traj);  // from no guess, as pardel solve --resume
+  expect_bit_for_bit(b);
+  EXPECT_EQ(b.dist.message, b.one.message);
+  if (world_rank() == 0)
+    std::printf("resumed at iteration %ld (N = %d): %ld iterations, %s\n", state.iteration, state.N,
+                b.dist.iterations, pardel::to_string(b.dist.termination));
+}
+
+TEST(Resume, NewtonInterruptedOverRanksResumesBitForBit) {
+  // Levels 50, 100, 200 (Newton's extrapolation needs the previous level's solution from the
+  // state): interrupted on the first level, on the second and on the last.
+  const auto problem = fuel_nav(200);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.refine_start_N = 50;
+  options.refine_factor = 2;
+  options.tol = 1e-10;
+  options.threads = 1;
+  const auto guess = pardel::linear_guess(problem);
+  pardel::Trajectory tr = guess;
+  const pardel::Summary plain = pardel::mpi::solve_distributed(problem, options, tr);
+  ASSERT_EQ(level_Ns(plain), (std::vector<int>{50, 100, 200}));
+  std::vector<long> at;  // the second iteration of each level
+  for (std::size_t i = 1; i < plain.history.size(); ++i)
+    if (plain.history[i].N != plain.history[i - 1].N || i == 1) at.push_back(plain.history[i].iteration + 1);
+  ASSERT_EQ(at.size(), 3u);
+  for (long k : at) {
+    const pardel::SolverState state = interrupted_over_ranks(problem, options, guess, k);
+    EXPECT_EQ(state.previous_level.N, state.level > 0 ? level_Ns(plain)[static_cast<std::size_t>(state.level) - 1] : 0);
+    expect_resumed_bit_for_bit(problem, options, guess, state);
+  }
+}
+
+TEST(Resume, HybridInterruptedOverRanksResumesBitForBit) {
+  const auto problem = fuel_nav(80);
+  pardel::Options options;
+  options.method = pardel::Method::hybrid;
+  options.tol = 1e-10;
+  options.threads = 1;
+  // In the sweeps (phase 0 of the state) from the linear guess; in Newton's steps (phase 1) from
+  // a perturbed solution, which switches after a few sweeps.
+  const auto guess = pardel::linear_guess(problem);
+  const pardel::SolverState sweeping = interrupted_over_ranks(problem, options, guess, 5);
+  ASSERT_FALSE(sweeping.method_state.empty());
+  EXPECT_EQ(sweeping.method_state[0], 0.0);
+  expect_resumed_bit_for_bit(problem, options, guess, sweeping);
+  pardel::Trajectory near = guess;
+  pardel::Options newton = options;
+  newton.method = pardel::Method::newton;
+  ASSERT_TRUE(pardel::solve(problem, newton, near).converged());
+  for (int k = 1; k < problem.N; ++k)
+    near.q[static_cast<std::size_t>(2 * k)] += 0.3 * std::sin(M_PI * k / problem.N);
+  pardel::Trajectory tr = near;
+  const pardel::Summary plain = pardel::mpi::solve_distributed(problem, options, tr);
+  ASSERT_TRUE(plain.converged()) << plain.message;
+  const pardel::SolverState stepping = interrupted_over_ranks(problem, options, near, plain.iterations - 1);
+  ASSERT_FALSE(stepping.method_state.empty());
+  EXPECT_EQ(stepping.method_state[0], 1.0);
+  expect_resumed_bit_for_bit(problem, options, near, stepping);
+}
+
+TEST(Resume, JacobiNewtonStateOverRanksIsTheOneProcessStateBitForBit) {
+  // The seed's method is bit for bit over ranks: the state captured over ranks is the one-process
+  // state, and either one resumed over ranks or in one process ends as the uninterrupted solves.
+  const auto problem = interp_fuel(240);
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.max_iterations = 300;
+  options.history_every = 7;
+  options.threads = 1;
+  const auto guess = pardel::linear_guess(problem);
+  const pardel::SolverState over_ranks = interrupted_over_ranks(problem, options, guess, 140);
+  pardel::Trajectory tr = guess;
+  const pardel::Summary one = pardel::solve(problem, interrupted_at(options, 140), tr);
+  ASSERT_EQ(one.termination, pardel::Termination::interrupted) << one.message;
+  expect_same_state(one.state, over_ranks, 0);
+  expect_resumed_bit_for_bit(problem, options, guess, one.state);
+  // The state of the ranks resumed in one process: the uninterrupted one-process solve.
+  pardel::Trajectory plain_traj = guess, resumed_traj;
+  const pardel::Summary plain = pardel::solve(problem, options, plain_traj);
+  options.resume_from = &over_ranks;
+  const pardel::Summary resumed = pardel::solve(problem, options, resumed_traj);
+  EXPECT_EQ(resumed.termination, plain.termination) << resumed.message;
+  EXPECT_EQ(resumed.iterations, plain.iterations);
+  EXPECT_EQ(resumed.residual, plain.residual);
+  EXPECT_EQ(resumed.action, plain.action);
+  EXPECT_EQ(resumed.history.size(), plain.history.size());
+  EXPECT_EQ(resumed_traj.q, plain_traj.q);
+}
+
+TEST(Clock, ResumedOverRanksBitForBit) {
+  // Under fixed_total_time the state carries the node times; the level resumes at them.
+  auto problem = bundled_problem("zermelo_tv", "trapezoid", 1.0, 60, {1, 6}, {6, 2});
+  problem.clock = pardel::ClockMode::fixed_total_time;
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.clock_update_every = 7;
+  options.max_iterations = 200;
+  options.threads = 1;
+  const auto guess = pardel::linear_guess(problem);
+  const pardel::SolverState state = interrupted_over_ranks(problem, options, guess, 95);
+  expect_resumed_bit_for_bit(problem, options, guess, state);
+  pardel::Trajectory tr = guess;
+  const pardel::Summary one = pardel::solve(problem, interrupted_at(options, 95), tr);
+  expect_same_state(one.state, state, 0);
+}
+
+TEST(Resume, NewtonStatesMoveBetweenOneProcessAndRanks) {
+  // The state of one process resumed over ranks, and the state of the ranks resumed in one
+  // process, agree with the uninterrupted solves to the tolerance (as Levels.NewtonRefinement...).
+  const auto problem = fuel_nav(200);
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.refine_start_N = 50;
+  options.refine_factor = 2;
+  options.tol = 1e-10;
+  options.threads = 1;
+  const auto guess = pardel::linear_guess(problem);
+  const long at = 9;
+  pardel::Trajectory tr = guess;
+  const pardel::Summary one = pardel::solve(problem, interrupted_at(options, at), tr);
+  ASSERT_EQ(one.termination, pardel::Termination::interrupted) << one.message;
+  const pardel::SolverState over_ranks = interrupted_over_ranks(problem, options, guess, at);
+  expect_same_state(one.state, over_ranks, 1e-9);
+  Both b;  // one process from the ranks' state, the ranks from one process's state
+  pardel::Options resumed = options;
+  resumed.resume_from = &over_ranks;
+  b.one = pardel::solve(problem, resumed, b.one_traj);
+  resumed.resume_from = &one.state;
+  b.dist = pardel::mpi::solve_distributed(problem, resumed, b.dist_traj);
+  expect_newton_agrees(b, options.tol, 1e-7);
+  Both plain = solve_both(problem, options, guess);
+  EXPECT_NEAR(b.one.action, plain.one.action, 1e-12 * (1 + std::fabs(plain.one.action)));
+  if (world_rank() == 0) {
+    EXPECT_LE(max_abs_difference(b.one_traj.q, plain.one_traj.q), 1e-7);
+    EXPECT_LE(max_abs_difference(b.dist_traj.q, plain.dist_traj.q), 1e-7);
+  }
+}
+
+TEST(Resume, WarmStartOverRanksAsInOneProcess) {
+  // Jacobi-Newton's iterate continued by Newton (pardel solve --resume DIR --set solver.method=newton).
+  const auto problem = fuel_nav(200);
+  pardel::Options sweeps;
+  sweeps.method = pardel::Method::jacobi_newton;
+  sweeps.threads = 1;
+  const pardel::SolverState state = interrupted_over_ranks(problem, sweeps, pardel::linear_guess(problem), 30);
+  pardel::Options newton;
+  newton.method = pardel::Method::newton;
+  newton.tol = 1e-10;
+  newton.threads = 1;
+  newton.resume_from = &state;
+  newton.warm_start = true;
+  const Both b = solve_both(problem, newton, pardel::Trajectory{});
+  expect_newton_agrees(b, newton.tol, 1e-7);
+  EXPECT_GT(b.dist.iterations, 30);
+  EXPECT_EQ(b.dist.history.front().iteration, b.one.history.front().iteration);
+  EXPECT_NE(b.dist.message.find("(warm start from iteration 30 of jacobi-newton at N = 200)"), std::string::npos)
+      << b.dist.message;
+}
+
+TEST(Resume, AStateThatDoesNotFitIsRefusedAsInOneProcess) {
+  const auto problem = fuel_nav(100);
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.threads = 1;
+  const pardel::SolverState state = interrupted_over_ranks(problem, options, pardel::linear_guess(problem), 10);
+  options.resume_from = &state;
+  // Another N; another method; a method state that does not fit.
+  const Both wrong_N = solve_both(fuel_nav(120), options, pardel::Trajectory{});
+  EXPECT_EQ(wrong_N.dist.termination, pardel::Termination::invalid_input);
+  EXPECT_EQ(wrong_N.dist.message, wrong_N.one.message);
+  EXPECT_NE(wrong_N.dist.message.find("resume: refinement level 0 with N = 100"), std::string::npos)
+      << wrong_N.dist.message;
+  pardel::SolverState newton_state = state;
+  newton_state.method = pardel::Method::newton;
+  options.method = pardel::Method::newton;
+  options.resume_from = &newton_state;
+  const Both misfit = solve_both(problem, options, pardel::Trajectory{});
+  EXPECT_EQ(misfit.dist.termination, pardel::Termination::invalid_input);
+  EXPECT_EQ(misfit.dist.message, misfit.one.message);
+  EXPECT_NE(misfit.dist.message.find("values that do not fit"), std::string::npos) << misfit.dist.message;
+}
+
+// A Lagrangian without velocity, L = x^2 / 2 (trapezoid): D12 Ld = 0 on every interval.
+void still_full(double h, double, double, const double* q0, const double* q1, const double*, double* Ld, double* D1,
+                double* D2, double* D11, double* D12, double* D22) {
+  *Ld = h * (q0[0] * q0[0] + q1[0] * q1[0]) / 4;
+  D1[0] = h * q0[0] / 2;
+  D2[0] = h * q1[0] / 2;
+  D11[0] = D22[0] = h / 2;
+  D12[0] = 0;
+}
+const char* const still_coords[] = {"x"};
+const pardel_discretization still_discs[] = {
+    {"trapezoid", 2, still_full, sweep_of<still_full>, grad_of<still_full>, action_of<still_full>}};
+const pardel_model still_model = {PARDEL_KERNEL_ABI_VERSION, "no_velocity_1d", "", 1, 1, 1, still_coords, 0, nullptr,
+                                  nullptr, 0, nullptr, 1, still_discs, nullptr, PARDEL_COST_ACTION};
+
+/** A problem of a 1-D model written here, from x = 0 to x = 1 over [0, T]. */
+pardel::Problem written_problem(const pardel_model& model, double T, int N) {
+  pardel::Problem problem;
+  problem.model = &model;
+  problem.discretization = &model.discretizations[0];
+  problem.T = T;
+  problem.N = N;
+  problem.q0 = {0};
+  problem.qN = {1};
+  return problem;
+}
+
+TEST(Refusal, DegenerateLagrangianAsInOneProcess) {
+  const pardel::Problem problem = written_problem(still_model, 2, 83);
+  for (pardel::Method method : {pardel::Method::jacobi_newton, pardel::Method::newton}) {
+    pardel::Options options;
+    options.method = method;
+    options.threads = 1;
+    const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+    EXPECT_EQ(b.dist.termination, pardel::Termination::invalid_input) << b.dist.message;
+    EXPECT_EQ(b.dist.message, b.one.message);
+    EXPECT_NE(b.dist.message.find("is degenerate"), std::string::npos) << b.dist.message;
+    EXPECT_EQ(b.dist.iterations, 0);
+  }
+}
+
 TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   if (world_size() < 2) GTEST_SKIP() << "refusals apply to more than one rank";
   const auto problem = fuel_nav(100);
@@ -519,13 +890,19 @@ TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   auto s = pardel::mpi::solve_distributed(problem, multigrid, guess);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
   EXPECT_NE(s.message.find("solver.method = multigrid"), std::string::npos) << s.message;
-  pardel::SolverState state;
-  pardel::Options resume;
-  resume.resume_from = &state;
+  // A state of a level too small for the ranks (refine_start_N = 4: N + 1 < 3 ranks).
+  pardel::Options coarse;
+  coarse.method = pardel::Method::jacobi_newton;
+  coarse.refine_start_N = 4;
+  coarse.refine_factor = 2;
+  coarse.threads = 1;
   guess = pardel::linear_guess(problem);
-  s = pardel::mpi::solve_distributed(problem, resume, guess);
+  const pardel::Summary one = pardel::solve(problem, interrupted_at(coarse, 1), guess);
+  ASSERT_EQ(one.state.N, 4);
+  coarse.resume_from = &one.state;
+  s = pardel::mpi::solve_distributed(problem, coarse, guess);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
-  EXPECT_NE(s.message.find("--resume"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("resume: refinement level 0 with N = 4 is too small for"), std::string::npos) << s.message;
   auto small = fuel_nav(4);
   guess = pardel::linear_guess(small);
   s = pardel::mpi::solve_distributed(small, pardel::Options{}, guess);
@@ -549,36 +926,16 @@ void nan_full(double h, double t0, double, const double* q0, const double* q1, c
     *Ld = D1[0] = D2[0] = D11[0] = D12[0] = D22[0] = nan;
   }
 }
-void nan_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* D1,
-               double* D2, double* D11, double* D22) {
-  double Ld, D12;
-  nan_full(h, t0, t1, q0, q1, p, &Ld, D1, D2, D11, &D12, D22);
-}
-void nan_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* Ld,
-              double* D1, double* D2) {
-  double a, b, c;
-  nan_full(h, t0, t1, q0, q1, p, Ld, D1, D2, &a, &b, &c);
-}
-double nan_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p) {
-  double Ld, D1, D2;
-  nan_grad(h, t0, t1, q0, q1, p, &Ld, &D1, &D2);
-  return Ld;
-}
 const char* const nan_coords[] = {"x"};
 const char* const nan_params[] = {"omega"};
 const double nan_defaults[] = {2.0};
-const pardel_discretization nan_discs[] = {{"trapezoid", 2, nan_full, nan_sweep, nan_grad, nan_action}};
+const pardel_discretization nan_discs[] = {
+    {"trapezoid", 2, nan_full, sweep_of<nan_full>, grad_of<nan_full>, action_of<nan_full>}};
 const pardel_model nan_model = {PARDEL_KERNEL_ABI_VERSION, "nan_harmonic", "", 1, 1, 1, nan_coords, 1, nan_params,
                                 nan_defaults, 0, nullptr, 1, nan_discs, nullptr, PARDEL_COST_ACTION};
 
 TEST(Failure, NaNOnOneRankEndsEveryRankAsNonFinite) {
-  pardel::Problem problem;
-  problem.model = &nan_model;
-  problem.discretization = &nan_discs[0];
-  problem.T = 1;
-  problem.N = 30;
-  problem.q0 = {0};
-  problem.qN = {1};
+  const pardel::Problem problem = written_problem(nan_model, 1, 30);
   for (pardel::Method method : {pardel::Method::jacobi_newton, pardel::Method::newton}) {
     pardel::Options options;
     options.method = method;

@@ -12,7 +12,10 @@
  * of schur_solver.hpp. The levels of coarse-to-fine refinement and of the automatic method's grid
  * sequencing are the one-process solve's (levels.hpp): each level but the last is set up from the
  * whole start trajectory, which every rank holds, and its solution is gathered on every rank to
- * start the next; the last level releases the whole trajectory before it iterates.
+ * start the next; the last level releases the whole trajectory before it iterates. An interrupted
+ * solve's state (SolverState) is the one-process state, gathered on rank 0; a resumed state (of
+ * one process or of any number of ranks) is checked as in one process (levels.hpp) and each rank
+ * sets up its own nodes at the state's level from it.
  */
 #include "pardel/distributed.hpp"
 
@@ -68,9 +71,6 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
   if (options.method == Method::multigrid)
     return fail(std::string("solver.method = ") + to_string(options.method) + over +
                 " (distributed methods: jacobi, jacobi-newton, newton, hybrid); run it on one rank");
-  if (options.resume_from != nullptr)
-    return fail("resuming a checkpoint (pardel solve --resume, Options::resume_from)" + over +
-                ": a checkpoint continues a one-process solve; resume it without mpirun");
   if (!fits_ranks(problem.N, ranks))
     return fail("grid.N = " + std::to_string(problem.N) + " is too small for " + std::to_string(ranks) +
                 " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks)");
@@ -170,43 +170,42 @@ bool setup_local(const Problem& problem, int N, int threads, const Trajectory& g
   return true;
 }
 
-/** The whole iterate of the current level and its node times in `out`, from the owned nodes of
- *  every rank: on every rank (`everywhere`) or on rank 0 alone, the other ranks' `out` emptied.
- *  Collective. */
-void gather_trajectory(const Local& local, bool everywhere, Trajectory& out) {
+/** The owned nodes' values of `values`, an array in the local node layout with `per_node` values
+ *  a node, in node order over all ranks ((N+1) per_node values): in `out` on every rank
+ *  (`everywhere`) or on rank 0 alone, the other ranks' `out` emptied. Collective. */
+void gather_nodes(const Local& local, const double* values, int per_node, bool everywhere, std::vector<double>& out) {
   const Layout& L = local.layout;
-  const Context& ctx = local.ctx;
-  const int d = ctx.dim;
-  const std::size_t R = static_cast<std::size_t>(L.ranks), n1 = static_cast<std::size_t>(L.N) + 1;
+  const std::size_t R = static_cast<std::size_t>(L.ranks);
   std::vector<int> counts(R), displs(R);
   for (int r = 0; r < L.ranks; ++r) {
     const NodeRange range = owned_nodes(L.N, L.ranks, r);
     counts[static_cast<std::size_t>(r)] = range.last - range.first + 1;
     displs[static_cast<std::size_t>(r)] = range.first;
   }
-  if (everywhere || L.rank == 0) {
-    out.t.assign(n1, 0.0);
-    out.q.assign(n1 * static_cast<std::size_t>(d), 0.0);
-  } else {
-    std::vector<double>().swap(out.t);
-    std::vector<double>().swap(out.q);
-  }
+  if (everywhere || L.rank == 0)
+    out.assign((static_cast<std::size_t>(L.N) + 1) * static_cast<std::size_t>(per_node), 0.0);
+  else
+    std::vector<double>().swap(out);
   const int owned = L.last - L.first + 1;
-  const double* t = ctx.t.data() + L.local(L.first);
-  const double* q = ctx.q.data() + static_cast<std::size_t>(L.local(L.first)) * static_cast<std::size_t>(d);
+  const double* mine = values + static_cast<std::size_t>(L.local(L.first)) * static_cast<std::size_t>(per_node);
   MPI_Datatype node_type;
-  MPI_Type_contiguous(d, MPI_DOUBLE, &node_type);
+  MPI_Type_contiguous(per_node, MPI_DOUBLE, &node_type);
   MPI_Type_commit(&node_type);
-  if (everywhere) {
-    MPI_Allgatherv(t, owned, MPI_DOUBLE, out.t.data(), counts.data(), displs.data(), MPI_DOUBLE, local.comm);
-    MPI_Allgatherv(q, owned, node_type, out.q.data(), counts.data(), displs.data(), node_type, local.comm);
-  } else {
-    MPI_Gatherv(t, owned, MPI_DOUBLE, out.t.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, local.comm);
-    MPI_Gatherv(q, owned, node_type, out.q.data(), counts.data(), displs.data(), node_type, 0, local.comm);
-  }
+  if (everywhere)
+    MPI_Allgatherv(mine, owned, node_type, out.data(), counts.data(), displs.data(), node_type, local.comm);
+  else
+    MPI_Gatherv(mine, owned, node_type, out.data(), counts.data(), displs.data(), node_type, 0, local.comm);
   MPI_Type_free(&node_type);
-  out.N = L.N;
-  out.dim = d;
+}
+
+/** The whole iterate of the current level and its node times in `out`, from the owned nodes of
+ *  every rank: on every rank (`everywhere`) or on rank 0 alone, the other ranks' `out` emptied.
+ *  Collective. */
+void gather_trajectory(const Local& local, bool everywhere, Trajectory& out) {
+  gather_nodes(local, local.ctx.t.data(), 1, everywhere, out.t);
+  gather_nodes(local, local.ctx.q.data(), local.ctx.dim, everywhere, out.q);
+  out.N = local.layout.N;
+  out.dim = local.ctx.dim;
 }
 
 /** The discrete action at the local iterate through the action kernel, summed in node order over all ranks. */
@@ -576,8 +575,51 @@ class DistributedSpace {
   std::vector<double> halo_;
 };
 
+/**
+ * The trust-region Newton of trust_region.hpp over the ranks, with its state in the one-process
+ * layout (checkpoints move between one process and the ranks): the head of trust_region.hpp's
+ * save_state (the same on every rank), then, while its watchdog is active, the reference point
+ * of the whole grid in node order, of which each rank holds its local nodes.
+ */
 template <int D>
-using DistributedNewton = pardel::detail::TrustRegionNewton<DistributedSpace<D>>;
+class DistributedNewton : public pardel::detail::TrustRegionNewton<DistributedSpace<D>> {
+  using Base = pardel::detail::TrustRegionNewton<DistributedSpace<D>>;
+
+ public:
+  DistributedNewton(const Options& options, Local& local) : Base(options, local), local_(local) {}
+
+  /** The state on rank 0, the reference point gathered there; the other ranks return the head
+   *  alone. Collective. */
+  std::vector<double> save_state() const override {
+    std::vector<double> s = Base::save_state();
+    if (s.size() <= kHead) return s;
+    std::vector<double> whole;
+    gather_nodes(local_, s.data() + kHead, local_.ctx.dim, false, whole);
+    s.resize(kHead);
+    s.insert(s.end(), whole.begin(), whole.end());
+    return s;
+  }
+
+  /** From the one-process layout (on every rank): the head and this rank's local nodes of the
+   *  reference point. */
+  bool load_state(const std::vector<double>& s) override {
+    const Layout& L = local_.layout;
+    const std::size_t d = static_cast<std::size_t>(local_.ctx.dim);
+    const std::size_t whole = (static_cast<std::size_t>(L.N) + 1) * d;
+    if (s.size() <= kHead) return Base::load_state(s);
+    if (s.size() != kHead + whole) return false;
+    std::vector<double> mine(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(kHead));
+    const auto from = s.begin() + static_cast<std::ptrdiff_t>(kHead + static_cast<std::size_t>(L.lo) * d);
+    mine.insert(mine.end(), from, from + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(L.hi - L.lo + 1) * d));
+    return Base::load_state(mine);
+  }
+
+ private:
+  /** Values of trust_region.hpp's save_state before the reference point: radius, shift, best
+   *  residual, escapes and the watchdog's active, failed, steps, F, pred, norm. */
+  static constexpr std::size_t kHead = 4 + 6;
+  Local& local_;
+};
 
 /** What the returned point is, over the ranks: the kind and inertia of the Hessian (its smallest
  *  eigenvalues are computed in one process only). Collective. */
@@ -633,6 +675,23 @@ class DistributedHybrid : public pardel::detail::Method_ {
     return newton_mode_ ? newton_.accept_stop(ctx, final_level) : true;
   }
   void times_changed() override { newton_.times_changed(); }
+
+  /** hybrid.cpp's layout: {phase (0 sweeps, 1 newton), sweeps since the last check, then
+   *  Newton's state} (Newton's gathered on rank 0). Collective. */
+  std::vector<double> save_state() const override {
+    std::vector<double> state = {newton_mode_ ? 1.0 : 0.0, static_cast<double>(since_check_)};
+    const std::vector<double> newton = newton_.save_state();
+    state.insert(state.end(), newton.begin(), newton.end());
+    return state;
+  }
+  bool load_state(const std::vector<double>& state) override {
+    if (state.size() < 2 || (state[0] != 0 && state[0] != 1) || !(state[1] >= 0 && state[1] <= check_every))
+      return false;
+    if (!newton_.load_state(std::vector<double>(state.begin() + 2, state.end()))) return false;
+    newton_mode_ = state[0] == 1;
+    since_check_ = static_cast<int>(state[1]);
+    return true;
+  }
 
  private:
   static constexpr int check_every = 10;
@@ -729,9 +788,85 @@ class Driver : public pardel::detail::Iteration {
     s_.wall_seconds = seconds();
   }
 
+  /** solve.cpp's resume_level over the ranks: this rank's context at the state's level from the
+   *  state's iterate and node times (every rank holds the whole state, checked by check_state),
+   *  its share of the method's state and every counter. False with `error` on every rank when
+   *  the state does not fit on any. Collective. */
+  bool resume_level(const Problem& problem, const SolverState& st, int ranks, int rank, std::string* error) {
+    local_.layout = detail::make_layout(st.N, ranks, rank);
+    const Layout& L = local_.layout;
+    std::string message;
+    if (!detail::all_true(setup_local(problem, st.N, s_.threads, st.trajectory, local_, &message), local_.comm)) {
+      *error = "resume: " + message;
+      return false;
+    }
+    std::copy(st.trajectory.t.begin() + L.lo, st.trajectory.t.begin() + L.hi + 1, ctx_.t.begin());
+    if (problem.clock == ClockMode::fixed_total_time)
+      for (std::size_t j = 0; j + 1 < ctx_.t.size(); ++j) ctx_.hk[j] = ctx_.t[j + 1] - ctx_.t[j];
+    method_.reset(ctx_);
+    if (!detail::all_true(method_.load_state(st.method_state), local_.comm)) {
+      *error = pardel::detail::method_state_misfit(st);
+      return false;
+    }
+    resume_counters(st);
+    return true;
+  }
+
+  /** The state of the interrupted solve on rank 0, as one process captures it: the iterate and
+   *  its node times (`result`, which write_result gathered there) and the method's state in node
+   *  order; the other ranks' `st` stays empty. Collective. */
+  void capture(SolverState& st, int level, const Trajectory& result) {
+    std::vector<double> method_state = method_.save_state();
+    if (local_.layout.rank != 0) return;
+    capture_counters(st);
+    st.level = level;
+    st.N = result.N;
+    st.trajectory = result;
+    st.method_state = std::move(method_state);
+  }
+
  private:
   Local& local_;
 };
+
+/** solve.cpp's check that the Lagrangian is regular (assessment.hpp lagrangian_regular) at the
+ *  current iterate and node times of the ranks: made on rank 0 from the whole level gathered
+ *  there (for the length of the check), its verdict and message sent to every rank. Collective. */
+bool lagrangian_regular_over_ranks(const Local& local, std::string* message) {
+  Trajectory whole;
+  gather_trajectory(local, false, whole);
+  int regular = 1;
+  std::string text;
+  if (local.layout.rank == 0) {
+    // What lagrangian_regular reads: the model and discretization, the grid and its steps, the iterate.
+    const Context& ctx = local.ctx;
+    Context probe;
+    probe.model = ctx.model;
+    probe.disc = ctx.disc;
+    probe.dim = ctx.dim;
+    probe.ncoords = ctx.ncoords;
+    probe.order = ctx.order;
+    probe.params = ctx.params;
+    probe.clock = ctx.clock;
+    probe.t0 = ctx.t0;
+    probe.T = ctx.T;
+    probe.N = whole.N;
+    probe.t = std::move(whole.t);
+    probe.q = std::move(whole.q);
+    probe.hk.assign(static_cast<std::size_t>(whole.N), ctx.T / whole.N);
+    if (ctx.clock == ClockMode::fixed_total_time)
+      for (std::size_t k = 0; k < probe.hk.size(); ++k) probe.hk[k] = probe.t[k + 1] - probe.t[k];
+    regular = pardel::detail::lagrangian_regular(probe, &text) ? 1 : 0;
+  }
+  MPI_Bcast(&regular, 1, MPI_INT, 0, local.comm);
+  if (regular) return true;
+  int length = static_cast<int>(text.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, local.comm);
+  text.resize(static_cast<std::size_t>(length));
+  MPI_Bcast(text.data(), length, MPI_CHAR, 0, local.comm);
+  *message = text;
+  return false;
+}
 
 std::unique_ptr<pardel::detail::Method_> make_method(const Options& options, int dim, Local& local) {
   switch (options.method) {
@@ -761,52 +896,84 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
   summary.N = problem.N;
   summary.threads = pardel::detail::resolve_threads(options.threads);
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-  std::string error;
-  bool valid = distributed_supported(problem, options, ranks, &error) && options.is_valid(&error) &&
-               validate(problem, trajectory, &error);
-  // Every rank was given the same input; agree anyway, so that no rank iterates alone.
-  if (!detail::all_true(valid, MPI_COMM_WORLD)) {
+  auto refuse = [&](std::string message) {
     summary.termination = Termination::invalid_input;
-    summary.message = valid ? "invalid input on another rank" : error;
+    summary.message = std::move(message);
     summary.wall_seconds = elapsed();
     return summary;
+  };
+  const SolverState* resume = options.resume_from;
+  const SolverState* warm = resume && options.warm_start ? resume : nullptr;
+  if (warm) resume = nullptr;
+  std::string error;
+  bool valid = distributed_supported(problem, options, ranks, &error) && options.is_valid(&error) &&
+               (resume || warm || validate(problem, trajectory, &error));
+  // The one-process levels (a state's level is an index into them); the solve starts at the first
+  // on which every rank owns 3 nodes (the last one does).
+  std::vector<int> levels;
+  if (valid) levels = pardel::detail::refinement_levels(problem, options, automatic);
+  const std::size_t first_fit = static_cast<std::size_t>(
+      std::find_if(levels.begin(), levels.end(), [ranks](int n) { return fits_ranks(n, ranks); }) - levels.begin());
+  if (valid && (resume || warm))
+    valid = pardel::detail::check_state(problem, options, resume ? *resume : *warm, levels, &error);
+  if (valid && resume && static_cast<std::size_t>(resume->level) < first_fit) {
+    valid = false;
+    error = "resume: refinement level " + std::to_string(resume->level) + " with N = " + std::to_string(resume->N) +
+            " is too small for " + std::to_string(ranks) +
+            " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks); resume it on fewer ranks";
   }
-  // The one-process levels from the first on which every rank owns 3 nodes (the last one does).
-  std::vector<int> levels = pardel::detail::refinement_levels(problem, options, automatic);
-  levels.erase(levels.begin(),
-               std::find_if(levels.begin(), levels.end(), [ranks](int n) { return fits_ranks(n, ranks); }));
+  // Every rank was given the same input; agree anyway, so that no rank iterates alone.
+  if (!detail::all_true(valid, MPI_COMM_WORLD)) return refuse(valid ? "invalid input on another rank" : error);
   Local local;
   local.comm = MPI_COMM_WORLD;
   std::unique_ptr<pardel::detail::Method_> method = make_method(options, problem.model->dim, local);
   RankPartition partition(local);
   Driver driver(options, *method, partition, local, summary);
   pardel::detail::LevelStarts starts(problem, options);
+  if (resume) starts.previous() = resume->previous_level;
   Trajectory resampled;
+  bool checked_regular = false;
   // Sets up this rank's context at the level of N intervals from `from`, a whole trajectory that
-  // every rank holds (resampled to N when it lies on another grid).
+  // every rank holds (resampled to N when it lies on another grid), as solve.cpp's enter_level.
   auto enter_level = [&](const Trajectory& from, int N) {
     const Trajectory& src = from.N == N ? from : (resampled = resample(problem, from, N));
     local.layout = detail::make_layout(N, ranks, rank);
     const bool constrained = setup_local(problem, N, summary.threads, src, local, &error);
-    return detail::all_true(constrained, MPI_COMM_WORLD);
-  };
-  for (std::size_t l = 0; l < levels.size(); ++l) {
-    const bool last = l + 1 == levels.size();
-    if (!starts.enter(trajectory, levels[l], enter_level)) {
-      summary.termination = Termination::invalid_input;
-      summary.message = error;
-      summary.wall_seconds = elapsed();
-      return summary;
+    if (!detail::all_true(constrained, MPI_COMM_WORLD)) return false;
+    if (problem.clock != ClockMode::none) update_times_distributed(local, Positions::follow_times);
+    if (!checked_regular) {
+      checked_regular = true;
+      if (!lagrangian_regular_over_ranks(local, &error)) return false;
     }
+    method->reset(local.ctx);
+    return true;
+  };
+  std::size_t l = first_fit;
+  if (warm)  // the first level at or above the state's N
+    while (l + 1 < levels.size() && levels[l] < warm->N) ++l;
+  const std::size_t first_level = l;
+  for (l = resume ? static_cast<std::size_t>(resume->level) : l; l < levels.size(); ++l) {
+    const bool last = l + 1 == levels.size();
+    bool entered;
+    if (resume && l == static_cast<std::size_t>(resume->level)) {
+      entered = driver.resume_level(problem, *resume, ranks, rank, &error);
+    } else if (warm && l == first_level) {
+      entered = enter_level(warm->trajectory, levels[l]);
+      if (entered) driver.continue_count(*warm);
+    } else {
+      entered = starts.enter(trajectory, levels[l], enter_level);
+    }
+    if (!entered) return refuse(error);
     resampled = Trajectory{};
     if (last) {
-      // From here on a rank holds O(N / ranks) values.
+      // From here on a rank holds O(N / ranks) values; rank 0 keeps the previous level's solution
+      // that an interruption's state carries for Newton's extrapolation, as in one process.
       std::vector<double>().swap(trajectory.q);
       std::vector<double>().swap(trajectory.t);
+      Trajectory previous = std::move(starts.previous());
       starts.release();
+      if (rank == 0 && starts.extrapolates()) starts.previous() = std::move(previous);
     }
-    if (problem.clock != ClockMode::none) update_times_distributed(local, Positions::follow_times);
-    method->reset(local.ctx);
     const bool settled = driver.run_level(last);
     if (!settled || last) break;
     // The level's solution on every rank: the start of the next level.
@@ -815,11 +982,16 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
     starts.settled(std::move(solution));
   }
   driver.write_result(trajectory);
+  if (summary.termination == Termination::interrupted) {
+    driver.capture(summary.state, static_cast<int>(l), trajectory);
+    if (rank == 0 && starts.extrapolates()) summary.state.previous_level = starts.previous();
+  }
   pardel::detail::note_stopped_level(problem, trajectory.N, summary);
   // What the returned point is; the method's storage is released first, as in one process.
   method.reset();
   if (summary.termination != Termination::invalid_input && summary.termination != Termination::non_finite)
     assess_distributed(options, local, summary.point);
+  if (warm) pardel::detail::note_warm_start(*warm, summary);
   return summary;
 }
 
