@@ -25,6 +25,8 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
 
 /** Pivot eigenvalues below this fraction of their block's size count as zero. */
 constexpr double kZeroPivot = 1e-12;
+/** The budget of the inverse subspace iteration for the two smallest eigenvalues at a minimum. */
+constexpr int kInverseIterations = 12;
 
 /** Fixed components are identity rows of the assembled matrix: they add +1 eigenvalues that are
  *  not the action's; they are taken out of the counts. */
@@ -106,7 +108,7 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
     if (m == 2) X1[i] /= std::sqrt(norm[1]);
   }
   double theta[2] = {0, 0}, previous[2] = {-1, -1};
-  for (int it = 0; it < 12; ++it) {
+  for (int it = 0; it < kInverseIterations; ++it) {
     if (m == 2)
       H.solve_ldlt(X0, X1, Y0, Y1);
     else
@@ -153,7 +155,10 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
                          (m < 2 || std::fabs(theta[1] - previous[1]) <= 3e-3 * std::fabs(theta[1]));
     previous[0] = theta[0];
     previous[1] = theta[1];
-    if (settled) break;
+    if (settled) {
+      out.lambda_settled = true;
+      break;
+    }
   }
   out.lambda_min = theta[0];
   out.lambda_next = theta[1];
@@ -165,11 +170,19 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
                       "next (%.3g); the action is determined to round-off, the trajectory only up to a motion of "
                       "size about %.2g along one direction",
                       out.lambda_min, out.lambda_min / out.lambda_next, out.lambda_next, out.soft_motion);
-  } else {
+  } else if (out.lambda_settled) {
     out.note = format("a strict local minimum: Hessian positive definite, eigenvalues from %.3g (next %.3g) to at "
                       "most %.3g",
                       out.lambda_min, out.lambda_next, out.lambda_max);
+  } else {
+    out.note = format("a strict local minimum: Hessian positive definite, eigenvalues from at most %.3g (next at "
+                      "most %.3g) to at most %.3g",
+                      out.lambda_min, out.lambda_next, out.lambda_max);
   }
+  if (!out.lambda_settled)
+    out.note += format("; the two smallest are upper bounds: Ritz values of %.0f inverse iterations that had not "
+                       "settled",
+                       static_cast<double>(kInverseIterations));
   // Round-off in the DEL residual moves a solution by up to the condition number times 1e-16
   // (relative): say so where that exceeds 1e-3 (high orders at large N: the condition grows like
   // N^(2 order)).

@@ -7,6 +7,7 @@
 #include "iteration.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -18,6 +19,11 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0) {
   char buf[512];
   std::snprintf(buf, sizeof buf, fmt, a, b, c);
   return buf;
+}
+
+/** `seconds` as a duration of the steady clock (moves a solve's start back by a resumed wall time). */
+std::chrono::steady_clock::duration steady_seconds(double seconds) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 }  // namespace
@@ -277,5 +283,43 @@ void OneProcess::check_next(const Context& ctx, const StepOutcome& outcome, int*
 }
 
 double OneProcess::action(Context& ctx) { return action_at(ctx, ctx.q); }
+
+void Iteration::capture_counters(SolverState& st) const {
+  st.valid = true;
+  st.method = options_.method;
+  st.iteration = iteration_;
+  st.level_iteration = level_.level_it;
+  st.since_clock_update = level_.since_clock;
+  st.next_record = next_record_;
+  st.best_iteration = best_iteration_;
+  st.have_initial_residual = have_initial_;
+  st.initial_residual = r_initial_;
+  st.last_good_residual = last_good_residual_;
+  st.best_residual = best_residual_;
+  st.level_initial_residual = level_.r_level0;
+  st.level_checkpoint_residual = level_.r_checkpoint;
+  st.seconds = seconds();
+  st.history = s_.history;
+}
+
+void Iteration::continue_count(const SolverState& st) {
+  iteration_ = st.iteration;
+  next_record_ = st.next_record;
+  best_iteration_ = st.iteration;
+  r_initial_ = st.initial_residual;
+  have_initial_ = st.have_initial_residual;
+  s_.history = st.history;
+  start_ -= steady_seconds(st.seconds);
+}
+
+void Iteration::resume_counters(const SolverState& st) {
+  continue_count(st);
+  best_iteration_ = st.best_iteration;
+  last_good_residual_ = st.last_good_residual;
+  best_residual_ = st.best_residual;
+  level_ = LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
+                         st.level_checkpoint_residual};
+  resumed_level_ = true;
+}
 
 }  // namespace pardel::detail

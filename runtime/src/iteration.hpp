@@ -70,7 +70,7 @@ class Iteration {
   Context& context() { return ctx_; }
   long iterations() const { return iteration_; }
 
-  // An interrupted solve's state (defined in levels.cpp, with the rest of resuming): its counters,
+  // An interrupted solve's state: its counters,
   // history and wall time into `st`; back from it to resume the level (every counter) or for a
   // warm start (the iteration count, the history and the wall time).
   void capture_counters(SolverState& st) const;

@@ -2,15 +2,13 @@
  * @file levels.cpp
  * The grid levels shared by the one-process and the distributed solve (levels.hpp): refinement
  * and grid-sequencing levels, nested iteration's extrapolated start, and resuming an interrupted
- * solve: the checks of its state and the Iteration's counters captured and restored.
+ * solve: the checks of its state (the Iteration's counters are captured and restored in
+ * iteration.cpp).
  */
 #include "levels.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-
-#include "iteration.hpp"
 
 namespace pardel::detail {
 
@@ -130,53 +128,6 @@ std::string method_state_misfit(const SolverState& st) {
 void note_warm_start(const SolverState& warm, Summary& summary) {
   summary.message += std::string(" (warm start from iteration ") + std::to_string(warm.iteration) + " of " +
                      to_string(warm.method) + " at N = " + std::to_string(warm.N) + ")";
-}
-
-namespace {
-
-/** `seconds` as a duration of the steady clock (moves a solve's start back by a resumed wall time). */
-std::chrono::steady_clock::duration steady_seconds(double seconds) {
-  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
-}
-
-}  // namespace
-
-void Iteration::capture_counters(SolverState& st) const {
-  st.valid = true;
-  st.method = options_.method;
-  st.iteration = iteration_;
-  st.level_iteration = level_.level_it;
-  st.since_clock_update = level_.since_clock;
-  st.next_record = next_record_;
-  st.best_iteration = best_iteration_;
-  st.have_initial_residual = have_initial_;
-  st.initial_residual = r_initial_;
-  st.last_good_residual = last_good_residual_;
-  st.best_residual = best_residual_;
-  st.level_initial_residual = level_.r_level0;
-  st.level_checkpoint_residual = level_.r_checkpoint;
-  st.seconds = seconds();
-  st.history = s_.history;
-}
-
-void Iteration::continue_count(const SolverState& st) {
-  iteration_ = st.iteration;
-  next_record_ = st.next_record;
-  best_iteration_ = st.iteration;
-  r_initial_ = st.initial_residual;
-  have_initial_ = st.have_initial_residual;
-  s_.history = st.history;
-  start_ -= steady_seconds(st.seconds);
-}
-
-void Iteration::resume_counters(const SolverState& st) {
-  continue_count(st);
-  best_iteration_ = st.best_iteration;
-  last_good_residual_ = st.last_good_residual;
-  best_residual_ = st.best_residual;
-  level_ = LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
-                         st.level_checkpoint_residual};
-  resumed_level_ = true;
 }
 
 }  // namespace pardel::detail

@@ -107,6 +107,8 @@ def num(x):
 
 
 def fmt_g(x, digits=3):
+    if isinstance(x, str) and x.startswith("<="):
+        return "≤ " + fmt_g(x[2:], digits)
     x = num(x)
     if math.isnan(x):
         return "—"
@@ -317,7 +319,10 @@ def point_of(summary):
         elif inertia is None:
             parts = [point.get(k) for k in ("inertia_positive", "inertia_negative", "inertia_zero")]
             inertia = "/".join(str(v) for v in parts) if any(v is not None for v in parts) else ""
-        return str(point.get("kind", "")), "point", str(inertia), point.get("lambda_min", "")
+        lam = point.get("lambda_min", "")
+        if point.get("lambda_settled") is False and point.get("kind") == "minimum":
+            lam = f"<={lam}"  # an upper bound: the inverse iteration had not settled
+        return str(point.get("kind", "")), "point", str(inertia), lam
     cert = summary.get("certificate")
     if isinstance(cert, dict) and "inertia_negative" in cert:
         pos, neg, zero = cert.get("inertia_positive"), cert.get("inertia_negative"), cert.get("inertia_zero")

@@ -127,6 +127,7 @@ nlohmann::ordered_json point_json(const PointAssessment& p) {
   j["lambda_min"] = p.lambda_min;
   j["lambda_next"] = p.lambda_next;
   j["lambda_max_bound"] = p.lambda_max;
+  j["lambda_settled"] = p.lambda_settled;
   j["nearly_degenerate"] = p.nearly_degenerate;
   j["soft_motion"] = p.soft_motion;
   j["note"] = p.note;

@@ -308,6 +308,10 @@ struct PointAssessment {
   double lambda_min = 0;    ///< smallest eigenvalue (minimum only; 0 otherwise)
   double lambda_next = 0;   ///< the next one, from above (a Ritz value; 0 with one row or at a non-minimum)
   double lambda_max = 0;    ///< Gershgorin's upper bound on the largest |eigenvalue|
+  /** lambda_min and lambda_next settled in the inverse iteration (to about 1e-4 and 3e-3); false:
+   *  they are the Ritz values where its iteration budget ended, upper bounds on the two smallest
+   *  eigenvalues (the note says so) */
+  bool lambda_settled = false;
   /** A minimum whose smallest eigenvalue is below 1e-4 of the next: the action is determined to
    *  round-off, the trajectory only up to a motion along the eigenvector of lambda_min. */
   bool nearly_degenerate = false;
