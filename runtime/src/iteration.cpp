@@ -284,6 +284,26 @@ void OneProcess::check_next(const Context& ctx, const StepOutcome& outcome, int*
 
 double OneProcess::action(Context& ctx) { return action_at(ctx, ctx.q); }
 
+void Iteration::summarize() {
+  s_.N = partition_.global_N(ctx_);
+  s_.iterations = iteration_;
+  s_.residual = ctx_.residual;
+  s_.action = partition_.action(ctx_);
+  s_.final_time = partition_.final_time(ctx_);
+  s_.residual_floor = ctx_.residual_floor;
+  s_.tolerance = target_residual();
+  if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != s_.N) {
+    IterationRecord rec;
+    rec.iteration = iteration_;
+    rec.N = s_.N;
+    rec.residual = s_.residual;
+    rec.action = s_.action;
+    rec.seconds = seconds();
+    s_.history.push_back(rec);
+  }
+  s_.wall_seconds = seconds();
+}
+
 void Iteration::capture_counters(SolverState& st) const {
   st.valid = true;
   st.method = options_.method;

@@ -42,6 +42,8 @@ class Partition {
   virtual bool all(bool yes) { return yes; }
   /** The number of intervals of the whole grid (ctx.N is this process's). */
   virtual int global_N(const Context& ctx) const { return ctx.N; }
+  /** t_N, the time of the grid's last node (the same on every process). */
+  virtual double final_time(const Context& ctx) { return ctx.t.back(); }
 };
 
 /** The counters of one grid level (members so that an interruption can capture them). */
@@ -74,6 +76,9 @@ class Iteration {
   // history and wall time into `st`; back from it to resume the level (every counter) or for a
   // warm start (the iteration count, the history and the wall time).
   void capture_counters(SolverState& st) const;
+  /** The summary's numbers at the current iterate (the same on every process) and the history's
+   *  record of it, then the wall time; the drivers add the trajectory. */
+  void summarize();
   void resume_counters(const SolverState& st);
   void continue_count(const SolverState& st);
 

@@ -112,23 +112,7 @@ class Driver : private OwnedContext, public detail::Iteration {
     out.dim = ctx_.dim;
     out.t = ctx_.t;
     out.q = ctx_.q;
-    s_.N = ctx_.N;
-    s_.iterations = iteration_;
-    s_.residual = ctx_.residual;
-    s_.action = detail::action_at(ctx_, ctx_.q);
-    s_.final_time = ctx_.t.back();
-    s_.residual_floor = ctx_.residual_floor;
-    s_.tolerance = target_residual();
-    if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != ctx_.N) {
-      IterationRecord rec;
-      rec.iteration = iteration_;
-      rec.N = ctx_.N;
-      rec.residual = s_.residual;
-      rec.action = s_.action;
-      rec.seconds = seconds();
-      s_.history.push_back(rec);
-    }
-    s_.wall_seconds = seconds();
+    summarize();
   }
 
  private:

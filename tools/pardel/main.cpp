@@ -350,9 +350,11 @@ int run_solve_unguarded(const SolveArgs& args) {
   progress.finish();
   scene.options.on_iteration = nullptr;
   // A checkpoint that does not fit is refused before anything in the folder is overwritten (under
-  // mpirun a resumed solve is refused as any other invalid input, below, by rank 0 alone).
-  if (ranks == 1 && resume && summary.termination == Termination::invalid_input)
+  // mpirun, by rank 0 alone).
+  if (resume && summary.termination == Termination::invalid_input) {
+    if (!root) return exit_code(summary.termination);
     throw CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
+  }
   // Input the runtime refused (a degenerate model, a method this build lacks, fewer nodes than the
   // ranks need, ...): an error, and nothing is written.
   if (summary.termination == Termination::invalid_input) {

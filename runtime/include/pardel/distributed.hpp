@@ -40,16 +40,18 @@ NodeRange owned_nodes(int N, int ranks, int rank);
 /**
  * Whether solve_distributed can run this problem with these options on `ranks` ranks (always true
  * for one rank). On false, `message` names the scene key or option that cannot be distributed
- * (solver.method, a resumed checkpoint, or grid.N too small for the ranks). Refinement levels and
- * the automatic method's grid sequencing are distributed; levels too small for the ranks are
- * skipped (the solve starts at the first level on which every rank owns 3 nodes).
+ * (solver.method, or grid.N too small for the ranks). Refinement levels and the automatic
+ * method's grid sequencing are distributed; levels too small for the ranks are skipped (the solve
+ * starts at the first level on which every rank owns 3 nodes). A resumed state is checked by the
+ * solve (a level too small for the ranks is refused there).
  */
 bool distributed_supported(const Problem& problem, const Options& options, int ranks, std::string* message);
 
 /**
  * Solves the problem over all ranks of MPI_COMM_WORLD; every rank must call it with the same
- * problem, options and initial guess (`trajectory`, on the problem's grid). The guess is released
- * before the iteration, so a rank holds O(N / ranks) values while it iterates. On return rank 0
+ * problem, options and initial guess (`trajectory`, on the problem's grid). Every rank holds the
+ * guess and the coarser levels' solutions until the finest level starts; there they are released,
+ * so a rank holds O(N / ranks) values while it iterates on the finest grid. On return rank 0
  * holds the whole final iterate in `trajectory` (gathered), the other ranks an empty trajectory
  * (N and dim set, no values); the Summary is the same on every rank. Options::on_iteration is
  * called on every rank; the solve is interrupted when it returns false on any of them.

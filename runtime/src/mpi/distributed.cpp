@@ -752,6 +752,11 @@ class RankPartition final : public pardel::detail::Partition {
   double action(Context& ctx) override { return global_action(local_, ctx.q); }
   bool all(bool yes) override { return detail::all_true(yes, local_.comm); }
   int global_N(const Context&) const override { return local_.layout.N; }
+  double final_time(const Context& ctx) override {
+    double t = ctx.t.back();  // t_N, held by the last rank
+    MPI_Bcast(&t, 1, MPI_DOUBLE, local_.layout.ranks - 1, local_.comm);
+    return t;
+  }
 
  private:
   Local& local_;
@@ -767,23 +772,7 @@ class Driver : public pardel::detail::Iteration {
   /** Fills the summary's numbers (the same on every rank) and gathers the iterate of the current
    *  level on rank 0. */
   void write_result(Trajectory& out) {
-    const Layout& L = local_.layout;
-    s_.N = L.N;
-    s_.iterations = iteration_;
-    s_.residual = ctx_.residual;
-    s_.action = global_action(local_, ctx_.q);
-    s_.final_time = ctx_.t.back();  // t_N, held by the last rank
-    MPI_Bcast(&s_.final_time, 1, MPI_DOUBLE, L.ranks - 1, local_.comm);
-    s_.residual_floor = ctx_.residual_floor;
-    if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != L.N) {
-      IterationRecord rec;
-      rec.iteration = iteration_;
-      rec.N = L.N;
-      rec.residual = s_.residual;
-      rec.action = s_.action;
-      rec.seconds = seconds();
-      s_.history.push_back(rec);
-    }
+    summarize();
     gather_trajectory(local_, false, out);
     s_.wall_seconds = seconds();
   }
