@@ -141,9 +141,11 @@ struct Named {
   const char* name;
 };
 
-constexpr Named<Method> kMethods[] = {{Method::automatic, "auto"},         {Method::jacobi, "jacobi"},
-                                      {Method::jacobi_newton, "jacobi-newton"}, {Method::newton, "newton"},
-                                      {Method::multigrid, "multigrid"},     {Method::hybrid, "hybrid"}};
+constexpr Named<Method> kMethods[] = {{Method::automatic, "auto"},
+                                      {Method::jacobi, "jacobi"},
+                                      {Method::jacobi_newton, "jacobi-newton"},
+                                      {Method::newton, "newton"},
+                                      {Method::hybrid, "hybrid"}};
 constexpr Named<LinearSolver> kLinearSolvers[] = {{LinearSolver::block_ldlt, "ldlt"},
                                                   {LinearSolver::cyclic_reduction, "cyclic-reduction"}};
 constexpr Named<NewtonShift> kNewtonShifts[] = {{NewtonShift::identity, "identity"},

@@ -1,7 +1,8 @@
 /**
  * @file certificate.cpp
- * The convergence certificate at a trajectory: the hypotheses of the seed's theorem
- * prp:discrete_positive_def interval by interval (H^{Ld}_k p.s.d., A_k = D11 or B_k = D22 p.d.),
+ * The convergence certificate at a trajectory: the hypotheses of the seed's sufficient condition
+ * for a positive definite discrete Hessian, interval by interval (H^{Ld}_k p.s.d., A_k = D11 or
+ * B_k = D22 p.d.),
  * the inertia of the full block-tridiagonal Hessian by block LDL^T (Sylvester's law of inertia),
  * and the spectral radius rho of the Jacobi iteration matrix J = -D^{-1} C. The Hessian is first
  * equilibrated by powers of two (exact; inertia and J's eigenvalues unchanged), since the jets of
@@ -311,7 +312,7 @@ Certificate certify(const Problem& problem, const Trajectory& trajectory, int th
   detail::compute_residual(ctx);
   c.residual = ctx.residual;
 
-  // Theorem prp:discrete_positive_def, interval by interval.
+  // The seed's sufficient condition for a positive definite Hessian, interval by interval.
   const int d = ctx.dim, N = ctx.N;
   std::vector<IntervalCheck> checks(static_cast<std::size_t>(N));
 #pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
@@ -392,7 +393,7 @@ std::string Certificate::report() const {
   std::snprintf(buf, sizeof buf, "DEL residual at the trajectory: %.3e (%ld free components)\n", residual,
                 free_components);
   out += buf;
-  out += "Theorem prp:discrete_positive_def (interval Hessians H^Ld_k):\n";
+  out += "Sufficient condition for a positive definite Hessian (seed, interval Hessians H^Ld_k):\n";
   std::snprintf(buf, sizeof buf, "  all H^Ld_k positive semi-definite: %s\n  all A_k = D11 positive definite: %s\n"
                 "  all B_k = D22 positive definite: %s\n  hypotheses hold: %s%s\n",
                 all_intervals_psd ? "yes" : "no", all_A_pd ? "yes" : "no", all_B_pd ? "yes" : "no",

@@ -219,8 +219,6 @@ std::unique_ptr<Method_> make_jacobi(const Options& options, int dim);
 std::unique_ptr<Method_> make_jacobi_newton(const Options& options, int dim);
 std::unique_ptr<Method_> make_newton(const Options& options, int dim);
 std::unique_ptr<Method_> make_hybrid(const Options& options, int dim);
-/** nullptr when this build has no multigrid (message says why). */
-std::unique_ptr<Method_> make_multigrid(const Options& options, int dim, std::string* message);
 
 /** The residual that counts as converged at the context's iterate: Options::tol when set, else
  *  max(rtol x residual_scale, 10 x residual_floor). */

@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "invariant.hpp"
+
 namespace pardel::detail {
 
 bool knots_on_grid(const Problem& problem, int n) {
@@ -34,7 +36,10 @@ std::vector<int> automatic_levels(const Problem& problem) {
   return std::vector<int>(down.rbegin(), down.rend());
 }
 
-std::vector<int> refinement_levels(const Problem& problem, const Options& options, bool automatic) {
+namespace {
+
+/** refinement_levels before its invariants are checked. */
+std::vector<int> unchecked_levels(const Problem& problem, const Options& options, bool automatic) {
   std::vector<int> levels;
   const int N = problem.N;
   if (automatic && options.refine_start_N <= 0) return automatic_levels(problem);
@@ -51,7 +56,18 @@ std::vector<int> refinement_levels(const Problem& problem, const Options& option
   return levels;
 }
 
+}  // namespace
+
+std::vector<int> refinement_levels(const Problem& problem, const Options& options, bool automatic) {
+  const std::vector<int> levels = unchecked_levels(problem, options, automatic);
+  for (std::size_t l = 1; l < levels.size(); ++l)
+    PARDEL_INVARIANT(levels[l - 1] < levels[l], "refinement levels grow from coarse to fine");
+  PARDEL_INVARIANT(!levels.empty() && levels.back() == problem.N, "the last refinement level is the problem's grid");
+  return levels;
+}
+
 Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, const Trajectory& coarser, int N) {
+  PARDEL_INVARIANT(coarser.N < coarse.N && coarse.N < N, "nested iteration extrapolates from two coarser grids");
   Trajectory start = resample(problem, coarse, N);
   const Trajectory other = resample(problem, coarser, N);
   const double p = problem.discretization->consistency_order;

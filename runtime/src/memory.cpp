@@ -89,7 +89,6 @@ double method_bytes(Method method, bool cyclic, double N, int d) {
     case Method::automatic:
     case Method::newton: return newton_bytes(N, d, cyclic);
     case Method::hybrid: return (N + 1) + newton_bytes(N, d, cyclic) + block_tridiagonal_bytes(N, d, false);
-    case Method::multigrid: return 2 * (N + 1) + 2 * context_bytes(N / 2, d);  // coarse levels, at most N in all
   }
   return 0;
 }

@@ -128,7 +128,6 @@ std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, st
     case Method::automatic:
     case Method::newton: return detail::make_newton(options, dim);
     case Method::hybrid: return detail::make_hybrid(options, dim);
-    case Method::multigrid: return detail::make_multigrid(options, dim, message);
   }
   *message = "unknown method";
   return nullptr;

@@ -261,13 +261,14 @@ TEST(PardelSolve, ExitCodeSaysHowItEnded) {
   const Result missing = pardel("solve '" + (dir / "absent.toml") + "' --quiet");
   EXPECT_EQ(missing.code, 2);
   EXPECT_NE(missing.err.find("cannot open scene file"), std::string::npos) << missing.err;
-  // A method this build lacks: a usage error naming the key, and no outputs.
+  // A method pardel does not have (the multigrid of docs/benchmarks.md was measured and left out):
+  // a usage error naming the key and the methods, and no outputs.
   const Result multigrid = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "mg") +
                                   "' --no-plot --set solver.method=multigrid");
   EXPECT_EQ(multigrid.code, 2);
-  EXPECT_NE(multigrid.err.find("small.toml: error: solver.method = multigrid is not available"), std::string::npos)
+  EXPECT_NE(multigrid.err.find("unknown method 'multigrid'"), std::string::npos) << multigrid.err;
+  EXPECT_NE(multigrid.err.find("(methods: auto, jacobi, jacobi-newton, newton, hybrid)"), std::string::npos)
       << multigrid.err;
-  EXPECT_EQ(multigrid.err.find(".cpp"), std::string::npos) << multigrid.err;
   EXPECT_TRUE(multigrid.out.empty()) << multigrid.out;
   EXPECT_FALSE(fs::exists(dir / "mg"));
 }

@@ -884,23 +884,17 @@ TEST(Refusal, DegenerateLagrangianAsInOneProcess) {
 TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   if (world_size() < 2) GTEST_SKIP() << "refusals apply to more than one rank";
   const auto problem = fuel_nav(100);
-  auto guess = pardel::linear_guess(problem);
-  pardel::Options multigrid;
-  multigrid.method = pardel::Method::multigrid;
-  auto s = pardel::mpi::solve_distributed(problem, multigrid, guess);
-  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
-  EXPECT_NE(s.message.find("solver.method = multigrid"), std::string::npos) << s.message;
   // A state of a level too small for the ranks (refine_start_N = 4: N + 1 < 3 ranks).
   pardel::Options coarse;
   coarse.method = pardel::Method::jacobi_newton;
   coarse.refine_start_N = 4;
   coarse.refine_factor = 2;
   coarse.threads = 1;
-  guess = pardel::linear_guess(problem);
+  auto guess = pardel::linear_guess(problem);
   const pardel::Summary one = pardel::solve(problem, interrupted_at(coarse, 1), guess);
   ASSERT_EQ(one.state.N, 4);
   coarse.resume_from = &one.state;
-  s = pardel::mpi::solve_distributed(problem, coarse, guess);
+  auto s = pardel::mpi::solve_distributed(problem, coarse, guess);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
   EXPECT_NE(s.message.find("resume: refinement level 0 with N = 4 is too small for"), std::string::npos) << s.message;
   auto small = fuel_nav(4);

@@ -3,7 +3,7 @@
  * The convergence certificate against closed forms: for the harmonic oscillator's trapezoid DEL
  * the Hessian is a + (1/h) tridiag(-1, 0, -1) with a = 2/h - h w^2, so its eigenvalues are
  * a - (2/h) cos(j pi / N) and the Jacobi spectral radius is 2 cos(pi/N) / (2 - h^2 w^2).
- * Also the interval hypotheses of prp:discrete_positive_def (free particle: hold; harmonic:
+ * Also the interval hypotheses of the seed's positive-definiteness theorem (free particle: hold; harmonic:
  * H^Ld_k indefinite; spline trapezoid(alpha=1): hold), knots restricting the Hessian, and the report.
  * At orders 3 and 4 (bundled min_jerk, min_snap), where 1 - rho falls like N^(-2 order), the
  * radius against the dense generalized eigenproblem H x = lambda D x (1 - rho = lambda_min), and

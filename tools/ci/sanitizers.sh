@@ -20,7 +20,8 @@ cd "$(dirname "$0")/../.."
 build_dir="${1:-build-asan}"
 jobs="${JOBS:-2}"
 
-san_flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined"
+# PARDEL_CHECK_INVARIANTS: the runtime's internal invariants (runtime/src/invariant.hpp) are checked.
+san_flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined -DPARDEL_CHECK_INVARIANTS"
 
 # The same options for the build: test discovery runs the instrumented binaries.
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"

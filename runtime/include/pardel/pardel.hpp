@@ -106,11 +106,10 @@ enum class Method {
   jacobi,         ///< nonlinear block Jacobi (seed eq. pDEL), each block by Newton to a tolerance
   jacobi_newton,  ///< the seed's m-step block Jacobi-Newton (eq. NewtonRaphson)
   newton,         ///< globalized Newton on the whole DEL system, block-tridiagonal solves
-  multigrid,      ///< nonlinear multigrid in time (FAS) with Jacobi-Newton smoothing
   hybrid,         ///< Jacobi-Newton until the certificate holds, then Newton
 };
 const char* to_string(Method method);
-/** Parses "auto", "jacobi", "jacobi-newton", "newton", "multigrid", "hybrid"; false if unknown. */
+/** Parses "auto", "jacobi", "jacobi-newton", "newton", "hybrid"; false if unknown. */
 bool parse_method(std::string_view text, Method* method);
 /** Every method's name, in the order of the enum. */
 std::vector<std::string> method_names();
@@ -257,7 +256,7 @@ struct IntervalViolation {
 };
 
 struct Certificate {
-  // Theorem prp:discrete_positive_def, interval by interval
+  // The seed's sufficient condition for a positive definite Hessian, interval by interval
   bool all_intervals_psd = false;
   bool all_A_pd = false;
   bool all_B_pd = false;

@@ -67,10 +67,7 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
     if (message) *message = std::move(text);
     return false;
   };
-  const std::string over = " cannot be distributed over " + std::to_string(ranks) + " ranks";
-  if (options.method == Method::multigrid)
-    return fail(std::string("solver.method = ") + to_string(options.method) + over +
-                " (distributed methods: jacobi, jacobi-newton, newton, hybrid); run it on one rank");
+  (void)options;  // every method runs over ranks
   if (!fits_ranks(problem.N, ranks))
     return fail("grid.N = " + std::to_string(problem.N) + " is too small for " + std::to_string(ranks) +
                 " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks)");
