@@ -66,6 +66,29 @@ std::vector<int> refinement_levels(const Problem& problem, const Options& option
   return levels;
 }
 
+long run_levels(const std::vector<int>& levels, std::size_t first, const SolverState* resume,
+                const SolverState* warm, const LevelSteps& steps) {
+  std::size_t l = first;
+  if (warm)  // the first level at or above the state's N
+    while (l + 1 < levels.size() && levels[l] < warm->N) ++l;
+  const std::size_t first_level = l;
+  for (l = resume ? static_cast<std::size_t>(resume->level) : l; l < levels.size(); ++l) {
+    const bool last = l + 1 == levels.size();
+    bool entered;
+    if (resume && l == static_cast<std::size_t>(resume->level))
+      entered = steps.resume();
+    else if (warm && l == first_level)
+      entered = steps.warm(levels[l]);
+    else
+      entered = steps.enter(levels[l]);
+    if (!entered) return -1;
+    if (steps.entered) steps.entered(last);
+    if (!steps.run(last) || last) break;
+    steps.settled();
+  }
+  return static_cast<long>(l);
+}
+
 Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, const Trajectory& coarser, int N) {
   PARDEL_INVARIANT(coarser.N < coarse.N && coarse.N < N, "nested iteration extrapolates from two coarser grids");
   Trajectory start = resample(problem, coarse, N);

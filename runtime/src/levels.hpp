@@ -9,6 +9,7 @@
 #ifndef PARDEL_RUNTIME_LEVELS_HPP
 #define PARDEL_RUNTIME_LEVELS_HPP
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -89,6 +90,25 @@ class LevelStarts {
   bool extrapolate_;
   Trajectory previous_, coarser_;  // solutions of levels l-1 and l-2 (N = 0: none)
 };
+
+/** What a solve does at each level (one process or over ranks; see run_levels). */
+struct LevelSteps {
+  std::function<bool()> resume;             ///< enter the resumed state's level
+  std::function<bool(int N)> warm;          ///< enter a warm start's first level, with its counts
+  std::function<bool(int N)> enter;         ///< enter a level from its start (LevelStarts)
+  std::function<void(bool last)> entered;   ///< after a level was entered (may be empty)
+  std::function<bool(bool last)> run;       ///< iterate on it: whether it settled
+  std::function<void()> settled;            ///< keep a settled level's solution for the next
+};
+
+/**
+ * The loop over the levels of a solve: from the resumed state's level, or a warm start's first
+ * level at or above its N (from `first` on), or `first`, each level is entered and run; a level
+ * that settles below the last one is kept and the next entered. Returns the index of the level
+ * where the iteration ended, or -1 when a level could not be entered.
+ */
+long run_levels(const std::vector<int>& levels, std::size_t first, const SolverState* resume,
+                const SolverState* warm, const LevelSteps& steps);
 
 /** Appends to a summary that did not converge the note that it stopped at the refinement level
  *  N = `reached` below problem.N (nothing when reached == problem.N). */

@@ -172,33 +172,25 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   driver.reserve(levels.back());
   detail::LevelStarts starts(problem, options);
   if (resume) starts.previous() = resume->previous_level;
-  std::size_t l = 0;
-  if (warm)  // the first level at or above the state's N
-    while (l + 1 < levels.size() && levels[l] < warm->N) ++l;
-  const std::size_t first_level = l;
-  for (l = resume ? static_cast<std::size_t>(resume->level) : l; l < levels.size(); ++l) {
-    const bool last = l + 1 == levels.size();
-    bool entered;
-    if (resume && l == static_cast<std::size_t>(resume->level)) {
-      entered = driver.resume_level(*resume);
-    } else if (warm && l == first_level) {
-      entered = driver.enter_level(warm->trajectory, levels[l]);
-      if (entered) driver.continue_count(*warm);
-    } else {
-      entered = starts.enter(trajectory, levels[l],
-                             [&driver](const Trajectory& from, int N) { return driver.enter_level(from, N); });
-    }
-    if (!entered) {
-      summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      return summary;
-    }
-    const bool settled = driver.run_level(last);
-    if (settled && !last) {
-      const Context& ctx = driver.context();
-      starts.settled(Trajectory{ctx.N, ctx.dim, ctx.t, ctx.q});
-      continue;
-    }
-    break;
+  detail::LevelSteps steps;
+  steps.resume = [&] { return driver.resume_level(*resume); };
+  steps.warm = [&](int N) {
+    if (!driver.enter_level(warm->trajectory, N)) return false;
+    driver.continue_count(*warm);
+    return true;
+  };
+  steps.enter = [&](int N) {
+    return starts.enter(trajectory, N, [&driver](const Trajectory& from, int n) { return driver.enter_level(from, n); });
+  };
+  steps.run = [&](bool last) { return driver.run_level(last); };
+  steps.settled = [&] {
+    const Context& ctx = driver.context();
+    starts.settled(Trajectory{ctx.N, ctx.dim, ctx.t, ctx.q});
+  };
+  const long l = detail::run_levels(levels, 0, resume, warm, steps);
+  if (l < 0) {
+    summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return summary;
   }
   driver.write_result(trajectory);
   if (summary.termination == Termination::interrupted) {

@@ -934,39 +934,34 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
     method->reset(local.ctx);
     return true;
   };
-  std::size_t l = first_fit;
-  if (warm)  // the first level at or above the state's N
-    while (l + 1 < levels.size() && levels[l] < warm->N) ++l;
-  const std::size_t first_level = l;
-  for (l = resume ? static_cast<std::size_t>(resume->level) : l; l < levels.size(); ++l) {
-    const bool last = l + 1 == levels.size();
-    bool entered;
-    if (resume && l == static_cast<std::size_t>(resume->level)) {
-      entered = driver.resume_level(problem, *resume, ranks, rank, &error);
-    } else if (warm && l == first_level) {
-      entered = enter_level(warm->trajectory, levels[l]);
-      if (entered) driver.continue_count(*warm);
-    } else {
-      entered = starts.enter(trajectory, levels[l], enter_level);
-    }
-    if (!entered) return refuse(error);
+  pardel::detail::LevelSteps steps;
+  steps.resume = [&] { return driver.resume_level(problem, *resume, ranks, rank, &error); };
+  steps.warm = [&](int N) {
+    if (!enter_level(warm->trajectory, N)) return false;
+    driver.continue_count(*warm);
+    return true;
+  };
+  steps.enter = [&](int N) { return starts.enter(trajectory, N, enter_level); };
+  steps.entered = [&](bool last) {
     resampled = Trajectory{};
-    if (last) {
-      // From here on a rank holds O(N / ranks) values; rank 0 keeps the previous level's solution
-      // that an interruption's state carries for Newton's extrapolation, as in one process.
-      std::vector<double>().swap(trajectory.q);
-      std::vector<double>().swap(trajectory.t);
-      Trajectory previous = std::move(starts.previous());
-      starts.release();
-      if (rank == 0 && starts.extrapolates()) starts.previous() = std::move(previous);
-    }
-    const bool settled = driver.run_level(last);
-    if (!settled || last) break;
+    if (!last) return;
+    // From here on a rank holds O(N / ranks) values; rank 0 keeps the previous level's solution
+    // that an interruption's state carries for Newton's extrapolation, as in one process.
+    std::vector<double>().swap(trajectory.q);
+    std::vector<double>().swap(trajectory.t);
+    Trajectory previous = std::move(starts.previous());
+    starts.release();
+    if (rank == 0 && starts.extrapolates()) starts.previous() = std::move(previous);
+  };
+  steps.run = [&](bool last) { return driver.run_level(last); };
+  steps.settled = [&] {
     // The level's solution on every rank: the start of the next level.
     Trajectory solution;
     gather_trajectory(local, true, solution);
     starts.settled(std::move(solution));
-  }
+  };
+  const long l = pardel::detail::run_levels(levels, first_fit, resume, warm, steps);
+  if (l < 0) return refuse(error);
   driver.write_result(trajectory);
   if (summary.termination == Termination::interrupted) {
     driver.capture(summary.state, static_cast<int>(l), trajectory);
