@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine.hpp"
 #include "invariant.hpp"
 
 namespace pardel::detail {
@@ -64,6 +65,15 @@ std::vector<int> refinement_levels(const Problem& problem, const Options& option
     PARDEL_INVARIANT(levels[l - 1] < levels[l], "refinement levels grow from coarse to fine");
   PARDEL_INVARIANT(!levels.empty() && levels.back() == problem.N, "the last refinement level is the problem's grid");
   return levels;
+}
+
+Options resolved_options(const Options& requested, const Problem& problem, Summary& summary) {
+  Options options = requested;
+  if (options.method == Method::automatic) options.method = Method::newton;
+  summary.method = options.method;
+  summary.N = problem.N;
+  summary.threads = resolve_threads(options.threads);
+  return options;
 }
 
 long run_levels(const std::vector<int>& levels, std::size_t first, const SolverState* resume,

@@ -91,6 +91,10 @@ class LevelStarts {
   Trajectory previous_, coarser_;  // solutions of levels l-1 and l-2 (N = 0: none)
 };
 
+/** The options a solve runs with, the automatic method resolved to Newton (whose grid sequencing
+ *  refinement_levels gives), and the summary's method, N and threads set from them. */
+Options resolved_options(const Options& requested, const Problem& problem, Summary& summary);
+
 /** What a solve does at each level (one process or over ranks; see run_levels). */
 struct LevelSteps {
   std::function<bool()> resume;             ///< enter the resumed state's level

@@ -139,12 +139,8 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   const auto start = std::chrono::steady_clock::now();
   // The automatic method is Newton with grid sequencing (refinement_levels).
   const bool automatic = requested.method == Method::automatic;
-  Options options = requested;
-  if (automatic) options.method = Method::newton;
   Summary summary;
-  summary.method = options.method;
-  summary.N = problem.N;
-  summary.threads = detail::resolve_threads(options.threads);
+  const Options options = detail::resolved_options(requested, problem, summary);
   std::string error;
   const SolverState* resume = options.resume_from;
   const SolverState* warm = resume && options.warm_start ? resume : nullptr;

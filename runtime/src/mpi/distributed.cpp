@@ -875,12 +875,8 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
   const auto start = std::chrono::steady_clock::now();
   // The automatic method is Newton with grid sequencing, as in one process.
   const bool automatic = requested.method == Method::automatic;
-  Options options = requested;
-  if (automatic) options.method = Method::newton;
   Summary summary;
-  summary.method = options.method;
-  summary.N = problem.N;
-  summary.threads = pardel::detail::resolve_threads(options.threads);
+  const Options options = pardel::detail::resolved_options(requested, problem, summary);
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   auto refuse = [&](std::string message) {
     summary.termination = Termination::invalid_input;
