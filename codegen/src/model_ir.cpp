@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 
 #include "pardel_codegen/discretize.hpp"
 #include "pardel_codegen/lag_parser.hpp"
@@ -115,7 +116,10 @@ void write_kernel(std::ostringstream& j, const KernelIR& k, const std::string& i
 
 }  // namespace
 
-ModelIR build_model_ir(const LagModel& model, const std::string& source_name, const CseOptions& options) {
+namespace {
+
+/** build_model_ir without its translation of GiNaC's arithmetic errors. */
+ModelIR build_ir(const LagModel& model, const std::string& source_name, const CseOptions& options) {
   ModelIR ir;
   ir.model = model;
   ir.source_name = source_name;
@@ -158,6 +162,22 @@ ModelIR build_model_ir(const LagModel& model, const std::string& source_name, co
     ir.clock = std::move(k);
   }
   return ir;
+}
+
+}  // namespace
+
+ModelIR build_model_ir(const LagModel& model, const std::string& source_name, const CseOptions& options) {
+  try {
+    return build_ir(model, source_name, options);
+  } catch (const CodegenError&) {
+    throw;
+  } catch (const std::runtime_error& error) {
+    // GiNaC's arithmetic on the model's expressions, e.g. a zero base raised to a negative power
+    // that appears only in a derivative ("power::eval(): division by zero").
+    throw CodegenError(std::string("the Lagrangian or its derivatives cannot be formed: ") + error.what());
+  } catch (const std::domain_error& error) {  // GiNaC::pole_error: a derivative at a singularity
+    throw CodegenError(std::string("the Lagrangian or its derivatives cannot be formed: ") + error.what());
+  }
 }
 
 std::string ir_to_json(const ModelIR& ir) {

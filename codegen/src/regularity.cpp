@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 #include "pardel_codegen/lag_parser.hpp"
@@ -474,7 +475,22 @@ std::vector<std::string> check_regularity(const LagModel& model, bool allow_sing
       "a deliberately degenerate model may say so with a line '# pardel: allow-singular' "
       "(or pardel-gen --allow-singular, pardel_add_model(... ALLOW_SINGULAR))";
 
-  const RegularityFindings f = analyze_regularity(model);
+  RegularityFindings f;
+  try {
+    f = analyze_regularity(model);
+  } catch (const std::exception& error) {
+    // GiNaC's arithmetic on the model's expressions: a derivative that cannot be formed, e.g. of a
+    // zero base raised to a power that depends on the coordinates ("division by zero").
+    if (dynamic_cast<const std::runtime_error*>(&error) == nullptr &&
+        dynamic_cast<const std::domain_error*>(&error) == nullptr)
+      throw;
+    const std::string source =
+        model.source_lines.empty() ? std::string() : model.source_lines[static_cast<std::size_t>(line - 1)];
+    const std::string message = "model '" + model.name + "': L cannot be differentiated symbolically (" +
+                                error.what() + "); a zero or negative base raised to a power that depends on " +
+                                "the coordinates has no derivative there";
+    throw LagError(lag_diagnostic(model.filename, source, line, col, message), line, col, message);
+  }
   if (f.points == 0) {
     warnings.push_back(as_warning(model, line, col,
                                   "model '" + model.name + "': regularity not checked: " + w_name +

@@ -83,6 +83,20 @@ TEST(Regularity, RefusalSaysWhatItMeans) {
   }
 }
 
+TEST(Regularity, ALagrangianThatCannotBeDifferentiatedIsRefusedAtItsLine) {
+  try {
+    pardel_codegen::check_regularity(load("zero_base_power"), false);
+    FAIL() << "accepted";
+  } catch (const LagError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path_of("zero_base_power") + ":4:5: error: model 'u': L cannot be differentiated", 0), 0u)
+        << what;
+    EXPECT_TRUE(contains(what, "division by zero")) << what;
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_EQ(e.column(), 5);
+  }
+}
+
 TEST(Regularity, WarnsWhereDetWChangesSignThroughAZero) {
   const std::vector<std::string> warnings = pardel_codegen::check_regularity(load("cubic_fold"), false);
   ASSERT_EQ(warnings.size(), 1u);
