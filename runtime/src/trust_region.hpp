@@ -283,6 +283,9 @@ class TrustRegionNewton : public Method_ {
     return newton_stalled(iteration, r0, ctx.residual_floor);
   }
 
+  /** Values of save_state() before the watchdog's reference point. */
+  static constexpr std::size_t kStateHead = 4 + 6;
+
   /** {radius, shift, best residual, escapes, then the watchdog: active,
    *  failed, steps, F, pred, norm and (active) its reference point}. */
   std::vector<double> save_state() const override {
@@ -293,7 +296,7 @@ class TrustRegionNewton : public Method_ {
     return s;
   }
   bool load_state(const std::vector<double>& s) override {
-    constexpr std::size_t head = 4 + 6;
+    constexpr std::size_t head = kStateHead;
     if (s.size() < head) return false;
     if (!(s[0] >= 0) || !std::isfinite(s[0]) || !(s[1] >= 0) || !std::isfinite(s[1]) || !(s[3] >= 0) ||
         s[3] > kMaxEscapes || std::isnan(s[2]))

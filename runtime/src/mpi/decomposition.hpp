@@ -9,6 +9,8 @@
 
 #include <mpi.h>
 
+#include <string>
+
 #include "pardel/distributed.hpp"
 
 namespace pardel::mpi::detail {
@@ -45,6 +47,8 @@ double ordered_sum(const Layout& layout, const double* values, int n, MPI_Comm c
 double max_all(double value, MPI_Comm comm);
 int min_all(int value, MPI_Comm comm);
 bool all_true(bool value, MPI_Comm comm);
+/** `text` of rank `root` on every rank (a message all ranks report). Collective. */
+void broadcast_text(std::string& text, int root, MPI_Comm comm);
 
 }  // namespace pardel::mpi::detail
 

@@ -612,9 +612,7 @@ class DistributedNewton : public pardel::detail::TrustRegionNewton<DistributedSp
   }
 
  private:
-  /** Values of trust_region.hpp's save_state before the reference point: radius, shift, best
-   *  residual, escapes and the watchdog's active, failed, steps, F, pred, norm. */
-  static constexpr std::size_t kHead = 4 + 6;
+  static constexpr std::size_t kHead = Base::kStateHead;
   Local& local_;
 };
 
@@ -716,10 +714,7 @@ class RankPartition final : public pardel::detail::Partition {
     if (L.rank == failing && L.has_left())
       message += " (node numbers of rank " + std::to_string(L.rank) + ", whose local node 0 is node " +
                  std::to_string(L.lo) + ")";
-    int length = static_cast<int>(message.size());
-    MPI_Bcast(&length, 1, MPI_INT, failing, local_.comm);
-    message.resize(static_cast<std::size_t>(length));
-    MPI_Bcast(message.data(), length, MPI_CHAR, failing, local_.comm);
+    detail::broadcast_text(message, failing, local_.comm);
     outcome.failure = static_cast<Termination>(code);
     outcome.message = message;
     return false;
@@ -846,10 +841,7 @@ bool lagrangian_regular_over_ranks(const Local& local, std::string* message) {
   }
   MPI_Bcast(&regular, 1, MPI_INT, 0, local.comm);
   if (regular) return true;
-  int length = static_cast<int>(text.size());
-  MPI_Bcast(&length, 1, MPI_INT, 0, local.comm);
-  text.resize(static_cast<std::size_t>(length));
-  MPI_Bcast(text.data(), length, MPI_CHAR, 0, local.comm);
+  detail::broadcast_text(text, 0, local.comm);
   *message = text;
   return false;
 }
