@@ -2,9 +2,9 @@
  * @file assessment.cpp
  * What a returned trajectory is as a stationary point of the discrete action: the inertia of the
  * Hessian from its block LDL^T (minimum, saddle of index k, degenerate) and, at a minimum, its two
- * smallest eigenvalues by inverse subspace iteration against Gershgorin's bound on the largest,
+ * smallest eigenvalues by block Lanczos on the inverse against Gershgorin's bound on the largest,
  * which tells a well-posed minimum from a nearly degenerate one. O(N) work: one factorization (or
- * Newton's last one, at the same point) and at most 2 x 12 solves. Also the check that refuses a degenerate Lagrangian before solving.
+ * Newton's last one, at the same point) and at most 2 x 24 solves. Also the check that refuses a degenerate Lagrangian before solving.
  */
 #include <Eigen/Dense>
 #include <cmath>
@@ -25,8 +25,8 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
 
 /** Pivot eigenvalues below this fraction of their block's size count as zero. */
 constexpr double kZeroPivot = 1e-12;
-/** The budget of the inverse subspace iteration for the two smallest eigenvalues at a minimum. */
-constexpr int kInverseIterations = 12;
+/** The budget of block Lanczos steps for the two smallest eigenvalues at a minimum. */
+constexpr int kLanczosSteps = 24;
 
 /** Fixed components are identity rows of the assembled matrix: they add +1 eigenvalues that are
  *  not the action's; they are taken out of the counts. */
@@ -81,84 +81,129 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
     out.note = "no unknowns";
     return;
   }
-  // Inverse subspace iteration with two vectors and Rayleigh-Ritz on the free components. With
-  // Y = H^-1 X, the Ritz values of H on span(Y) solve Y^T X v = theta Y^T Y v (as H Y = X), and
-  // X <- Y V with V^T (Y^T Y) V = I keeps X orthonormal: per iteration two solves, one pass for
-  // the 2 x 2 Gram matrices and one for the update, no multiplication by H.
+  // Block Lanczos (block size m = 2: a double smallest eigenvalue, as in models whose components
+  // move alike, is found as two) on A = H^-1 restricted to the free components: the largest
+  // eigenvalues mu of the block tridiagonal T_j = V^T A V of the Krylov space converge to 1/lambda
+  // from below, so theta = 1/mu are upper bounds on the smallest eigenvalues of H (interlacing),
+  // and they converge far faster than an inverse iteration where the lowest eigenvalues cluster.
+  // No reorthogonalization beyond the three-term recurrence: the iteration stops as soon as the
+  // values settle, well before converged Ritz vectors make the basis lose orthogonality.
   const int m = out.positive >= 2 ? 2 : 1;
-  std::vector<double> X(2 * n, 0.0), Y(2 * n, 0.0);
-  double* X0 = X.data();
-  double* X1 = X.data() + n;
-  double* Y0 = Y.data();
-  double* Y1 = Y.data() + n;
-  double norm[2] = {0, 0};
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!ctx.is_free[dz + i]) continue;
-    const double s = static_cast<double>(i / dz + 1) / static_cast<double>(n / dz + 1);
-    const double a = static_cast<double>(i % dz);
-    // Smooth start vectors, even and odd about the middle (the shapes of the lowest modes of a
-    // string), slightly different per component.
-    X0[i] = s * (1 - s) * (1 + 0.1 * a);
-    X1[i] = m == 2 ? s * (1 - s) * (1 - 2 * s) + 0.05 * a * s * (1 - s) : 0.0;
-    norm[0] += X0[i] * X0[i];
-    norm[1] += X1[i] * X1[i];
+  std::vector<double> store(6 * n, 0.0);
+  // Each of the three blocks holds m vectors of length n: V_{j-1}, V_j and the new W.
+  double* prev = store.data();
+  double* cur = store.data() + 2 * n;
+  double* next = store.data() + 4 * n;
+  {
+    double norm[2] = {0, 0};
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!ctx.is_free[dz + i]) continue;
+      const double s = static_cast<double>(i / dz + 1) / static_cast<double>(n / dz + 1);
+      const double a = static_cast<double>(i % dz);
+      // Smooth start vectors, even and odd about the middle (the shapes of the lowest modes of a
+      // string), slightly different per component.
+      cur[i] = s * (1 - s) * (1 + 0.1 * a);
+      cur[n + i] = m == 2 ? s * (1 - s) * (1 - 2 * s) + 0.05 * a * s * (1 - s) : 0.0;
+      norm[0] += cur[i] * cur[i];
+      norm[1] += cur[n + i] * cur[n + i];
+    }
+    // Orthonormal start block: the two shapes are orthogonal up to the per-component terms.
+    double c01 = 0;
+    for (std::size_t i = 0; i < n; ++i) cur[i] /= std::sqrt(norm[0]);
+    if (m == 2) {
+      for (std::size_t i = 0; i < n; ++i) c01 += cur[i] * cur[n + i];
+      double r = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        cur[n + i] -= c01 * cur[i];
+        r += cur[n + i] * cur[n + i];
+      }
+      for (std::size_t i = 0; i < n; ++i) cur[n + i] /= std::sqrt(r);
+    }
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    X0[i] /= std::sqrt(norm[0]);
-    if (m == 2) X1[i] /= std::sqrt(norm[1]);
-  }
+  std::vector<Eigen::MatrixXd> diagonal, below;  // the blocks A_j and B_j of T
+  Eigen::MatrixXd B_prev = Eigen::MatrixXd::Zero(m, m);
   double theta[2] = {0, 0}, previous[2] = {-1, -1};
-  for (int it = 0; it < kInverseIterations; ++it) {
+  for (int j = 0; j < kLanczosSteps; ++j) {
     if (m == 2)
-      H.solve_ldlt(X0, X1, Y0, Y1);
+      H.solve_ldlt(cur, cur + n, next, next + n);
     else
-      H.solve_ldlt(X0, Y0);
-    // Y^T X and Y^T Y on the free components (H maps fixed components to themselves, where X is 0).
-    double a00 = 0, a01 = 0, a10 = 0, a11 = 0, b00 = 0, b01 = 0, b11 = 0;
+      H.solve_ldlt(cur, next);
+    // W = A V_j - V_{j-1} B_{j-1}^T, then A_j = V_j^T W.
+    Eigen::MatrixXd Aj = Eigen::MatrixXd::Zero(m, m);
     for (std::size_t i = 0; i < n; ++i) {
       if (!ctx.is_free[dz + i]) {
-        Y0[i] = 0;
-        Y1[i] = 0;
+        for (int c = 0; c < m; ++c) next[c * n + i] = 0;
         continue;
       }
-      const double y0 = Y0[i], y1 = Y1[i], x0 = X0[i], x1 = X1[i];
-      a00 += y0 * x0;
-      a01 += y0 * x1;
-      a10 += y1 * x0;
-      a11 += y1 * x1;
-      b00 += y0 * y0;
-      b01 += y0 * y1;
-      b11 += y1 * y1;
+      for (int c = 0; c < m; ++c) {
+        double w = next[c * n + i];
+        for (int r = 0; r < m; ++r) w -= prev[r * n + i] * B_prev(c, r);
+        next[c * n + i] = w;
+        for (int r = 0; r < m; ++r) Aj(r, c) += cur[r * n + i] * w;
+      }
     }
-    Eigen::Matrix2d V = Eigen::Matrix2d::Zero();
-    if (m == 2) {
-      Eigen::Matrix2d A, B;
-      A << a00, 0.5 * (a01 + a10), 0.5 * (a01 + a10), a11;
-      B << b00, b01, b01, b11;
-      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d> eig(A, B);
-      if (eig.info() != Eigen::Success) break;
-      theta[0] = eig.eigenvalues()(0);
-      theta[1] = eig.eigenvalues()(1);
-      V = eig.eigenvectors();  // B-orthonormal columns
-    } else {
-      theta[0] = a00 / b00;
-      V(0, 0) = 1 / std::sqrt(b00);
-    }
+    Aj = 0.5 * (Aj + Aj.transpose()).eval();
+    // W -= V_j A_j, and W^T W for the QR of W (Cholesky QR: W = V_{j+1} B_j, B_j upper triangular).
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
     for (std::size_t i = 0; i < n; ++i) {
-      const double y0 = Y0[i], y1 = Y1[i];
-      X0[i] = V(0, 0) * y0 + V(1, 0) * y1;
-      X1[i] = V(0, 1) * y0 + V(1, 1) * y1;
+      double w[2];
+      for (int c = 0; c < m; ++c) {
+        w[c] = next[c * n + i];
+        for (int r = 0; r < m; ++r) w[c] -= cur[r * n + i] * Aj(r, c);
+        next[c * n + i] = w[c];
+      }
+      for (int r = 0; r < m; ++r)
+        for (int c = 0; c < m; ++c) G(r, c) += w[r] * w[c];
     }
+    diagonal.push_back(Aj);
+    // The Ritz values: eigenvalues of T_j (order m (j + 1)).
+    const int order = m * static_cast<int>(diagonal.size());
+    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(order, order);
+    for (std::size_t b = 0; b < diagonal.size(); ++b) {
+      const int o = m * static_cast<int>(b);
+      T.block(o, o, m, m) = diagonal[b];
+      if (b + 1 < diagonal.size()) {
+        T.block(o + m, o, m, m) = below[b];
+        T.block(o, o + m, m, m) = below[b].transpose();
+      }
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(T, Eigen::EigenvaluesOnly);
+    if (eig.info() != Eigen::Success) break;
+    const auto& mu = eig.eigenvalues();  // ascending
+    if (!(mu(order - 1) > 0)) break;
+    theta[0] = 1 / mu(order - 1);
+    theta[1] = m == 2 ? 1 / mu(order - 2) : 0;
     // Settled when the smallest Ritz value moves by less than 1e-4 (the notes print 3 digits) and
     // the next by less than 3e-3 (within about 1% of the eigenvalue).
     const bool settled = std::fabs(theta[0] - previous[0]) <= 1e-4 * std::fabs(theta[0]) &&
                          (m < 2 || std::fabs(theta[1] - previous[1]) <= 3e-3 * std::fabs(theta[1]));
     previous[0] = theta[0];
     previous[1] = theta[1];
-    if (settled) {
+    // A Krylov space that A maps into itself (W vanishes against the scale of A_j) holds exact
+    // eigenvalues: nothing further to find from this start.
+    const double scale = std::fabs(mu(order - 1));
+    Eigen::LLT<Eigen::MatrixXd> chol(G);
+    const bool invariant = chol.info() != Eigen::Success || !(G.diagonal().minCoeff() > 1e-24 * scale * scale);
+    if (settled || invariant) {
       out.lambda_settled = true;
       break;
     }
+    const Eigen::MatrixXd R = chol.matrixU();  // G = R^T R
+    const Eigen::MatrixXd Rinv = R.inverse();
+    for (std::size_t i = 0; i < n; ++i) {
+      double w[2] = {next[i], m == 2 ? next[n + i] : 0.0};
+      for (int c = 0; c < m; ++c) {
+        double v = 0;
+        for (int r = 0; r < m; ++r) v += w[r] * Rinv(r, c);
+        next[c * n + i] = v;
+      }
+    }
+    below.push_back(R);  // A V_j = V_{j-1} B_{j-1}^T + V_j A_j + V_{j+1} B_j, with B_j = R
+    B_prev = R;
+    double* recycled = prev;
+    prev = cur;
+    cur = next;
+    next = recycled;
   }
   out.lambda_min = theta[0];
   out.lambda_next = theta[1];
@@ -180,9 +225,9 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
                       out.lambda_min, out.lambda_next, out.lambda_max);
   }
   if (!out.lambda_settled)
-    out.note += format("; the two smallest are upper bounds: Ritz values of %.0f inverse iterations that had not "
+    out.note += format("; the two smallest are upper bounds: Ritz values of %.0f Lanczos steps that had not "
                        "settled",
-                       static_cast<double>(kInverseIterations));
+                       static_cast<double>(kLanczosSteps));
   // Round-off in the DEL residual moves a solution by up to the condition number times 1e-16
   // (relative): say so where that exceeds 1e-3 (high orders at large N: the condition grows like
   // N^(2 order)).

@@ -321,7 +321,7 @@ def point_of(summary):
             inertia = "/".join(str(v) for v in parts) if any(v is not None for v in parts) else ""
         lam = point.get("lambda_min", "")
         if point.get("lambda_settled") is False and point.get("kind") == "minimum":
-            lam = f"<={lam}"  # an upper bound: the inverse iteration had not settled
+            lam = f"<={lam}"  # an upper bound: the Lanczos iteration had not settled
         return str(point.get("kind", "")), "point", str(inertia), lam
     cert = summary.get("certificate")
     if isinstance(cert, dict) and "inertia_negative" in cert:
