@@ -69,148 +69,160 @@ double relative_smallest_singular_value(const double* block, int d) {
 
 }  // namespace
 
-template <int D>
-void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out) {
-  out = PointAssessment{};
-  out.lambda_max = H.gershgorin_bound();
-  const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
-  const std::size_t dz = static_cast<std::size_t>(ctx.dim);
-  out.positive = static_cast<long>(n) - fixed_components(ctx);
-  out.kind = PointKind::minimum;
-  if (out.positive <= 0) {
-    out.note = "no unknowns";
-    return;
+namespace {
+
+/**
+ * Block Lanczos with M vectors per block on A = H^-1 restricted to the free components (see
+ * smallest_eigenvalues). store holds 3 M n values: V_{j-1}, V_j and W, M vectors of n each.
+ */
+template <int M>
+SmallestEigenvalues block_lanczos(const LanczosOperator& op, double* store) {
+  const std::size_t n = op.n;
+  double* prev = store;
+  double* cur = store + M * n;
+  double* next = store + 2 * M * n;
+  const double* no_input = nullptr;
+  double* no_output = nullptr;
+  auto solve = [&](const double* in, double* out) {
+    op.solve(in, M == 2 ? in + n : no_input, out, M == 2 ? out + n : no_output);
+  };
+  SmallestEigenvalues result;
+  // Smooth start vectors, even and odd about the middle (the shapes of the lowest modes of a
+  // string), slightly different per component, made orthonormal (Cholesky QR).
+  double gram[3] = {0, 0, 0};  // v0.v0, v0.v1, v1.v1
+  for (std::size_t i = 0; i < n; ++i) {
+    double v[2] = {0, 0};
+    if (op.free[i]) {
+      const double s = static_cast<double>(op.first_node + static_cast<int>(i / op.dim)) / op.N;
+      const double a = static_cast<double>(i % op.dim);
+      v[0] = s * (1 - s) * (1 + 0.1 * a);
+      v[1] = s * (1 - s) * (1 - 2 * s) + 0.05 * a * s * (1 - s);
+    }
+    for (int c = 0; c < M; ++c) cur[c * n + i] = v[c];
+    gram[0] += v[0] * v[0];
+    gram[1] += v[0] * v[1];
+    gram[2] += v[1] * v[1];
   }
-  // Block Lanczos (block size m = 2: a double smallest eigenvalue, as in models whose components
-  // move alike, is found as two) on A = H^-1 restricted to the free components: the largest
-  // eigenvalues mu of the block tridiagonal T_j = V^T A V of the Krylov space converge to 1/lambda
-  // from below, so theta = 1/mu are upper bounds on the smallest eigenvalues of H (interlacing),
-  // and they converge far faster than an inverse iteration where the lowest eigenvalues cluster.
-  // No reorthogonalization beyond the three-term recurrence: the iteration stops as soon as the
-  // values settle, well before converged Ritz vectors make the basis lose orthogonality.
-  const int m = out.positive >= 2 ? 2 : 1;
-  std::vector<double> store(6 * n, 0.0);
-  // Each of the three blocks holds m vectors of length n: V_{j-1}, V_j and the new W.
-  double* prev = store.data();
-  double* cur = store.data() + 2 * n;
-  double* next = store.data() + 4 * n;
-  {
-    double norm[2] = {0, 0};
+  op.reduce(gram, 3);
+  // R of the Cholesky QR of a block with Gram matrix {g00, g01, g11}: V <- V R^-1.
+  auto orthonormalize = [&](double* V, const double* g, double R[2][2]) {
+    R[0][0] = std::sqrt(g[0]);
+    R[0][1] = M == 2 ? g[1] / R[0][0] : 0;
+    R[1][0] = 0;
+    const double r11 = M == 2 ? g[2] - R[0][1] * R[0][1] : 1;
+    if (!(R[0][0] > 0) || !(r11 > 1e-24 * g[0]) || !std::isfinite(r11)) return false;
+    R[1][1] = std::sqrt(r11);
+    const double i00 = 1 / R[0][0], i11 = 1 / R[1][1], i01 = -R[0][1] * i00 * i11;
     for (std::size_t i = 0; i < n; ++i) {
-      if (!ctx.is_free[dz + i]) continue;
-      const double s = static_cast<double>(i / dz + 1) / static_cast<double>(n / dz + 1);
-      const double a = static_cast<double>(i % dz);
-      // Smooth start vectors, even and odd about the middle (the shapes of the lowest modes of a
-      // string), slightly different per component.
-      cur[i] = s * (1 - s) * (1 + 0.1 * a);
-      cur[n + i] = m == 2 ? s * (1 - s) * (1 - 2 * s) + 0.05 * a * s * (1 - s) : 0.0;
-      norm[0] += cur[i] * cur[i];
-      norm[1] += cur[n + i] * cur[n + i];
+      const double w0 = V[i];
+      V[i] = w0 * i00;
+      if (M == 2) V[n + i] = w0 * i01 + V[n + i] * i11;
     }
-    // Orthonormal start block: the two shapes are orthogonal up to the per-component terms.
-    double c01 = 0;
-    for (std::size_t i = 0; i < n; ++i) cur[i] /= std::sqrt(norm[0]);
-    if (m == 2) {
-      for (std::size_t i = 0; i < n; ++i) c01 += cur[i] * cur[n + i];
-      double r = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        cur[n + i] -= c01 * cur[i];
-        r += cur[n + i] * cur[n + i];
-      }
-      for (std::size_t i = 0; i < n; ++i) cur[n + i] /= std::sqrt(r);
-    }
-  }
-  std::vector<Eigen::MatrixXd> diagonal, below;  // the blocks A_j and B_j of T
-  Eigen::MatrixXd B_prev = Eigen::MatrixXd::Zero(m, m);
-  double theta[2] = {0, 0}, previous[2] = {-1, -1};
+    return true;
+  };
+  double R[2][2];
+  if (!orthonormalize(cur, gram, R)) return result;
+  std::vector<Eigen::Matrix<double, M, M>> diagonal, below;  // the blocks A_j and B_j of T
+  double Bp[2][2] = {{0, 0}, {0, 0}};                         // B_{j-1}
+  double previous[2] = {-1, -1};
   for (int j = 0; j < kLanczosSteps; ++j) {
-    if (m == 2)
-      H.solve_ldlt(cur, cur + n, next, next + n);
-    else
-      H.solve_ldlt(cur, next);
+    solve(cur, next);
     // W = A V_j - V_{j-1} B_{j-1}^T, then A_j = V_j^T W.
-    Eigen::MatrixXd Aj = Eigen::MatrixXd::Zero(m, m);
+    double Aj[2][2] = {{0, 0}, {0, 0}};
     for (std::size_t i = 0; i < n; ++i) {
-      if (!ctx.is_free[dz + i]) {
-        for (int c = 0; c < m; ++c) next[c * n + i] = 0;
+      if (!op.free[i]) {
+        for (int c = 0; c < M; ++c) next[c * n + i] = 0;
         continue;
       }
-      for (int c = 0; c < m; ++c) {
+      for (int c = 0; c < M; ++c) {
         double w = next[c * n + i];
-        for (int r = 0; r < m; ++r) w -= prev[r * n + i] * B_prev(c, r);
+        for (int r = 0; r < M; ++r) w -= prev[r * n + i] * Bp[c][r];
         next[c * n + i] = w;
-        for (int r = 0; r < m; ++r) Aj(r, c) += cur[r * n + i] * w;
+        for (int r = 0; r < M; ++r) Aj[r][c] += cur[r * n + i] * w;
       }
     }
-    Aj = 0.5 * (Aj + Aj.transpose()).eval();
-    // W -= V_j A_j, and W^T W for the QR of W (Cholesky QR: W = V_{j+1} B_j, B_j upper triangular).
-    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
+    double reduced[4] = {Aj[0][0], Aj[0][1], Aj[1][0], Aj[1][1]};
+    op.reduce(reduced, 4);
+    Aj[0][0] = reduced[0];
+    Aj[1][1] = reduced[3];
+    Aj[0][1] = Aj[1][0] = 0.5 * (reduced[1] + reduced[2]);
+    // W -= V_j A_j, and the Gram matrix of W for its QR (W = V_{j+1} B_j).
+    double g[3] = {0, 0, 0};
     for (std::size_t i = 0; i < n; ++i) {
-      double w[2];
-      for (int c = 0; c < m; ++c) {
+      double w[2] = {0, 0};
+      for (int c = 0; c < M; ++c) {
         w[c] = next[c * n + i];
-        for (int r = 0; r < m; ++r) w[c] -= cur[r * n + i] * Aj(r, c);
+        for (int r = 0; r < M; ++r) w[c] -= cur[r * n + i] * Aj[r][c];
         next[c * n + i] = w[c];
       }
-      for (int r = 0; r < m; ++r)
-        for (int c = 0; c < m; ++c) G(r, c) += w[r] * w[c];
+      g[0] += w[0] * w[0];
+      g[1] += w[0] * w[1];
+      g[2] += w[1] * w[1];
     }
-    diagonal.push_back(Aj);
-    // The Ritz values: eigenvalues of T_j (order m (j + 1)).
-    const int order = m * static_cast<int>(diagonal.size());
+    op.reduce(g, 3);
+    Eigen::Matrix<double, M, M> block;
+    for (int r = 0; r < M; ++r)
+      for (int c = 0; c < M; ++c) block(r, c) = Aj[r][c];
+    diagonal.push_back(block);
+    // The Ritz values: eigenvalues of T_j (order M (j + 1)).
+    const int order = M * static_cast<int>(diagonal.size());
     Eigen::MatrixXd T = Eigen::MatrixXd::Zero(order, order);
-    for (std::size_t b = 0; b < diagonal.size(); ++b) {
-      const int o = m * static_cast<int>(b);
-      T.block(o, o, m, m) = diagonal[b];
-      if (b + 1 < diagonal.size()) {
-        T.block(o + m, o, m, m) = below[b];
-        T.block(o, o + m, m, m) = below[b].transpose();
+    for (std::size_t k = 0; k < diagonal.size(); ++k) {
+      const int o = M * static_cast<int>(k);
+      T.block(o, o, M, M) = diagonal[k];
+      if (k + 1 < diagonal.size()) {
+        T.block(o + M, o, M, M) = below[k];
+        T.block(o, o + M, M, M) = below[k].transpose();
       }
     }
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(T, Eigen::EigenvaluesOnly);
     if (eig.info() != Eigen::Success) break;
     const auto& mu = eig.eigenvalues();  // ascending
     if (!(mu(order - 1) > 0)) break;
-    theta[0] = 1 / mu(order - 1);
-    theta[1] = m == 2 ? 1 / mu(order - 2) : 0;
+    result.lambda[0] = 1 / mu(order - 1);
+    result.lambda[1] = M == 2 ? 1 / mu(order - 2) : 0;
+    result.steps = j + 1;
     // Settled when the smallest Ritz value moves by less than 1e-4 (the notes print 3 digits) and
     // the next by less than 3e-3 (within about 1% of the eigenvalue).
-    const bool settled = std::fabs(theta[0] - previous[0]) <= 1e-4 * std::fabs(theta[0]) &&
-                         (m < 2 || std::fabs(theta[1] - previous[1]) <= 3e-3 * std::fabs(theta[1]));
-    previous[0] = theta[0];
-    previous[1] = theta[1];
-    // A Krylov space that A maps into itself (W vanishes against the scale of A_j) holds exact
-    // eigenvalues: nothing further to find from this start.
-    const double scale = std::fabs(mu(order - 1));
-    Eigen::LLT<Eigen::MatrixXd> chol(G);
-    const bool invariant = chol.info() != Eigen::Success || !(G.diagonal().minCoeff() > 1e-24 * scale * scale);
-    if (settled || invariant) {
-      out.lambda_settled = true;
+    const bool settled = std::fabs(result.lambda[0] - previous[0]) <= 1e-4 * result.lambda[0] &&
+                         (M < 2 || std::fabs(result.lambda[1] - previous[1]) <= 3e-3 * result.lambda[1]);
+    previous[0] = result.lambda[0];
+    previous[1] = result.lambda[1];
+    // A Krylov space that A maps into itself (W vanishes) holds exact eigenvalues: nothing
+    // further to find from this start.
+    if (settled || !orthonormalize(next, g, R) || !(g[0] > 1e-24 * mu(order - 1) * mu(order - 1))) {
+      result.settled = true;
       break;
     }
-    const Eigen::MatrixXd R = chol.matrixU();  // G = R^T R
-    const Eigen::MatrixXd Rinv = R.inverse();
-    for (std::size_t i = 0; i < n; ++i) {
-      double w[2] = {next[i], m == 2 ? next[n + i] : 0.0};
-      for (int c = 0; c < m; ++c) {
-        double v = 0;
-        for (int r = 0; r < m; ++r) v += w[r] * Rinv(r, c);
-        next[c * n + i] = v;
-      }
-    }
-    below.push_back(R);  // A V_j = V_{j-1} B_{j-1}^T + V_j A_j + V_{j+1} B_j, with B_j = R
-    B_prev = R;
+    Eigen::Matrix<double, M, M> Bj;
+    for (int r = 0; r < M; ++r)
+      for (int c = 0; c < M; ++c) Bj(r, c) = R[r][c];
+    below.push_back(Bj);  // A V_j = V_{j-1} B_{j-1}^T + V_j A_j + V_{j+1} B_j
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 2; ++c) Bp[r][c] = R[r][c];
     double* recycled = prev;
     prev = cur;
     cur = next;
     next = recycled;
   }
-  out.lambda_min = theta[0];
-  out.lambda_next = theta[1];
-  if (m == 2 && out.lambda_min < 1e-4 * out.lambda_next) {
+  return result;
+}
+
+}  // namespace
+
+SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive) {
+  std::vector<double> store(6 * op.n, 0.0);
+  return positive >= 2 ? block_lanczos<2>(op, store.data()) : block_lanczos<1>(op, store.data());
+}
+
+void describe_minimum(const SmallestEigenvalues& e, double action, bool pair, PointAssessment& out) {
+  out.kind = PointKind::minimum;
+  out.lambda_min = e.lambda[0];
+  out.lambda_next = e.lambda[1];
+  out.lambda_settled = e.settled;
+  if (pair && out.lambda_min < 1e-4 * out.lambda_next) {
     out.nearly_degenerate = true;
-    const double action = std::fabs(sum_action(ctx));
-    out.soft_motion = std::sqrt(2 * 1e-16 * std::max(action, 1e-300) / std::max(out.lambda_min, 1e-300));
+    out.soft_motion = std::sqrt(2 * 1e-16 * std::max(std::fabs(action), 1e-300) / std::max(out.lambda_min, 1e-300));
     out.note = format("a nearly degenerate minimum: the smallest eigenvalue of the Hessian, %.3g, is %.2g of the "
                       "next (%.3g); the action is determined to round-off, the trajectory only up to a motion of "
                       "size about %.2g along one direction",
@@ -237,6 +249,34 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
                        "up to %.2g relative",
                        condition, condition * 1e-16);
   }
+}
+
+template <int D>
+void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out) {
+  out = PointAssessment{};
+  out.lambda_max = H.gershgorin_bound();
+  const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
+  const std::size_t dz = static_cast<std::size_t>(ctx.dim);
+  out.positive = static_cast<long>(n) - fixed_components(ctx);
+  out.kind = PointKind::minimum;
+  if (out.positive <= 0) {
+    out.note = "no unknowns";
+    return;
+  }
+  LanczosOperator op;
+  op.n = n;
+  op.dim = ctx.dim;
+  op.first_node = 1;
+  op.N = ctx.N;
+  op.free = ctx.is_free.data() + dz;
+  op.solve = [&H](const double* b0, const double* b1, double* x0, double* x1) {
+    if (b1)
+      H.solve_ldlt(b0, b1, x0, x1);
+    else
+      H.solve_ldlt(b0, x0);
+  };
+  op.reduce = [](double*, int) {};
+  describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out.positive >= 2, out);
 }
 
 template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&);

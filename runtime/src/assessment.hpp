@@ -6,6 +6,8 @@
 #ifndef PARDEL_RUNTIME_ASSESSMENT_HPP
 #define PARDEL_RUNTIME_ASSESSMENT_HPP
 
+#include <cstddef>
+#include <functional>
 #include <string>
 
 #include "block_tridiagonal.hpp"
@@ -21,6 +23,35 @@ void assess(Context& ctx, PointAssessment& out);
  *  dispatch_dim. */
 template <int D>
 void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out);
+
+/** A positive definite Hessian's inverse, as the Lanczos iteration of smallest_eigenvalues sees it:
+ *  n unknowns (this rank's, over ranks) of dim components per node, unknown 0 at node first_node
+ *  of N intervals, free[i] false on fixed components (identity rows). */
+struct LanczosOperator {
+  std::size_t n = 0;
+  int dim = 1, first_node = 1, N = 2;
+  const unsigned char* free = nullptr;
+  /** x0 = H^-1 b0 and, where b1 is not null, x1 = H^-1 b1 (collective over ranks). */
+  std::function<void(const double* b0, const double* b1, double* x0, double* x1)> solve;
+  /** Sums `count` values over the ranks, in place (nothing in one process). */
+  std::function<void(double* values, int count)> reduce;
+};
+
+/** The two smallest eigenvalues of H (Ritz values: upper bounds) and whether they settled. */
+struct SmallestEigenvalues {
+  double lambda[2] = {0, 0};
+  bool settled = false;
+  int steps = 0;
+};
+
+/** Block Lanczos (blocks of two vectors where `positive` >= 2, so a repeated smallest eigenvalue is
+ *  found twice) on H^-1 over the free components, at most 24 steps, stopping when the two values
+ *  settle. O(n) memory and work per step; collective over ranks through op. */
+SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive);
+
+/** A positive definite Hessian's assessment from its smallest eigenvalues (pair: two or more
+ *  unknowns) and out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note. */
+void describe_minimum(const SmallestEigenvalues& e, double action, bool pair, PointAssessment& out);
 
 /** From the inertia in out.positive, negative and zero: a saddle or a degenerate point gets its
  *  kind and note (true); a positive definite Hessian is left to the caller (false). */

@@ -6,7 +6,8 @@
  * threads inside the ranks; under fixed_total_time also when the clock moves nodes across ranks),
  * Newton and hybrid to the tolerance, the levels of refinement and of the automatic method's grid
  * sequencing (those of one process, from the first that fits the ranks), the halo exchange and the
- * rank-order sum, refusals (a degenerate Lagrangian with the one-process message), a NaN or an
+ * rank-order sum, the point assessment (kind, inertia and eigenvalue estimates), refusals (a
+ * degenerate Lagrangian with the one-process message), a NaN or an
  * interruption on one rank ending every rank, and checkpoints: the state of an interrupted solve
  * over ranks is the one-process state, and resumed over ranks or in one process (so is a
  * one-process state over ranks) it ends as the uninterrupted solve. The
@@ -475,13 +476,23 @@ TEST(Levels, StoppedOnACoarseLevelSaysSo) {
 
 // ---- refusals and failures
 
-// ---- the point assessment over ranks: the kind and inertia of the one-process assessment
+// ---- the point assessment over ranks: the kind, inertia and (at a minimum) the eigenvalue
+// estimates of the one-process assessment
 
 void expect_same_point(const Both& b) {
   EXPECT_EQ(b.dist.point.kind, b.one.point.kind) << b.one.point.note << " | " << b.dist.point.note;
   EXPECT_EQ(b.dist.point.positive, b.one.point.positive);
   EXPECT_EQ(b.dist.point.negative, b.one.point.negative);
   EXPECT_EQ(b.dist.point.zero, b.one.point.zero);
+  if (b.one.point.kind != pardel::PointKind::minimum) return;
+  // The same Lanczos iteration from the same start with another solver and other sums: Ritz values
+  // that settled within 1e-4 and 3e-3 of their limits agree to about that.
+  EXPECT_TRUE(b.one.point.lambda_settled && b.dist.point.lambda_settled) << b.one.point.note << " | " << b.dist.point.note;
+  EXPECT_NEAR(b.dist.point.lambda_min, b.one.point.lambda_min, 1e-3 * b.one.point.lambda_min);
+  EXPECT_NEAR(b.dist.point.lambda_next, b.one.point.lambda_next, 1e-2 * b.one.point.lambda_next);
+  EXPECT_NEAR(b.dist.point.lambda_max, b.one.point.lambda_max, 1e-12 * b.one.point.lambda_max);
+  EXPECT_EQ(b.dist.point.nearly_degenerate, b.one.point.nearly_degenerate);
+  EXPECT_GT(b.dist.point.lambda_min, 0);
 }
 
 TEST(Point, MinimumSaddleAndKnotsAsInOneProcess) {

@@ -462,6 +462,27 @@ class DistributedSpace {
     return in;
   }
 
+  /** Gershgorin's bound on the largest |eigenvalue| of the Hessian as last assembled, over all
+   *  ranks (the one-process BlockTridiagonal::gershgorin_bound). Collective. */
+  double gershgorin_bound() const {
+    const int owned = solver_.owned(), N = local_.layout.N;
+    double bound = 0;
+    for (int i = 0; i < owned; ++i) {
+      const int g = local_.u0 + i;
+      for (std::size_t a = 0; a < dz_; ++a) {
+        const int r = static_cast<int>(a);
+        double row = solver_.diag(i).row(r).cwiseAbs().sum();
+        if (g < N - 1) row += solver_.off(i).row(r).cwiseAbs().sum();
+        if (i > 0)
+          row += solver_.off(i - 1).col(r).cwiseAbs().sum();
+        else if (local_.layout.has_left())
+          row += solver_.left_coupling().col(r).cwiseAbs().sum();
+        bound = std::max(bound, row);
+      }
+    }
+    return detail::max_all(bound, local_.comm);
+  }
+
   void apply_metric(const Context&, const double* x, double* y) {
     if (!difference_) {
       std::copy(x, x + n_, y);
@@ -616,13 +637,16 @@ class DistributedNewton : public pardel::detail::TrustRegionNewton<DistributedSp
   Local& local_;
 };
 
-/** What the returned point is, over the ranks: the kind and inertia of the Hessian (its smallest
- *  eigenvalues are computed in one process only). Collective. */
+/** What the returned point is, over the ranks: the kind and inertia of the Hessian and, at a
+ *  minimum, its smallest eigenvalues by the one-process assessment's block Lanczos
+ *  (assessment.hpp) with the distributed solve. Collective. */
 void assess_distributed(const Options& options, Local& local, PointAssessment& out) {
   Context& ctx = local.ctx;
   out = PointAssessment{};
   pardel::detail::ensure_interval_arrays(ctx, Evaluated::full);
   pardel::detail::eval_full(ctx, ctx.q);
+  bool described = false;
+  pardel::detail::SmallestEigenvalues eigenvalues;
   pardel::detail::dispatch_dim(ctx.dim, [&](auto D) {
     DistributedSpace<decltype(D)::value> space(options, local);
     space.resize(ctx);
@@ -630,11 +654,34 @@ void assess_distributed(const Options& options, Local& local, PointAssessment& o
     out.positive = in.positive;
     out.negative = in.negative;
     out.zero = in.zero;
+    if (in.negative != 0 || in.zero != 0 || in.positive <= 0) return;
+    out.lambda_max = space.gershgorin_bound();  // of the unshifted Hessian that inertia() assembled
+    std::vector<double> b(space.size(), 0.0), x(space.size(), 0.0);
+    if (!space.factor(ctx, 0.0, b.data(), x.data())) return;
+    pardel::detail::LanczosOperator op;
+    op.n = space.size();
+    op.dim = ctx.dim;
+    op.first_node = space.first_node();
+    op.N = space.intervals();
+    op.free = local.global_free.data() + space.offset();
+    op.solve = [&](const double* b0, const double* b1, double* x0, double* x1) {
+      space.solve(ctx, b0, x0);
+      if (b1) space.solve(ctx, b1, x1);
+    };
+    op.reduce = [&local](double* values, int count) {
+      MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, local.comm);
+    };
+    eigenvalues = pardel::detail::smallest_eigenvalues(op, in.positive);
+    described = true;
   });
   if (pardel::detail::classify_indefinite(out)) return;
+  if (described) {
+    pardel::detail::describe_minimum(eigenvalues, global_sum_Ld(local), out.positive >= 2, out);
+    return;
+  }
   out.kind = PointKind::minimum;
-  out.note = "a strict local minimum: Hessian positive definite (its smallest eigenvalues are computed in one "
-             "process only)";
+  out.note = "a strict local minimum: Hessian positive definite (its inertia; the factorization for its smallest "
+             "eigenvalues failed)";
 }
 
 /** hybrid.cpp over the ranks: Jacobi-Newton sweeps until the distributed factorization certifies

@@ -77,6 +77,7 @@ class SchurBlockSolver {
   const Mat& off(int i) const { return off_[static_cast<std::size_t>(i)]; }
   /** H(L, 0): the previous rank's separator L coupled to owned unknown 0. */
   Mat& left_coupling() { return left_; }
+  const Mat& left_coupling() const { return left_; }
 
   /**
    * Solves H x = b; b and x hold the owned unknowns in node layout (d values each). Collective over
