@@ -7,9 +7,11 @@
  * Newton's last one, at the same point) and at most 2 x 24 solves. Also the check that refuses a degenerate Lagrangian before solving.
  */
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 
 #include "assessment.hpp"
 #include "block_tridiagonal.hpp"
@@ -211,8 +213,12 @@ SmallestEigenvalues block_lanczos(const LanczosOperator& op, double* store) {
 }  // namespace
 
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive) {
-  std::vector<double> store(6 * op.n, 0.0);
-  return positive >= 2 ? block_lanczos<2>(op, store.data()) : block_lanczos<1>(op, store.data());
+  // Left uninitialized (every value is written before it is read) but V_{j-1} of the first step,
+  // which is zero.
+  const int m = positive >= 2 ? 2 : 1;
+  std::unique_ptr<double[]> store(new double[3 * static_cast<std::size_t>(m) * op.n]);
+  std::fill(store.get(), store.get() + static_cast<std::size_t>(m) * op.n, 0.0);
+  return m == 2 ? block_lanczos<2>(op, store.get()) : block_lanczos<1>(op, store.get());
 }
 
 void describe_minimum(const SmallestEigenvalues& e, double action, bool pair, PointAssessment& out) {
