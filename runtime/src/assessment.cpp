@@ -69,10 +69,6 @@ double relative_smallest_singular_value(const double* block, int d) {
   return s(d - 1) / s(0);
 }
 
-}  // namespace
-
-namespace {
-
 /**
  * Block Lanczos with M vectors per block on A = H^-1 restricted to the free components (see
  * smallest_eigenvalues). store holds 3 M n values: V_{j-1}, V_j and W, M vectors of n each.

@@ -238,7 +238,12 @@ std::string Iteration::converged_message(double r, double target) const {
       ctx_.residual_scale);
   // Where the round-off level sets the target far above rtol, say how little the equations are resolved.
   const double relative = ctx_.residual_scale > 0 ? target / ctx_.residual_scale : 0;
-  if (relative > kRoundOffDominates * options_.rtol)
+  if (relative >= 1)
+    message += format("; the round-off level dominates: at this N the target it sets is %.2g times the DEL terms' "
+                      "scale, so the residual does not show that the DEL equations hold (the point note says how "
+                      "far round-off can move the trajectory); a smaller N resolves them",
+                      relative);
+  else if (relative > kRoundOffDominates * options_.rtol)
     message += format("; the round-off level dominates: at this N the DEL equations are resolved only to %.2g of "
                       "their scale (rtol %.2g), and the answer is uncertain accordingly; a smaller N resolves them "
                       "better",

@@ -8,7 +8,8 @@
  * minimum-acceleration path through knots converged (not stalled) and converging to the clamped
  * cubic spline at second order; a double-pendulum swing converged at N = 2e5 on the grid that was asked, with the
  * discretization's second order against coarser solves; a regular order-4 model accepted by the
- * solve-time regularity check on fine grids.
+ * solve-time regularity check on fine grids, and its converged message saying where round-off hides
+ * whether the equations hold.
  */
 #include <gtest/gtest.h>
 
@@ -247,6 +248,31 @@ TEST(Assessment, ARegularOrderFourModelIsAcceptedOnFineGrids) {
     EXPECT_NE(s.termination, pardel::Termination::invalid_input) << "N = " << N << ": " << s.message;
     EXPECT_EQ(s.termination, pardel::Termination::converged) << "N = " << N << ": " << s.brief_report();
   }
+}
+
+TEST(Assessment, ConvergedSaysWhenRoundOffHidesWhetherTheEquationsHold) {
+  // The same order-4 model: its Hessian's entries span h^-7 to h^-1, so at N = 256 the round-off
+  // of the DEL residual (eps |H| |q| per node, in the kernels' cancellations) exceeds the DEL
+  // terms themselves. The solve still ends at its round-off level, and the message must not
+  // call the equations resolved; at N = 8 they are resolved to far below their scale.
+  pardel::Problem p;
+  p.model = &plate_pair_model;
+  p.discretization = &plate_pair_model.discretizations[0];
+  p.T = 1;
+  p.q0 = {0, 0, 1, 0, 0, 0, 0, 0};
+  p.qN = {1, -1, 0, 0, 0, 0, 0, 0};
+  const std::string unresolved = "so the residual does not show that the DEL equations hold";
+  p.N = 8;
+  auto coarse = pardel::linear_guess(p);
+  const pardel::Summary c = pardel::solve(p, pardel::Options{}, coarse);
+  ASSERT_TRUE(c.converged()) << c.brief_report();
+  EXPECT_EQ(c.message.find(unresolved), std::string::npos) << c.message;
+  p.N = 256;
+  auto fine = pardel::linear_guess(p);
+  const pardel::Summary f = pardel::solve(p, pardel::Options{}, fine);
+  ASSERT_TRUE(f.converged()) << f.brief_report();
+  EXPECT_NE(f.message.find(unresolved), std::string::npos) << f.message;
+  EXPECT_NE(f.point.note.find("round-off alone can move the trajectory"), std::string::npos) << f.point.note;
 }
 
 TEST(Assessment, MinimumAccelerationThroughKnotsConvergesToTheClampedSpline) {
