@@ -2,13 +2,14 @@
  * @file assessment.cpp
  * What a returned trajectory is as a stationary point of the discrete action: the inertia of the
  * Hessian from its block LDL^T (minimum, saddle of index k, degenerate) and, at a minimum, its two
- * smallest eigenvalues by block Lanczos on the inverse against Gershgorin's bound on the largest,
- * which tells a well-posed minimum from a nearly degenerate one. O(N) work: one factorization (or
- * Newton's last one, at the same point) and at most 2 x 24 solves. Also the check that refuses a degenerate Lagrangian before solving.
+ * smallest eigenvalues by Lanczos on the inverse (the second one with the first deflated) against
+ * Gershgorin's bound on the largest, which tells a well-posed minimum from a nearly degenerate one.
+ * O(N) work: one factorization (or Newton's last one, at the same point) and at most 3 x 24 solves. Also the check that refuses a degenerate Lagrangian before solving.
  */
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -27,7 +28,7 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
 
 /** Pivot eigenvalues below this fraction of their block's size count as zero. */
 constexpr double kZeroPivot = 1e-12;
-/** The budget of block Lanczos steps for the two smallest eigenvalues at a minimum. */
+/** The budget of Lanczos steps for each of the two smallest eigenvalues at a minimum. */
 constexpr int kLanczosSteps = 24;
 
 /** Fixed components are identity rows of the assembled matrix: they add +1 eigenvalues that are
@@ -69,152 +70,173 @@ double relative_smallest_singular_value(const double* block, int d) {
   return s(d - 1) / s(0);
 }
 
+/** Sum over the rank's free components of a[i] b[i], reduced over the ranks. */
+double dot(const LanczosOperator& op, const double* a, const double* b) {
+  double s = 0;
+  for (std::size_t i = 0; i < op.n; ++i) s += op.free[i] ? a[i] * b[i] : 0.0;
+  op.reduce(&s, 1);
+  return s;
+}
+
+/** The largest eigenvalue of the tridiagonal T (diagonal alpha, off-diagonal beta), its unit
+ *  eigenvector and the next eigenvalue (-infinity for T of order 1). */
+double top_ritz(const std::vector<double>& alpha, const std::vector<double>& beta, Eigen::VectorXd* vector,
+                double* second) {
+  const Eigen::Index k = static_cast<Eigen::Index>(alpha.size());
+  Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(alpha.data(), k);
+  Eigen::VectorXd e = Eigen::Map<const Eigen::VectorXd>(beta.data(), k - 1);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
+  eig.computeFromTridiagonal(d, e, Eigen::ComputeEigenvectors);
+  if (eig.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
+  *vector = eig.eigenvectors().col(k - 1);
+  *second = k > 1 ? eig.eigenvalues()(k - 2) : -std::numeric_limits<double>::infinity();
+  return eig.eigenvalues()(k - 1);
+}
+
 /**
- * Block Lanczos with M vectors per block on A = H^-1 restricted to the free components (see
- * smallest_eigenvalues). store holds 3 M n values: V_{j-1}, V_j and W, M vectors of n each.
+ * Lanczos on A = H^-1 over the free components, projected against the unit vector y where y is
+ * not null (A restricted to y's complement), from the start vector in v[1] (any norm): the largest
+ * eigenvalue mu of A there, by the largest Ritz value of T_j, and 1/mu, an upper bound on the
+ * smallest eigenvalue of H there. v holds three vectors of n (v[0] must be zero). Stops when the
+ * residual bound puts mu within `settle` (relative) of an eigenvalue or the Krylov space is
+ * invariant. With `replay` (the
+ * alpha, beta and Ritz vector s of an earlier run from the same start) it recomputes the same
+ * basis with those coefficients instead and accumulates the Ritz vector sum_j s_j v_j into y_out.
  */
-template <int M>
-SmallestEigenvalues block_lanczos(const LanczosOperator& op, double* store) {
+struct Lanczos {
+  std::vector<double> alpha, beta;
+  Eigen::VectorXd s;  ///< the top Ritz vector of T
+  double lambda = 0;  ///< 1 / (largest Ritz value)
+  bool settled = false;
+};
+Lanczos lanczos(const LanczosOperator& op, double* v[3], const double* y, double settle, const Lanczos* replay,
+                double* y_out) {
   const std::size_t n = op.n;
-  double* prev = store;
-  double* cur = store + M * n;
-  double* next = store + 2 * M * n;
-  const double* no_input = nullptr;
-  double* no_output = nullptr;
-  auto solve = [&](const double* in, double* out) {
-    op.solve(in, M == 2 ? in + n : no_input, out, M == 2 ? out + n : no_output);
+  Lanczos run;
+  auto project = [&](double* x) {
+    if (!y) return;
+    const double c = dot(op, y, x);
+    for (std::size_t i = 0; i < n; ++i) x[i] -= c * y[i];
   };
-  SmallestEigenvalues result;
-  // Smooth start vectors, even and odd about the middle (the shapes of the lowest modes of a
-  // string), slightly different per component, made orthonormal (Cholesky QR).
-  double gram[3] = {0, 0, 0};  // v0.v0, v0.v1, v1.v1
-  for (std::size_t i = 0; i < n; ++i) {
-    double v[2] = {0, 0};
-    if (op.free[i]) {
-      const double s = static_cast<double>(op.first_node + static_cast<int>(i / op.dim)) / op.N;
-      const double a = static_cast<double>(i % op.dim);
-      v[0] = s * (1 - s) * (1 + 0.1 * a);
-      v[1] = s * (1 - s) * (1 - 2 * s) + 0.05 * a * s * (1 - s);
-    }
-    for (int c = 0; c < M; ++c) cur[c * n + i] = v[c];
-    gram[0] += v[0] * v[0];
-    gram[1] += v[0] * v[1];
-    gram[2] += v[1] * v[1];
-  }
-  op.reduce(gram, 3);
-  // R of the Cholesky QR of a block with Gram matrix {g00, g01, g11}: V <- V R^-1.
-  auto orthonormalize = [&](double* V, const double* g, double R[2][2]) {
-    R[0][0] = std::sqrt(g[0]);
-    R[0][1] = M == 2 ? g[1] / R[0][0] : 0;
-    R[1][0] = 0;
-    const double r11 = M == 2 ? g[2] - R[0][1] * R[0][1] : 1;
-    if (!(R[0][0] > 0) || !(r11 > 1e-24 * g[0]) || !std::isfinite(r11)) return false;
-    R[1][1] = std::sqrt(r11);
-    const double i00 = 1 / R[0][0], i11 = 1 / R[1][1], i01 = -R[0][1] * i00 * i11;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double w0 = V[i];
-      V[i] = w0 * i00;
-      if (M == 2) V[n + i] = w0 * i01 + V[n + i] * i11;
-    }
-    return true;
-  };
-  double R[2][2];
-  if (!orthonormalize(cur, gram, R)) return result;
-  std::vector<Eigen::Matrix<double, M, M>> diagonal, below;  // the blocks A_j and B_j of T
-  double Bp[2][2] = {{0, 0}, {0, 0}};                         // B_{j-1}
-  double previous[2] = {-1, -1};
-  for (int j = 0; j < kLanczosSteps; ++j) {
-    solve(cur, next);
-    // W = A V_j - V_{j-1} B_{j-1}^T, then A_j = V_j^T W.
-    double Aj[2][2] = {{0, 0}, {0, 0}};
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!op.free[i]) {
-        for (int c = 0; c < M; ++c) next[c * n + i] = 0;
-        continue;
+  double* prev = v[0];
+  double* cur = v[1];
+  double* next = v[2];
+  project(cur);
+  const double norm = std::sqrt(dot(op, cur, cur));
+  if (!(norm > 0) || !std::isfinite(norm)) return run;
+  for (std::size_t i = 0; i < n; ++i) cur[i] = op.free[i] ? cur[i] / norm : 0.0;
+  if (y_out) std::fill(y_out, y_out + n, 0.0);
+  const int steps = replay ? static_cast<int>(replay->alpha.size()) : kLanczosSteps;
+  for (int j = 0; j < steps; ++j) {
+    if (y_out)
+      for (std::size_t i = 0; i < n; ++i) y_out[i] += replay->s(j) * cur[i];
+    if (replay && j + 1 == steps) break;  // the last basis vector is in
+    op.solve(cur, next);
+    project(next);
+    // W = A v_j - beta_{j-1} v_{j-1} - alpha_j v_j (fixed components zero).
+    const double b_prev = j > 0 ? (replay ? replay->beta[j - 1] : run.beta[j - 1]) : 0.0;
+    for (std::size_t i = 0; i < n; ++i) next[i] = op.free[i] ? next[i] - b_prev * prev[i] : 0.0;
+    const double a = replay ? replay->alpha[j] : dot(op, cur, next);
+    for (std::size_t i = 0; i < n; ++i) next[i] -= a * cur[i];
+    if (replay) {
+      if (j + 1 < steps) {
+        const double b = replay->beta[j];
+        for (std::size_t i = 0; i < n; ++i) next[i] /= b;
       }
-      for (int c = 0; c < M; ++c) {
-        double w = next[c * n + i];
-        for (int r = 0; r < M; ++r) w -= prev[r * n + i] * Bp[c][r];
-        next[c * n + i] = w;
-        for (int r = 0; r < M; ++r) Aj[r][c] += cur[r * n + i] * w;
+    } else {
+      run.alpha.push_back(a);
+      double second = 0;
+      const double mu = top_ritz(run.alpha, run.beta, &run.s, &second);
+      if (!(mu > 0)) break;
+      run.lambda = 1 / mu;
+      const double b = std::sqrt(dot(op, next, next));
+      // The Ritz pair's residual |A x - mu x| is b |s_j|; with the gap to the next Ritz value it
+      // bounds the distance of mu to an eigenvalue by r^2 / gap (Kato-Temple, the gap estimated
+      // from T). Settled when that is below `settle` of mu, or when the Krylov space is one that
+      // A maps into itself (W vanishes against A's scale).
+      const double r = b * std::fabs(run.s(run.s.size() - 1)), gap = mu - second;
+      if ((run.alpha.size() >= 3 && r * r <= settle * mu * gap) || !(b > 1e-12 * mu)) {
+        run.settled = true;
+        break;
       }
+      run.beta.push_back(b);
+      for (std::size_t i = 0; i < n; ++i) next[i] /= b;
     }
-    double reduced[4] = {Aj[0][0], Aj[0][1], Aj[1][0], Aj[1][1]};
-    op.reduce(reduced, 4);
-    Aj[0][0] = reduced[0];
-    Aj[1][1] = reduced[3];
-    Aj[0][1] = Aj[1][0] = 0.5 * (reduced[1] + reduced[2]);
-    // W -= V_j A_j, and the Gram matrix of W for its QR (W = V_{j+1} B_j).
-    double g[3] = {0, 0, 0};
-    for (std::size_t i = 0; i < n; ++i) {
-      double w[2] = {0, 0};
-      for (int c = 0; c < M; ++c) {
-        w[c] = next[c * n + i];
-        for (int r = 0; r < M; ++r) w[c] -= cur[r * n + i] * Aj[r][c];
-        next[c * n + i] = w[c];
-      }
-      g[0] += w[0] * w[0];
-      g[1] += w[0] * w[1];
-      g[2] += w[1] * w[1];
-    }
-    op.reduce(g, 3);
-    Eigen::Matrix<double, M, M> block;
-    for (int r = 0; r < M; ++r)
-      for (int c = 0; c < M; ++c) block(r, c) = Aj[r][c];
-    diagonal.push_back(block);
-    // The Ritz values: eigenvalues of T_j (order M (j + 1)).
-    const int order = M * static_cast<int>(diagonal.size());
-    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(order, order);
-    for (std::size_t k = 0; k < diagonal.size(); ++k) {
-      const int o = M * static_cast<int>(k);
-      T.block(o, o, M, M) = diagonal[k];
-      if (k + 1 < diagonal.size()) {
-        T.block(o + M, o, M, M) = below[k];
-        T.block(o, o + M, M, M) = below[k].transpose();
-      }
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(T, Eigen::EigenvaluesOnly);
-    if (eig.info() != Eigen::Success) break;
-    const auto& mu = eig.eigenvalues();  // ascending
-    if (!(mu(order - 1) > 0)) break;
-    result.lambda[0] = 1 / mu(order - 1);
-    result.lambda[1] = M == 2 ? 1 / mu(order - 2) : 0;
-    result.steps = j + 1;
-    // Settled when the smallest Ritz value moves by less than 1e-4 (the notes print 3 digits) and
-    // the next by less than 3e-3 (within about 1% of the eigenvalue).
-    const bool settled = std::fabs(result.lambda[0] - previous[0]) <= 1e-4 * result.lambda[0] &&
-                         (M < 2 || std::fabs(result.lambda[1] - previous[1]) <= 3e-3 * result.lambda[1]);
-    previous[0] = result.lambda[0];
-    previous[1] = result.lambda[1];
-    // A Krylov space that A maps into itself (W vanishes) holds exact eigenvalues: nothing
-    // further to find from this start.
-    if (settled || !orthonormalize(next, g, R) || !(g[0] > 1e-24 * mu(order - 1) * mu(order - 1))) {
-      result.settled = true;
-      break;
-    }
-    Eigen::Matrix<double, M, M> Bj;
-    for (int r = 0; r < M; ++r)
-      for (int c = 0; c < M; ++c) Bj(r, c) = R[r][c];
-    below.push_back(Bj);  // A V_j = V_{j-1} B_{j-1}^T + V_j A_j + V_{j+1} B_j
-    for (int r = 0; r < 2; ++r)
-      for (int c = 0; c < 2; ++c) Bp[r][c] = R[r][c];
     double* recycled = prev;
     prev = cur;
     cur = next;
     next = recycled;
   }
-  return result;
+  return run;
+}
+
+/** Start vectors: smooth shapes, even (shape 0) and odd (shape 1) about the middle (the lowest
+ *  modes of a string), with per-component weights of no pattern, plus a pseudo-random tenth, so
+ *  that every eigenvector, whatever the mix of components in it, is in the start (a smooth shape
+ *  alike in every component misses the modes whose components move against each other). The same
+ *  on every rank (a function of the global index). */
+void start_vector(const LanczosOperator& op, int shape, double* v) {
+  for (std::size_t i = 0; i < op.n; ++i) {
+    const int node = op.first_node + static_cast<int>(i / op.dim), a = static_cast<int>(i % op.dim);
+    const double s = static_cast<double>(node) / op.N;
+    const double smooth = shape == 0 ? s * (1 - s) : s * (1 - s) * (1 - 2 * s);
+    const double weight = std::cos(1.3 + 2.1 * a + 0.7 * shape);
+    std::uint64_t x = (static_cast<std::uint64_t>(node) * static_cast<std::uint64_t>(op.dim) +
+                       static_cast<std::uint64_t>(a) + 1) * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(shape);
+    x ^= x >> 31;
+    x *= 0xBF58476D1CE4E5B9ull;
+    x ^= x >> 29;
+    const double noise = static_cast<double>(x >> 11) / 9007199254740992.0 * 2 - 1;  // [-1, 1)
+    v[i] = op.free[i] ? smooth * (weight + 0.1 * noise) : 0.0;
+  }
 }
 
 }  // namespace
 
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive) {
-  // Left uninitialized (every value is written before it is read) but V_{j-1} of the first step,
-  // which is zero.
-  const int m = positive >= 2 ? 2 : 1;
-  std::unique_ptr<double[]> store(new double[3 * static_cast<std::size_t>(m) * op.n]);
-  std::fill(store.get(), store.get() + static_cast<std::size_t>(m) * op.n, 0.0);
-  return m == 2 ? block_lanczos<2>(op, store.get()) : block_lanczos<1>(op, store.get());
+  // lambda_1 by Lanczos on H^-1; its Ritz vector y by replaying that run, refined by one inverse
+  // iteration; then lambda_2 by Lanczos on H^-1 restricted to the complement of y. The deflation keeps the converged lambda_1 out of
+  // the second run: without it, a Lanczos basis that loses orthogonality once lambda_1 converges
+  // returns it a second time (a "ghost"), and a lambda_1 far below lambda_2 (a nearly degenerate
+  // minimum) converges at once. A repeated lambda_1 is found again in the complement.
+  const std::size_t n = op.n;
+  std::unique_ptr<double[]> store(new double[4 * n]);
+  double* v[3] = {store.get(), store.get() + n, store.get() + 2 * n};
+  double* y = store.get() + 3 * n;
+  SmallestEigenvalues out;
+  std::fill(v[0], v[0] + n, 0.0);
+  start_vector(op, 0, v[1]);
+  const Lanczos first = lanczos(op, v, nullptr, 1e-4, nullptr, nullptr);
+  out.lambda[0] = first.lambda;
+  out.steps = static_cast<int>(first.alpha.size());
+  if (positive < 2 || first.alpha.empty()) {
+    out.settled = first.settled;
+    return out;
+  }
+  std::fill(v[0], v[0] + n, 0.0);
+  start_vector(op, 0, v[1]);
+  lanczos(op, v, nullptr, 0, &first, y);
+  // One inverse iteration from the Ritz vector, z = H^-1 y: the Rayleigh quotient of H at z,
+  // z.H z / z.z = z.y / z.z (as H z = y), is an upper bound on lambda_1 whose error is the square
+  // of z's angle to the eigenvector (a factor lambda_1 / lambda_2 below y's), and z/|z| is the
+  // vector deflated below.
+  op.solve(y, v[2]);
+  const double zy = dot(op, v[2], y), zz = dot(op, v[2], v[2]);
+  if (zz > 0 && zy > 0 && std::isfinite(zz)) {
+    out.lambda[0] = std::min(out.lambda[0], zy / zz);
+    const double nz = std::sqrt(zz);
+    for (std::size_t i = 0; i < n; ++i) y[i] = op.free[i] ? v[2][i] / nz : 0.0;
+  } else {
+    const double ny = std::sqrt(dot(op, y, y));
+    for (std::size_t i = 0; i < n; ++i) y[i] /= ny;
+  }
+  std::fill(v[0], v[0] + n, 0.0);
+  start_vector(op, 1, v[1]);
+  const Lanczos second = lanczos(op, v, y, 3e-3, nullptr, nullptr);
+  out.lambda[1] = std::max(second.lambda, first.lambda);
+  out.steps += static_cast<int>(first.alpha.size() + second.alpha.size());  // with the replay
+  out.settled = first.settled && second.settled;
+  return out;
 }
 
 void describe_minimum(const SmallestEigenvalues& e, double action, bool pair, PointAssessment& out) {
@@ -271,12 +293,7 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
   op.first_node = 1;
   op.N = ctx.N;
   op.free = ctx.is_free.data() + dz;
-  op.solve = [&H](const double* b0, const double* b1, double* x0, double* x1) {
-    if (b1)
-      H.solve_ldlt(b0, b1, x0, x1);
-    else
-      H.solve_ldlt(b0, x0);
-  };
+  op.solve = [&H](const double* b, double* x) { H.solve_ldlt(b, x); };
   op.reduce = [](double*, int) {};
   describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out.positive >= 2, out);
 }

@@ -31,8 +31,8 @@ struct LanczosOperator {
   std::size_t n = 0;
   int dim = 1, first_node = 1, N = 2;
   const unsigned char* free = nullptr;
-  /** x0 = H^-1 b0 and, where b1 is not null, x1 = H^-1 b1 (collective over ranks). */
-  std::function<void(const double* b0, const double* b1, double* x0, double* x1)> solve;
+  /** x = H^-1 b (collective over ranks). */
+  std::function<void(const double* b, double* x)> solve;
   /** Sums `count` values over the ranks, in place (nothing in one process). */
   std::function<void(double* values, int count)> reduce;
 };
@@ -44,9 +44,12 @@ struct SmallestEigenvalues {
   int steps = 0;
 };
 
-/** Block Lanczos (blocks of two vectors where `positive` >= 2, so a repeated smallest eigenvalue is
- *  found twice) on H^-1 over the free components, at most 24 steps, stopping when the two values
- *  settle. O(n) memory and work per step; collective over ranks through op. */
+/** The smallest eigenvalue by Lanczos on H^-1 over the free components (refined, where `positive`
+ *  >= 2, by one inverse iteration from its Ritz vector) and the next one by Lanczos on H^-1 with
+ *  that vector deflated (a repeated smallest
+ *  eigenvalue is found twice, and a converged first one does not return as a copy). At most 24
+ *  steps each, stopping when the residual bound puts them within 1e-4 and 3e-3 (relative). Four
+ *  vectors of n; collective over ranks through op. */
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive);
 
 /** A positive definite Hessian's assessment from its smallest eigenvalues (pair: two or more

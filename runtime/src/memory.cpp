@@ -127,9 +127,9 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
   // Context::t_kept, hk_kept: the node times and steps before a convergence check's clock update.
   if (problem.clock != ClockMode::none) e.solve += (2 * N + 1) * 8;
   // The point assessment (assessment.cpp): the solve's context and trajectories, the Hessian and
-  // the three two-vector blocks of its block Lanczos iteration.
+  // the four vectors of its Lanczos iterations.
   const double n = std::max(N - 1, 0.0);
-  e.assessment = context_bytes(N, d) + trajectories + block_tridiagonal_bytes(N, d, false) + 6 * n * d * 8;
+  e.assessment = context_bytes(N, d) + trajectories + block_tridiagonal_bytes(N, d, false) + 4 * n * d * 8;
   // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
   // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).

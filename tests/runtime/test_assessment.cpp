@@ -9,7 +9,8 @@
  * cubic spline at second order; a double-pendulum swing converged at N = 2e5 on the grid that was asked, with the
  * discretization's second order against coarser solves; a regular order-4 model accepted by the
  * solve-time regularity check on fine grids, and its converged message saying where round-off hides
- * whether the equations hold.
+ * whether the equations hold; a harmonic oscillator just before its conjugate point reported as a
+ * nearly degenerate minimum, against the exact eigenvalues of its Hessian.
  */
 #include <gtest/gtest.h>
 
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "hand_models.hpp"
 #include "pardel/pardel.hpp"
 
 #ifdef PARDEL_HAVE_ASSESSMENT_MODELS
@@ -29,6 +31,41 @@
 #endif
 
 namespace {
+
+TEST(Assessment, AMinimumJustBeforeAConjugatePointIsNearlyDegenerate) {
+  // The harmonic oscillator's trapezoid action (hand_models.hpp) has the Hessian
+  // tridiag(-1/h, 2/h - h w^2, -1/h), whose eigenvalues are exactly
+  // lambda_k = (4/h) sin^2(k pi / 2N) - h w^2. With w^2 = (4/h^2) sin^2(pi / 2N) (1 - delta) the
+  // interval T is just short of the discrete conjugate point: lambda_1 = (4/h) sin^2(pi/2N) delta,
+  // about delta/3 of lambda_2. Antisymmetric end values keep the solution bounded (the soft mode
+  // is symmetric). The assessment must call this minimum nearly degenerate, with both eigenvalues.
+  const int N = 100;
+  const double T = 3, h = T / N, delta = 1e-5, kPiHere = 3.14159265358979323846;
+  const double s1 = std::sin(kPiHere / (2 * N)), s2 = std::sin(2 * kPiHere / (2 * N));
+  const double w2 = 4 / (h * h) * s1 * s1 * (1 - delta);
+  pardel::Problem p;
+  p.model = &hand::harmonic;
+  p.discretization = &hand::harmonic.discretizations[0];
+  p.params = {std::sqrt(w2)};
+  p.T = T;
+  p.N = N;
+  p.q0 = {0.3};
+  p.qN = {-0.3};
+  const double lambda1 = 4 / h * s1 * s1 - h * w2, lambda2 = 4 / h * s2 * s2 - h * w2;
+  ASSERT_LT(lambda1, 1e-4 * lambda2);
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  EXPECT_EQ(s.point.kind, pardel::PointKind::minimum) << s.point.note;
+  EXPECT_TRUE(s.point.nearly_degenerate) << s.point.note;
+  EXPECT_TRUE(s.point.lambda_settled) << s.point.note;
+  // lambda_1 is 5e-9 of the diagonal: the assembled Hessian carries it to about 1e-5.
+  EXPECT_NEAR(s.point.lambda_min, lambda1, 1e-3 * lambda1) << s.point.note;
+  EXPECT_NEAR(s.point.lambda_next, lambda2, 1e-3 * lambda2) << s.point.note;
+  EXPECT_NE(s.point.note.find("a nearly degenerate minimum"), std::string::npos) << s.point.note;
+  EXPECT_NEAR(s.point.soft_motion, std::sqrt(2e-16 * std::fabs(s.action) / s.point.lambda_min),
+              1e-9 * s.point.soft_motion);
+}
 
 #ifdef PARDEL_HAVE_ASSESSMENT_MODELS
 
@@ -135,7 +172,7 @@ TEST(Assessment, InertiaAgreesWithAFiniteDifferenceHessian) {
   EXPECT_EQ(s.point.note.find("upper bounds"), std::string::npos) << s.point.note;
   EXPECT_NEAR(s.point.lambda_min, es[0], 1e-4 * es[0]);
   EXPECT_GE(s.point.lambda_next, es[1] * (1 - 1e-4));
-  EXPECT_LE(s.point.lambda_next, es[1] * 1.01);
+  EXPECT_LE(s.point.lambda_next, es[1] * 1.01) << es[0] << " " << es[1] << " " << es[2] << " " << es[3];
   EXPECT_GE(s.point.lambda_max, es[es.size() - 1]);  // Gershgorin bounds the largest
   EXPECT_FALSE(s.point.nearly_degenerate);
 }
@@ -143,9 +180,9 @@ TEST(Assessment, InertiaAgreesWithAFiniteDifferenceHessian) {
 TEST(Assessment, ARepeatedSmallestEigenvalueIsReportedTwice) {
   // Minimum acceleration in 3-D through two knots (order 2: positions and velocities): the three
   // coordinates move alike, so every eigenvalue of the Hessian is triple (the finite differences
-  // split them by ~1e-5). The assessment's block Lanczos finds the smallest one twice (lambda_next
-  // = lambda_min), where a single Krylov vector would report the next distinct eigenvalue; both are
-  // Ritz values, upper bounds on the finite-difference Hessian's eigenvalues.
+  // split them by ~1e-5). The assessment finds the smallest one twice (lambda_next = lambda_min):
+  // its second Lanczos run, in the complement of the first one's Ritz vector, still holds the
+  // other copies, where one Krylov space would see each distinct eigenvalue once.
   pardel::Problem p = min_accel_problem(60);
   auto tr = pardel::linear_guess(p);
   const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
@@ -171,7 +208,7 @@ TEST(Assessment, ARepeatedSmallestEigenvalueIsReportedTwice) {
   EXPECT_GE(s.point.lambda_min, e[0] * (1 - 1e-5));
   EXPECT_GE(s.point.lambda_next, e[1] * (1 - 1e-5));
   EXPECT_NEAR(s.point.lambda_min, e[0], 1e-4 * e[0]);
-  EXPECT_NEAR(s.point.lambda_next, e[1], 1e-4 * e[1]);
+  EXPECT_NEAR(s.point.lambda_next, e[1], 3e-3 * e[1]);  // settled to 3e-3 (docs/solvers.md)
   EXPECT_FALSE(s.point.nearly_degenerate);
 }
 

@@ -297,7 +297,7 @@ const char* to_string(PointKind kind);
 
 /**
  * The inertia of the Hessian of the discrete action at a trajectory, from its block LDL^T (O(N)),
- * and, at a minimum, its two smallest eigenvalues by block Lanczos on its inverse (a few more O(N)
+ * and, at a minimum, its two smallest eigenvalues by Lanczos on its inverse (a few more O(N)
  * solves) against Gershgorin's bound on the largest. It says what a returned point is; at a
  * residual above the tolerance it describes the point, not a solution.
  */
@@ -305,9 +305,9 @@ struct PointAssessment {
   PointKind kind = PointKind::unknown;
   long positive = 0, negative = 0, zero = 0;  ///< inertia (negative = the saddle's index)
   double lambda_min = 0;    ///< smallest eigenvalue (minimum only; 0 otherwise)
-  double lambda_next = 0;   ///< the next one, from above (a Ritz value; 0 with one row or at a non-minimum)
+  double lambda_next = 0;   ///< the next one, from above up to the error of lambda_min's eigenvector (0 with one row or at a non-minimum)
   double lambda_max = 0;    ///< Gershgorin's upper bound on the largest |eigenvalue|
-  /** lambda_min and lambda_next settled in the Lanczos iteration (to about 1e-4 and 3e-3); false:
+  /** lambda_min and lambda_next settled in the Lanczos iterations (to within 1e-4 and 3e-3); false:
    *  they are the Ritz values where its iteration budget ended, upper bounds on the two smallest
    *  eigenvalues (the note says so) */
   bool lambda_settled = false;

@@ -638,7 +638,7 @@ class DistributedNewton : public pardel::detail::TrustRegionNewton<DistributedSp
 };
 
 /** What the returned point is, over the ranks: the kind and inertia of the Hessian and, at a
- *  minimum, its smallest eigenvalues by the one-process assessment's block Lanczos
+ *  minimum, its smallest eigenvalues by the one-process assessment's Lanczos iterations
  *  (assessment.hpp) with the distributed solve. Collective. */
 void assess_distributed(const Options& options, Local& local, PointAssessment& out) {
   Context& ctx = local.ctx;
@@ -664,10 +664,7 @@ void assess_distributed(const Options& options, Local& local, PointAssessment& o
     op.first_node = space.first_node();
     op.N = space.intervals();
     op.free = local.global_free.data() + space.offset();
-    op.solve = [&](const double* b0, const double* b1, double* x0, double* x1) {
-      space.solve(ctx, b0, x0);
-      if (b1) space.solve(ctx, b1, x1);
-    };
+    op.solve = [&](const double* b, double* x) { space.solve(ctx, b, x); };
     op.reduce = [&local](double* values, int count) {
       MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, local.comm);
     };
