@@ -98,10 +98,10 @@ double top_ritz(const std::vector<double>& alpha, const std::vector<double>& bet
  * not null (A restricted to y's complement), from the start vector in v[1] (any norm): the largest
  * eigenvalue mu of A there, by the largest Ritz value of T_j, and 1/mu, an upper bound on the
  * smallest eigenvalue of H there. v holds three vectors of n (v[0] must be zero). Stops when the
- * residual bound puts mu within `settle` (relative) of an eigenvalue or the Krylov space is
- * invariant. With `replay` (the
- * alpha, beta and Ritz vector s of an earlier run from the same start) it recomputes the same
- * basis with those coefficients instead and accumulates the Ritz vector sum_j s_j v_j into y_out.
+ * residual bound puts mu within `settle` (relative) of an eigenvalue (after 3 steps at least) or
+ * the Krylov space is invariant. With `replay` (the alpha, beta and Ritz vector s of an earlier run
+ * from the same start) it recomputes the same basis with those coefficients instead and
+ * accumulates the Ritz vector sum_j s_j v_j into y_out.
  */
 struct Lanczos {
   std::vector<double> alpha, beta;
@@ -195,10 +195,11 @@ void start_vector(const LanczosOperator& op, int shape, double* v) {
 
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive) {
   // lambda_1 by Lanczos on H^-1; its Ritz vector y by replaying that run, refined by one inverse
-  // iteration; then lambda_2 by Lanczos on H^-1 restricted to the complement of y. The deflation keeps the converged lambda_1 out of
-  // the second run: without it, a Lanczos basis that loses orthogonality once lambda_1 converges
-  // returns it a second time (a "ghost"), and a lambda_1 far below lambda_2 (a nearly degenerate
-  // minimum) converges at once. A repeated lambda_1 is found again in the complement.
+  // iteration; then lambda_2 by Lanczos on H^-1 restricted to the complement of y. The deflation
+  // keeps the converged lambda_1 out of the second run: without it, a Lanczos basis that loses
+  // orthogonality once lambda_1 converges returns it a second time (a "ghost"), which a lambda_1
+  // far below lambda_2 (a nearly degenerate minimum) does at once. A repeated lambda_1 is found
+  // again in the complement.
   const std::size_t n = op.n;
   std::unique_ptr<double[]> store(new double[4 * n]);
   double* v[3] = {store.get(), store.get() + n, store.get() + 2 * n};
