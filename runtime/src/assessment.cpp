@@ -209,7 +209,6 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   start_vector(op, 0, v[1]);
   const Lanczos first = lanczos(op, v, nullptr, 1e-4, nullptr, nullptr);
   out.lambda[0] = first.lambda;
-  out.steps = static_cast<int>(first.alpha.size());
   if (positive < 2 || first.alpha.empty()) {
     out.settled = first.settled;
     return out;
@@ -235,17 +234,16 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   start_vector(op, 1, v[1]);
   const Lanczos second = lanczos(op, v, y, 3e-3, nullptr, nullptr);
   out.lambda[1] = std::max(second.lambda, first.lambda);
-  out.steps += static_cast<int>(first.alpha.size() + second.alpha.size());  // with the replay
   out.settled = first.settled && second.settled;
   return out;
 }
 
-void describe_minimum(const SmallestEigenvalues& e, double action, bool pair, PointAssessment& out) {
+void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out) {
   out.kind = PointKind::minimum;
   out.lambda_min = e.lambda[0];
   out.lambda_next = e.lambda[1];
   out.lambda_settled = e.settled;
-  if (pair && out.lambda_min < 1e-4 * out.lambda_next) {
+  if (out.positive >= 2 && out.lambda_min < 1e-4 * out.lambda_next) {
     out.nearly_degenerate = true;
     out.soft_motion = std::sqrt(2 * 1e-16 * std::max(std::fabs(action), 1e-300) / std::max(out.lambda_min, 1e-300));
     out.note = format("a nearly degenerate minimum: the smallest eigenvalue of the Hessian, %.3g, is %.2g of the "
@@ -296,7 +294,7 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
   op.free = ctx.is_free.data() + dz;
   op.solve = [&H](const double* b, double* x) { H.solve_ldlt(b, x); };
   op.reduce = [](double*, int) {};
-  describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out.positive >= 2, out);
+  describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out);
 }
 
 template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&);

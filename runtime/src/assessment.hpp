@@ -37,24 +37,23 @@ struct LanczosOperator {
   std::function<void(double* values, int count)> reduce;
 };
 
-/** The two smallest eigenvalues of H (Ritz values: upper bounds) and whether they settled. */
+/** The two smallest eigenvalues of H (Ritz values: upper bounds, the second up to the error of
+ *  the first one's eigenvector) and whether they settled. */
 struct SmallestEigenvalues {
   double lambda[2] = {0, 0};
   bool settled = false;
-  int steps = 0;
 };
 
 /** The smallest eigenvalue by Lanczos on H^-1 over the free components (refined, where `positive`
  *  >= 2, by one inverse iteration from its Ritz vector) and the next one by Lanczos on H^-1 with
- *  that vector deflated (a repeated smallest
- *  eigenvalue is found twice, and a converged first one does not return as a copy). At most 24
- *  steps each, stopping when the residual bound puts them within 1e-4 and 3e-3 (relative). Four
- *  vectors of n; collective over ranks through op. */
+ *  that vector deflated (a repeated smallest eigenvalue is found twice, and a converged first one
+ *  does not return as a copy). At most 24 steps each, stopping when the residual bound puts them
+ *  within 1e-4 and 3e-3 (relative). Four vectors of n; collective over ranks through op. */
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive);
 
-/** A positive definite Hessian's assessment from its smallest eigenvalues (pair: two or more
- *  unknowns) and out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note. */
-void describe_minimum(const SmallestEigenvalues& e, double action, bool pair, PointAssessment& out);
+/** A positive definite Hessian's assessment from its smallest eigenvalues, out.positive and
+ *  out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note. */
+void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out);
 
 /** From the inertia in out.positive, negative and zero: a saddle or a degenerate point gets its
  *  kind and note (true); a positive definite Hessian is left to the caller (false). */

@@ -283,12 +283,22 @@ class BlockTridiagonal {
     double bound = 0;
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
-      for (int a = 0; a < d_; ++a) {
-        double row = diag_[ii].row(a).cwiseAbs().sum();
-        if (i + 1 < n_) row += off_[ii].row(a).cwiseAbs().sum();
-        if (i > 0) row += off_[ii - 1].col(a).cwiseAbs().sum();
-        bound = std::max(bound, row);
-      }
+      bound = std::max(bound, gershgorin_rows(diag_[ii], i + 1 < n_ ? &off_[ii] : nullptr,
+                                              i > 0 ? &off_[ii - 1] : nullptr));
+    }
+    return bound;
+  }
+
+  /** The largest absolute row sum over the rows of one block row: its diagonal block, the
+   *  coupling to the next block (if any) and the previous block's coupling to it, transposed
+   *  (if any). */
+  static double gershgorin_rows(const Mat& diag, const Mat* next, const Mat* previous) {
+    double bound = 0;
+    for (Eigen::Index a = 0; a < diag.rows(); ++a) {
+      double row = diag.row(a).cwiseAbs().sum();
+      if (next) row += next->row(a).cwiseAbs().sum();
+      if (previous) row += previous->col(a).cwiseAbs().sum();
+      bound = std::max(bound, row);
     }
     return bound;
   }

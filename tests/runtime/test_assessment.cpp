@@ -269,15 +269,21 @@ double clamped_spline(const double tau[4], const double P[4], double m0, double 
          (s3 - s2) * L * slopes[i + 1];
 }
 
-TEST(Assessment, ARegularOrderFourModelIsAcceptedOnFineGrids) {
-  // D12 Ld of an order-4 discretization pairs derivatives whose entries differ by h^6: unscaled,
-  // its smallest relative singular value fell below the degeneracy threshold from h = 1/16 on.
+/** The order-4 plate pair on [0, 1] between two rests (N to be set). */
+pardel::Problem plate_pair_problem() {
   pardel::Problem p;
   p.model = &plate_pair_model;
   p.discretization = &plate_pair_model.discretizations[0];
   p.T = 1;
   p.q0 = {0, 0, 1, 0, 0, 0, 0, 0};
   p.qN = {1, -1, 0, 0, 0, 0, 0, 0};
+  return p;
+}
+
+TEST(Assessment, ARegularOrderFourModelIsAcceptedOnFineGrids) {
+  // D12 Ld of an order-4 discretization pairs derivatives whose entries differ by h^6: unscaled,
+  // its smallest relative singular value fell below the degeneracy threshold from h = 1/16 on.
+  pardel::Problem p = plate_pair_problem();
   for (int N : {8, 64, 256}) {
     p.N = N;
     auto tr = pardel::linear_guess(p);
@@ -292,12 +298,7 @@ TEST(Assessment, ConvergedSaysWhenRoundOffHidesWhetherTheEquationsHold) {
   // of the DEL residual (eps |H| |q| per node, in the kernels' cancellations) exceeds the DEL
   // terms themselves. The solve still ends at its round-off level, and the message must not
   // call the equations resolved; at N = 8 they are resolved to far below their scale.
-  pardel::Problem p;
-  p.model = &plate_pair_model;
-  p.discretization = &plate_pair_model.discretizations[0];
-  p.T = 1;
-  p.q0 = {0, 0, 1, 0, 0, 0, 0, 0};
-  p.qN = {1, -1, 0, 0, 0, 0, 0, 0};
+  pardel::Problem p = plate_pair_problem();
   const std::string unresolved = "so the residual does not show that the DEL equations hold";
   p.N = 8;
   auto coarse = pardel::linear_guess(p);

@@ -469,16 +469,9 @@ class DistributedSpace {
     double bound = 0;
     for (int i = 0; i < owned; ++i) {
       const int g = local_.u0 + i;
-      for (std::size_t a = 0; a < dz_; ++a) {
-        const int r = static_cast<int>(a);
-        double row = solver_.diag(i).row(r).cwiseAbs().sum();
-        if (g < N - 1) row += solver_.off(i).row(r).cwiseAbs().sum();
-        if (i > 0)
-          row += solver_.off(i - 1).col(r).cwiseAbs().sum();
-        else if (local_.layout.has_left())
-          row += solver_.left_coupling().col(r).cwiseAbs().sum();
-        bound = std::max(bound, row);
-      }
+      const Mat* previous = i > 0 ? &solver_.off(i - 1) : local_.layout.has_left() ? &solver_.left_coupling() : nullptr;
+      bound = std::max(bound, pardel::detail::BlockTridiagonal<D>::gershgorin_rows(
+                                  solver_.diag(i), g < N - 1 ? &solver_.off(i) : nullptr, previous));
     }
     return detail::max_all(bound, local_.comm);
   }
@@ -673,7 +666,7 @@ void assess_distributed(const Options& options, Local& local, PointAssessment& o
   });
   if (pardel::detail::classify_indefinite(out)) return;
   if (described) {
-    pardel::detail::describe_minimum(eigenvalues, global_sum_Ld(local), out.positive >= 2, out);
+    pardel::detail::describe_minimum(eigenvalues, global_sum_Ld(local), out);
     return;
   }
   out.kind = PointKind::minimum;
