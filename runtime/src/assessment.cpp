@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <vector>
 
 #include "assessment.hpp"
 #include "block_tridiagonal.hpp"
@@ -176,11 +177,13 @@ Lanczos lanczos(const LanczosOperator& op, double* v[3], const double* y, double
  *  alike in every component misses the modes whose components move against each other). The same
  *  on every rank (a function of the global index). */
 void start_vector(const LanczosOperator& op, int shape, double* v) {
+  std::vector<double> weights(static_cast<std::size_t>(op.dim));
+  for (int a = 0; a < op.dim; ++a) weights[static_cast<std::size_t>(a)] = std::cos(1.3 + 2.1 * a + 0.7 * shape);
   for (std::size_t i = 0; i < op.n; ++i) {
     const int node = op.first_node + static_cast<int>(i / op.dim), a = static_cast<int>(i % op.dim);
     const double s = static_cast<double>(node) / op.N;
     const double smooth = shape == 0 ? s * (1 - s) : s * (1 - s) * (1 - 2 * s);
-    const double weight = std::cos(1.3 + 2.1 * a + 0.7 * shape);
+    const double weight = weights[static_cast<std::size_t>(a)];
     std::uint64_t x = (static_cast<std::uint64_t>(node) * static_cast<std::uint64_t>(op.dim) +
                        static_cast<std::uint64_t>(a) + 1) * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(shape);
     x ^= x >> 31;
