@@ -52,12 +52,6 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-std::vector<std::string> bundled_names() {
-  std::vector<std::string> names;
-  for (const pardel_model* m : bundled_models()) names.push_back(m->name);
-  return names;
-}
-
 /** pardel.ModelWarning (a UserWarning), set when the module is initialized. */
 PyObject* g_model_warning = nullptr;
 
@@ -86,7 +80,7 @@ ModelHandle load_model(const std::string& spec) {
   const pardel_model* model = resolve_spec(spec);
   if (!model) {
     std::string message = fmt::format("unknown model '{}'", spec);
-    const std::string suggestion = app::nearest_name(spec, bundled_names());
+    const std::string suggestion = app::nearest_name(spec, bundled_model_names());
     if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
     throw InputError(message);
   }
@@ -285,7 +279,7 @@ Scene scene_from_arguments(const std::string& model_spec, const py::dict& argume
   const std::string source = "pardel.solve";
   Scene scene;
   try {
-    scene = app::parse_scene(text.str(), source, {}, resolve_spec, bundled_names());
+    scene = app::parse_scene(text.str(), source, {}, resolve_spec, bundled_model_names());
   } catch (const SceneError& error) {
     throw SceneError(without_generated_position(error.what(), source));
   }
@@ -303,7 +297,7 @@ Scene scene_from_arguments(const std::string& model_spec, const py::dict& argume
 }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-  return app::load_scene(path, overrides, resolve_spec, bundled_names());
+  return app::load_scene(path, overrides, resolve_spec, bundled_model_names());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -473,7 +467,7 @@ std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
  */
 py::dict run_sweep(const std::string& path, const std::vector<std::string>& overrides, int threads,
                    const std::string& out) {
-  const app::Sweep sweep = app::load_sweep(path, overrides, resolve_spec, bundled_names());
+  const app::Sweep sweep = app::load_sweep(path, overrides, resolve_spec, bundled_model_names());
   std::atomic<bool> stop{false};
   std::vector<app::VariantResult> results;
   std::exception_ptr failure;
@@ -688,7 +682,7 @@ PYBIND11_MODULE(_pardel, m) {
 
   // The upper bound of pardel::Options::threads (option_bound), for the checks of pardel.sweep.
   m.attr("max_threads") = static_cast<int>(pardel::option_bound("threads")->high);
-  m.def("bundled_models", &bundled_names, "The names of the models compiled into this module.");
+  m.def("bundled_models", &bundled_model_names, "The names of the models compiled into this module.");
   m.def("can_compile_lag_files", &pardel::can_compile_lag_files);
   m.def("loader_toolchain", [] {
     const LoaderToolchain t = loader_toolchain();

@@ -169,13 +169,9 @@ ModelIR build_ir(const LagModel& model, const std::string& source_name, const Cs
 ModelIR build_model_ir(const LagModel& model, const std::string& source_name, const CseOptions& options) {
   try {
     return build_ir(model, source_name, options);
-  } catch (const CodegenError&) {
-    throw;
-  } catch (const std::runtime_error& error) {
-    // GiNaC's arithmetic on the model's expressions, e.g. a zero base raised to a negative power
-    // that appears only in a derivative ("power::eval(): division by zero").
-    throw CodegenError(std::string("the Lagrangian or its derivatives cannot be formed: ") + error.what());
-  } catch (const std::domain_error& error) {  // GiNaC::pole_error: a derivative at a singularity
+  } catch (const std::exception& error) {
+    // E.g. a zero base raised to a negative power that appears only in a derivative.
+    if (!symbolic_arithmetic_error(error)) throw;
     throw CodegenError(std::string("the Lagrangian or its derivatives cannot be formed: ") + error.what());
   }
 }

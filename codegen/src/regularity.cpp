@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "pardel_codegen/cse.hpp"
 #include "pardel_codegen/lag_parser.hpp"
 
 namespace pardel_codegen {
@@ -479,11 +480,9 @@ std::vector<std::string> check_regularity(const LagModel& model, bool allow_sing
   try {
     f = analyze_regularity(model);
   } catch (const std::exception& error) {
-    // GiNaC's arithmetic on the model's expressions: a derivative that cannot be formed, e.g. of a
-    // zero base raised to a power that depends on the coordinates ("division by zero").
-    if (dynamic_cast<const std::runtime_error*>(&error) == nullptr &&
-        dynamic_cast<const std::domain_error*>(&error) == nullptr)
-      throw;
+    // A derivative that cannot be formed, e.g. of a zero base raised to a power that depends on
+    // the coordinates ("division by zero").
+    if (!symbolic_arithmetic_error(error)) throw;
     const std::string source =
         model.source_lines.empty() ? std::string() : model.source_lines[static_cast<std::size_t>(line - 1)];
     const std::string message = "model '" + model.name + "': L cannot be differentiated symbolically (" +

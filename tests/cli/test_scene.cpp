@@ -20,16 +20,10 @@ using namespace pardel;
 using namespace pardel::app;
 namespace fs = std::filesystem;
 
-std::vector<std::string> model_names() {
-  std::vector<std::string> names;
-  for (const pardel_model* m : bundled_models()) names.push_back(m->name);
-  return names;
-}
-
 const pardel_model* resolve(const std::string& name) { return find_model(name); }
 
 Scene parse(const std::string& text, const std::vector<std::string>& sets = {}) {
-  return parse_scene(text, "scene.toml", sets, resolve, model_names());
+  return parse_scene(text, "scene.toml", sets, resolve, bundled_model_names());
 }
 
 std::string error_of(const std::string& text, const std::vector<std::string>& sets = {}) {
@@ -85,7 +79,7 @@ TEST_P(BadScene, GivesItsExpectedMessageAtItsLocation) {
   const std::string message = header_value(path, "expect-message");
   std::string error = "(no error)";
   try {
-    load_scene(path, {}, resolve, model_names());
+    load_scene(path, {}, resolve, bundled_model_names());
   } catch (const SceneError& e) {
     error = e.what();
   }
@@ -326,7 +320,7 @@ TEST(Guess, CsvGuessIsReadAndResampled) {
   write_file_atomic(csv, trajectory_csv(*coarse.model, line));
   const std::string scene_path = (dir / "scene.toml").string();
   write_file_atomic(scene_path, std::string(kFuelNav) + "[guess]\nkind = \"csv\"\npath = \"guess.csv\"\n");
-  const Scene scene = load_scene(scene_path, {"grid.N=40"}, resolve, model_names());
+  const Scene scene = load_scene(scene_path, {"grid.N=40"}, resolve, bundled_model_names());
   EXPECT_EQ(scene.guess.csv_path, csv);
   const Trajectory guess = make_initial_guess(scene);
   ASSERT_EQ(guess.N, 40);

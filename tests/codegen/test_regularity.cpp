@@ -24,6 +24,18 @@ LagModel load(const std::string& name) { return pardel_codegen::parse_lag_file(p
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
+/** The LagError with which check_regularity refuses `model` (a failure, and an empty error, where
+ *  the model is accepted). */
+LagError refusal(const LagModel& model) {
+  try {
+    pardel_codegen::check_regularity(model, false);
+  } catch (const LagError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "model '" << model.name << "' was accepted";
+  return LagError("", 0, 0, "");
+}
+
 /** A model that must be refused: where, and fragments the message must hold. */
 struct Refusal {
   std::string name;
@@ -36,10 +48,8 @@ class RegularityRefusal : public ::testing::TestWithParam<Refusal> {};
 TEST_P(RegularityRefusal, NamesModelFileLineAndCoordinates) {
   const Refusal& r = GetParam();
   const LagModel model = load(r.name);
-  try {
-    pardel_codegen::check_regularity(model, false);
-    FAIL() << r.name << " was accepted";
-  } catch (const LagError& e) {
+  {
+    const LagError e = refusal(model);
     const std::string what = e.what();
     EXPECT_EQ(e.line(), r.line) << what;
     EXPECT_EQ(e.column(), r.col) << what;
@@ -73,28 +83,19 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
 
 TEST(Regularity, RefusalSaysWhatItMeans) {
-  try {
-    pardel_codegen::check_regularity(load("jerk_missing"), false);
-    FAIL() << "accepted";
-  } catch (const LagError& e) {
-    const std::string what = e.what();
-    EXPECT_TRUE(contains(what, kMeaning)) << what;
-    EXPECT_TRUE(contains(what, "Newton's and Jacobi's iterations need W invertible")) << what;
-  }
+  const std::string what = refusal(load("jerk_missing")).what();
+  EXPECT_TRUE(contains(what, kMeaning)) << what;
+  EXPECT_TRUE(contains(what, "Newton's and Jacobi's iterations need W invertible")) << what;
 }
 
 TEST(Regularity, ALagrangianThatCannotBeDifferentiatedIsRefusedAtItsLine) {
-  try {
-    pardel_codegen::check_regularity(load("zero_base_power"), false);
-    FAIL() << "accepted";
-  } catch (const LagError& e) {
-    const std::string what = e.what();
-    EXPECT_EQ(what.rfind(path_of("zero_base_power") + ":4:5: error: model 'u': L cannot be differentiated", 0), 0u)
-        << what;
-    EXPECT_TRUE(contains(what, "division by zero")) << what;
-    EXPECT_EQ(e.line(), 4);
-    EXPECT_EQ(e.column(), 5);
-  }
+  const LagError e = refusal(load("zero_base_power"));
+  const std::string what = e.what();
+  EXPECT_EQ(what.rfind(path_of("zero_base_power") + ":4:5: error: model 'u': L cannot be differentiated", 0), 0u)
+      << what;
+  EXPECT_TRUE(contains(what, "division by zero")) << what;
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.column(), 5);
 }
 
 TEST(Regularity, WarnsWhereDetWChangesSignThroughAZero) {
@@ -192,13 +193,9 @@ TEST(Regularity, BundledModelsPass) {
   }
   const LagModel degenerate =
       pardel_codegen::parse_lag_file(std::string(PARDEL_SOURCE_DIR) + "/tests/runtime/models/no_velocity.lag");
-  try {
-    pardel_codegen::check_regularity(degenerate, false);
-    FAIL() << "no_velocity was accepted";
-  } catch (const LagError& e) {
-    EXPECT_TRUE(contains(e.what(), "no_velocity.lag:5:5: error: model 'no_velocity' is not regular")) << e.what();
-    EXPECT_TRUE(contains(e.what(), "L does not depend on x'; L does not depend on y'")) << e.what();
-  }
+  const std::string what = refusal(degenerate).what();
+  EXPECT_TRUE(contains(what, "no_velocity.lag:5:5: error: model 'no_velocity' is not regular")) << what;
+  EXPECT_TRUE(contains(what, "L does not depend on x'; L does not depend on y'")) << what;
 }
 
 TEST(Regularity, ElasticaIsSingularAlongItsVelocityAndSaysSo) {

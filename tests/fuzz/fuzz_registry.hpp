@@ -31,13 +31,6 @@ inline const pardel_model* resolve(const std::string& name) {
   return pardel::find_model(name);
 }
 
-/** The bundled models' names, for the readers' "did you mean" suggestions. */
-inline std::vector<std::string> model_names() {
-  std::vector<std::string> names;
-  for (const pardel_model* model : pardel::bundled_models()) names.emplace_back(model->name);
-  return names;
-}
-
 }  // namespace pardel_fuzz
 
 #endif  // PARDEL_TESTS_FUZZ_REGISTRY_HPP

@@ -63,7 +63,6 @@ const BaseScene kBases[] = {
 }
 
 using pardel_fuzz::count_lines;
-using pardel_fuzz::model_names;
 using pardel_fuzz::resolve;
 
 void check_error(const std::string& base, const std::vector<std::string>& overrides, const std::string& what) {
@@ -128,7 +127,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::string line = lines[i].substr(0, lines[i].find('\0'));  // an argument ends at its first NUL
     if (!line.empty()) overrides.push_back(line);
   }
-  static const std::vector<std::string> names = model_names();
+  static const std::vector<std::string> names = pardel::bundled_model_names();
   try {
     check_scene(pardel::app::parse_scene(base->text, kSourceName, overrides, resolve, names));
   } catch (const pardel::app::SceneError& error) {

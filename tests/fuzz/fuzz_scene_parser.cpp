@@ -37,7 +37,6 @@ const char kSourceName[] = "fuzz.toml";
 }
 
 using pardel_fuzz::count_lines;
-using pardel_fuzz::model_names;
 using pardel_fuzz::resolve;
 
 void check_error(const std::string& scene_text, const pardel::app::SceneError& error) {
@@ -106,7 +105,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       start = nl + 1;
     }
   }
-  static const std::vector<std::string> names = model_names();
+  static const std::vector<std::string> names = pardel::bundled_model_names();
   try {
     const pardel::app::Scene scene = pardel::app::parse_scene(scene_text, kSourceName, overrides, resolve, names);
     check_scene(scene);

@@ -38,7 +38,6 @@ const std::string kSource = std::string(PARDEL_FUZZ_SCENES_DIR) + "/sweeps/fuzz.
 }
 
 using pardel_fuzz::count_lines;
-using pardel_fuzz::model_names;
 using pardel_fuzz::resolve;
 
 void check_error(const std::string& text, const std::string& what) {
@@ -103,7 +102,7 @@ void check_sweep(const pardel::app::Sweep& sweep) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
-  static const std::vector<std::string> names = model_names();
+  static const std::vector<std::string> names = pardel::bundled_model_names();
   try {
     check_sweep(pardel::app::parse_sweep(text, kSource, {}, resolve, names));
   } catch (const pardel::app::SceneError& error) {

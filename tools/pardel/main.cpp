@@ -57,12 +57,6 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-std::vector<std::string> bundled_names() {
-  std::vector<std::string> names;
-  for (const pardel_model* m : bundled_models()) names.push_back(m->name);
-  return names;
-}
-
 bool looks_like_path(const std::string& spec) {
   return spec.find('/') != std::string::npos || (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
 }
@@ -196,7 +190,7 @@ int run_kernels(const KernelArgs& args) {
     throw UsageError(fmt::format("--model: cannot load '{}': {}", args.model, error.what()));
   }
   if (!model) {
-    const std::string suggestion = nearest_name(args.model, bundled_names());
+    const std::string suggestion = nearest_name(args.model, bundled_model_names());
     throw UsageError(fmt::format("--model: unknown model '{}'{}", args.model,
                                  suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion)));
   }
@@ -250,7 +244,7 @@ std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted.store(true); }
 
 Scene load_scene_or_throw(const std::string& path, const std::vector<std::string>& sets) {
-  return load_scene(path, sets, resolve_model_spec, bundled_names());
+  return load_scene(path, sets, resolve_model_spec, bundled_model_names());
 }
 
 struct SolveArgs {
@@ -550,7 +544,7 @@ int main(int argc, char** argv) {
     if (*kernels) return run_kernels(k);
     if (*solve_cmd) return run_solve(s);
     if (*check) return run_check(c);
-    if (sweep_cmd.parsed()) return sweep_cmd.run(resolve_model_spec, bundled_names());
+    if (sweep_cmd.parsed()) return sweep_cmd.run(resolve_model_spec, bundled_model_names());
   } catch (const UsageError& error) {
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
     return fail(kExitUsage);

@@ -31,6 +31,16 @@ class CodegenError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/** Whether `error` is GiNaC's objection to arithmetic on a model's expressions (a
+ *  std::runtime_error such as "power::eval(): division by zero" for a zero base raised to a
+ *  negative power, or GiNaC::pole_error, a std::domain_error, for a derivative at a singularity)
+ *  rather than a CodegenError or a defect. */
+inline bool symbolic_arithmetic_error(const std::exception& error) {
+  return dynamic_cast<const CodegenError*>(&error) == nullptr &&
+         (dynamic_cast<const std::runtime_error*>(&error) != nullptr ||
+          dynamic_cast<const std::domain_error*>(&error) != nullptr);
+}
+
 /** A symbol the kernel reads: its C spelling and the kernel argument it belongs to. */
 struct KernelInput {
   GiNaC::symbol symbol;

@@ -23,6 +23,8 @@ namespace pardel {
 
 /** Every model linked into this binary through the bundled registry (empty if none linked). */
 const std::vector<const pardel_model*>& bundled_models();
+/** Their names, in the same order. */
+std::vector<std::string> bundled_model_names();
 /** The bundled model of that name, or nullptr. */
 const pardel_model* find_model(std::string_view name);
 /**
