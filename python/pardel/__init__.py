@@ -15,8 +15,15 @@ import os
 
 import numpy as np
 
-from . import _pardel
-from ._pardel import ModelError, ModelWarning, PardelError, SceneError
+# OpenMP threads wait passively (sleep) between parallel loops unless the user chose otherwise:
+# spinning threads cost a scheduler quantum per loop where another process keeps a core busy (as
+# the command line, docs/solvers.md). OpenMP reads this when its library is loaded: by the import
+# below, unless something imported before pardel loaded it already.
+if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
+    os.environ["OMP_WAIT_POLICY"] = "passive"
+
+from . import _pardel  # noqa: E402
+from ._pardel import ModelError, ModelWarning, PardelError, SceneError  # noqa: E402
 
 # An installed package compiles .lag files with the installed pardel-gen and render script, which
 # `cmake --install` names in _installed.py; the build tree's package uses the build tree's.

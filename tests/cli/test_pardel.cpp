@@ -296,6 +296,23 @@ TEST(PardelSolve, ThreadsOptionFailsAsTheSceneKeyDoes) {
   }
 }
 
+TEST(PardelSolve, OpenMPThreadsWaitPassivelyUnlessTheUserChose) {
+  // Spinning OpenMP threads cost a scheduler quantum per loop where another process holds a core
+  // (docs/solvers.md): the command sets OMP_WAIT_POLICY=passive before OpenMP starts, and keeps
+  // what the user set. The summary says which policy the solve ran with.
+  TempDir dir;
+  app::write_file_atomic(dir / "small.toml", kSmallScene);
+  const std::string solve = "solve '" + (dir / "small.toml") + "' --out '" + (dir / "out") + "' --quiet --no-plot";
+  const std::pair<const char*, const char*> cases[] = {{"env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT ", "passive"},
+                                                       {"env -u GOMP_SPINCOUNT OMP_WAIT_POLICY=active ", "active"},
+                                                       {"env -u OMP_WAIT_POLICY GOMP_SPINCOUNT=1000 ", "default"}};
+  for (const auto& [environment, expected] : cases) {
+    const std::string command = std::string(environment) + "'" + PARDEL_BINARY + "' " + solve + " 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    EXPECT_EQ(nlohmann::json::parse(slurp(dir / "out/summary.json"))["openmp_wait_policy"], expected) << command;
+  }
+}
+
 TEST(PardelSolve, DrawsBothPlots) {
   TempDir dir;
   app::write_file_atomic(dir / "small.toml", kSmallScene);

@@ -114,3 +114,20 @@ def test_on_iteration_can_stop_the_solve(spring_lag):
     assert r.stopped_by_callback
     assert len(seen) == 5
     assert r.q.shape == (201, 2)
+
+
+@pytest.mark.parametrize("environment,expected", [({}, "passive"), ({"OMP_WAIT_POLICY": "active"}, "active"),
+                                                  ({"GOMP_SPINCOUNT": "1000"}, "default")])
+def test_openmp_threads_wait_passively_unless_the_user_chose(environment, expected):
+    # Importing pardel sets OMP_WAIT_POLICY=passive before OpenMP starts (docs/solvers.md) unless the
+    # user set the policy; a solve's summary says which policy it ran with. A fresh interpreter,
+    # as OpenMP reads the variable once.
+    import os
+    import subprocess
+    import sys
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    env.update(environment)
+    code = ("import pardel; r = pardel.solve('fuel_nav', q0=[0, 0], qN=[6, 5], T=8, N=40, threads=2); "
+            "print(r.status, r.summary['openmp_wait_policy'])")
+    out = subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True).stdout
+    assert out.split() == ["converged", expected]

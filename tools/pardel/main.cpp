@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "exit_codes.hpp"
 #include "pardel/app/checkpoint.hpp"
 #include "pardel/app/outputs.hpp"
@@ -468,7 +470,23 @@ std::string checked_threads_text(const std::string& text) {
 
 }  // namespace
 
+/**
+ * OpenMP threads that finish their share of a loop spin by default until the others arrive. Where
+ * another process keeps a core busy, the spinning thread holds the free core while its partner
+ * waits for the busy one, and every parallel region costs a scheduler quantum: on 2 cores with one
+ * busy, a 2-thread solve of rb_kepler at N = 2·10⁴ took 112–130 ms spinning and 15–18 ms waiting
+ * passively (one thread: 16 ms; docs/benchmarks.md). So pardel waits passively unless the user
+ * chose: OpenMP reads OMP_WAIT_POLICY when its library is loaded, before main, so the command sets
+ * it and runs itself again (nothing happens where it cannot).
+ */
+void prefer_passive_openmp_wait(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr) return;
+  if (setenv("OMP_WAIT_POLICY", "passive", 0) != 0) return;
+  execv("/proc/self/exe", argv);
+}
+
 int main(int argc, char** argv) {
+  prefer_passive_openmp_wait(argv);
   const pardel::mpi::Session mpi_session(&argc, &argv);
   CLI::App app{"pardel: solve the boundary-value problems of variational integrators"};
   app.footer(kExitCodesHelp);

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -162,6 +163,8 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   j["method"] = to_string(summary.method);
   j["N"] = summary.N;
   j["threads"] = summary.threads;
+  const char* wait = std::getenv("OMP_WAIT_POLICY");
+  j["openmp_wait_policy"] = wait != nullptr ? wait : "default";
   j["model"] = scene.model->name;
   j["model_source"] = model_source;
   j["discretization"] = scene.discretization;
