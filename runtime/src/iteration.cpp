@@ -179,9 +179,13 @@ bool Iteration::reached_max_iterations(double r, double target) {
 
 bool Iteration::diverged(double r) {
   if (!(iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_)) return false;
-  finish(Termination::diverged, format("DEL residual %.3g grew beyond divergence_factor x initial residual %.3g at "
-                                       "iteration %.0f",
-                                       r, r_initial_, static_cast<double>(iteration_)));
+  finish(Termination::diverged,
+         format("DEL residual %.3g grew beyond divergence_factor x initial residual %.3g at iteration %.0f. pardel's "
+                "methods converge to minima of the action (docs/solvers.md); the usual causes are an action that is "
+                "unbounded below along the iterates (where the DEL equations have a solution then, it is a saddle "
+                "of the action, e.g. past a conjugate point: an oscillator over more than half its period) or no "
+                "solution near the start",
+                r, r_initial_, static_cast<double>(iteration_)));
   return true;
 }
 

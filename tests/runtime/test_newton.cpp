@@ -123,6 +123,11 @@ TEST(Newton, NoConvergenceBeyondTheConjugatePoint) {
   EXPECT_TRUE(s.termination == pardel::Termination::diverged ||
               s.termination == pardel::Termination::max_iterations)
       << s.brief_report();
+  // A divergence names its usual causes: a saddle past a conjugate point is one.
+  if (s.termination == pardel::Termination::diverged) {
+    EXPECT_NE(s.message.find("converge to minima of the action"), std::string::npos) << s.message;
+    EXPECT_NE(s.message.find("past a conjugate point"), std::string::npos) << s.message;
+  }
 }
 
 TEST(Newton, CyclicReductionAgreesWithLdlt) {
