@@ -113,44 +113,65 @@ struct Lanczos {
 Lanczos lanczos(const LanczosOperator& op, double* v[3], const double* y, double settle, const Lanczos* replay,
                 double* y_out) {
   const std::size_t n = op.n;
+  const unsigned char* free = op.free;
   Lanczos run;
-  auto project = [&](double* x) {
-    if (!y) return;
-    const double c = dot(op, y, x);
-    for (std::size_t i = 0; i < n; ++i) x[i] -= c * y[i];
-  };
   double* prev = v[0];
   double* cur = v[1];
   double* next = v[2];
-  project(cur);
+  if (y) {
+    const double c = dot(op, y, cur);
+    for (std::size_t i = 0; i < n; ++i) cur[i] -= c * y[i];
+  }
   const double norm = std::sqrt(dot(op, cur, cur));
   if (!(norm > 0) || !std::isfinite(norm)) return run;
-  for (std::size_t i = 0; i < n; ++i) cur[i] = op.free[i] ? cur[i] / norm : 0.0;
+  for (std::size_t i = 0; i < n; ++i) cur[i] = free[i] ? cur[i] / norm : 0.0;
   if (y_out) std::fill(y_out, y_out + n, 0.0);
   const int steps = replay ? static_cast<int>(replay->alpha.size()) : kLanczosSteps;
   for (int j = 0; j < steps; ++j) {
-    if (y_out)
-      for (std::size_t i = 0; i < n; ++i) y_out[i] += replay->s(j) * cur[i];
-    if (replay && j + 1 == steps) break;  // the last basis vector is in
+    const double s_j = y_out ? replay->s(j) : 0.0;
+    if (replay && j + 1 == steps) {  // the last basis vector is in
+      for (std::size_t i = 0; i < n; ++i) y_out[i] += s_j * cur[i];
+      break;
+    }
     op.solve(cur, next);
-    project(next);
-    // W = A v_j - beta_{j-1} v_{j-1} - alpha_j v_j (fixed components zero).
+    // W = P A v_j - beta_{j-1} v_{j-1} - alpha_j v_j (P the projection off y; fixed components
+    // zero), in two passes over the vectors: the first removes y and v_{j-1} and forms
+    // alpha_j = v_j.W, the second removes alpha_j v_j and forms |W|^2 (with a replay, the recorded
+    // alpha and beta instead, and the Ritz vector's term of v_j).
+    double c = 0;
+    if (y) {
+      for (std::size_t i = 0; i < n; ++i) c += free[i] ? y[i] * next[i] : 0.0;
+      op.reduce(&c, 1);
+    }
     const double b_prev = j > 0 ? (replay ? replay->beta[j - 1] : run.beta[j - 1]) : 0.0;
-    for (std::size_t i = 0; i < n; ++i) next[i] = op.free[i] ? next[i] - b_prev * prev[i] : 0.0;
-    const double a = replay ? replay->alpha[j] : dot(op, cur, next);
-    for (std::size_t i = 0; i < n; ++i) next[i] -= a * cur[i];
+    double a = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double w = free[i] ? next[i] - (y ? c * y[i] : 0.0) - b_prev * prev[i] : 0.0;
+      next[i] = w;
+      a += cur[i] * w;
+    }
     if (replay) {
-      if (j + 1 < steps) {
-        const double b = replay->beta[j];
-        for (std::size_t i = 0; i < n; ++i) next[i] /= b;
+      a = replay->alpha[j];
+      const double inv_b = 1 / replay->beta[j];
+      for (std::size_t i = 0; i < n; ++i) {
+        next[i] = (next[i] - a * cur[i]) * inv_b;
+        y_out[i] += s_j * cur[i];
       }
     } else {
+      op.reduce(&a, 1);
+      double bb = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double w = next[i] - a * cur[i];
+        next[i] = w;
+        bb += w * w;
+      }
+      op.reduce(&bb, 1);
       run.alpha.push_back(a);
       double second = 0;
       const double mu = top_ritz(run.alpha, run.beta, &run.s, &second);
       if (!(mu > 0)) break;
       run.lambda = 1 / mu;
-      const double b = std::sqrt(dot(op, next, next));
+      const double b = std::sqrt(bb);
       // The Ritz pair's residual |A x - mu x| is b |s_j|; with the gap to the next Ritz value it
       // bounds the distance of mu to an eigenvalue by r^2 / gap (Kato-Temple, the gap estimated
       // from T). Settled when that is below `settle` of mu, or when the Krylov space is one that
@@ -161,7 +182,8 @@ Lanczos lanczos(const LanczosOperator& op, double* v[3], const double* y, double
         break;
       }
       run.beta.push_back(b);
-      for (std::size_t i = 0; i < n; ++i) next[i] /= b;
+      const double inv_b = 1 / b;
+      for (std::size_t i = 0; i < n; ++i) next[i] *= inv_b;
     }
     double* recycled = prev;
     prev = cur;
@@ -204,9 +226,14 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   // far below lambda_2 (a nearly degenerate minimum) does at once. A repeated lambda_1 is found
   // again in the complement.
   const std::size_t n = op.n;
-  std::unique_ptr<double[]> store(new double[4 * n]);
-  double* v[3] = {store.get(), store.get() + n, store.get() + 2 * n};
-  double* y = store.get() + 3 * n;
+  std::unique_ptr<double[]> store;
+  double* w[4] = {op.work[0], op.work[1], op.work[2], op.work[3]};
+  if (!(w[0] && w[1] && w[2] && w[3])) {
+    store.reset(new double[4 * n]);
+    for (std::size_t k = 0; k < 4; ++k) w[k] = store.get() + k * n;
+  }
+  double* v[3] = {w[0], w[1], w[2]};
+  double* y = w[3];
   SmallestEigenvalues out;
   std::fill(v[0], v[0] + n, 0.0);
   start_vector(op, 0, v[1]);
@@ -278,7 +305,7 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
 }
 
 template <int D>
-void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out) {
+void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out, double* const* work) {
   out = PointAssessment{};
   out.lambda_max = H.gershgorin_bound();
   const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
@@ -297,15 +324,21 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
   op.free = ctx.is_free.data() + dz;
   op.solve = [&H](const double* b, double* x) { H.solve_ldlt(b, x); };
   op.reduce = [](double*, int) {};
+  if (work)
+    for (int k = 0; k < 4; ++k) op.work[k] = work[k];
   describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out);
 }
 
-template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&);
-template void assess_positive_definite<2>(Context&, BlockTridiagonal<2>&, PointAssessment&);
-template void assess_positive_definite<4>(Context&, BlockTridiagonal<4>&, PointAssessment&);
-template void assess_positive_definite<6>(Context&, BlockTridiagonal<6>&, PointAssessment&);
-template void assess_positive_definite<Eigen::Dynamic>(Context&, BlockTridiagonal<Eigen::Dynamic>&,
-                                                       PointAssessment&);
+template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&,
+                                                       double* const*);
+template void assess_positive_definite<2>(Context&, BlockTridiagonal<2>&, PointAssessment&,
+                                                       double* const*);
+template void assess_positive_definite<4>(Context&, BlockTridiagonal<4>&, PointAssessment&,
+                                                       double* const*);
+template void assess_positive_definite<6>(Context&, BlockTridiagonal<6>&, PointAssessment&,
+                                                       double* const*);
+template void assess_positive_definite<Eigen::Dynamic>(Context&, BlockTridiagonal<Eigen::Dynamic>&, PointAssessment&,
+                                                       double* const*);
 
 bool classify_indefinite(PointAssessment& out) {
   if (out.negative > 0) {

@@ -19,10 +19,11 @@ namespace pardel::detail {
 void assess(Context& ctx, PointAssessment& out);
 
 /** Assesses ctx.q given H, the unshifted Hessian there, already factored by block LDL^T (positive
- *  definite): a minimum, with its smallest eigenvalues. Instantiated for the block sizes of
- *  dispatch_dim. */
+ *  definite): a minimum, with its smallest eigenvalues. `work` as LanczosOperator::work (optional).
+ *  Instantiated for the block sizes of dispatch_dim. */
 template <int D>
-void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out);
+void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out,
+                              double* const* work = nullptr);
 
 /** A positive definite Hessian's inverse, as the Lanczos iteration of smallest_eigenvalues sees it:
  *  n unknowns (this rank's, over ranks) of dim components per node, unknown 0 at node first_node
@@ -35,6 +36,9 @@ struct LanczosOperator {
   std::function<void(const double* b, double* x)> solve;
   /** Sums `count` values over the ranks, in place (nothing in one process). */
   std::function<void(double* values, int count)> reduce;
+  /** Scratch of four vectors of n that smallest_eigenvalues may overwrite (a method's vectors, free
+   *  once it has stopped); where any is null, it allocates its own. */
+  double* work[4] = {nullptr, nullptr, nullptr, nullptr};
 };
 
 /** The two smallest eigenvalues of H (Ritz values: upper bounds, the second up to the error of
@@ -48,7 +52,8 @@ struct SmallestEigenvalues {
  *  >= 2, by one inverse iteration from its Ritz vector) and the next one by Lanczos on H^-1 with
  *  that vector deflated (a repeated smallest eigenvalue is found twice, and a converged first one
  *  does not return as a copy). At most 24 steps each, stopping when the residual bound puts them
- *  within 1e-4 and 3e-3 (relative). Four vectors of n; collective over ranks through op. */
+ *  within 1e-4 and 3e-3 (relative). Four vectors of n (op.work or its own); collective over ranks
+ *  through op. */
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive);
 
 /** A positive definite Hessian's assessment from its smallest eigenvalues, out.positive and

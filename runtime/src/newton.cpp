@@ -98,9 +98,9 @@ class LocalSpace {
     return compute_residual(ctx);
   }
   double action(const Context& ctx) const { return sum_action(ctx); }
-  bool assess_factored(Context& ctx, PointAssessment& out) {
+  bool assess_factored(Context& ctx, PointAssessment& out, double* const* work) {
     if (cyclic_) return false;  // cyclic reduction keeps no factorization to solve with again
-    assess_positive_definite(ctx, H_, out);
+    assess_positive_definite(ctx, H_, out, work);
     return true;
   }
 

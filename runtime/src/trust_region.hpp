@@ -35,7 +35,8 @@
  *   void trial_point(Context&, step);  (ctx.q_next = ctx.q + step)
  *   int evaluate(Context&, q);  (full evaluation and residual: the first non-finite node or -1)
  *   double action(const Context&);
- *   bool assess_factored(Context&, PointAssessment&);  (after factor at lambda = 0 succeeded there; false: cannot)
+ *   bool assess_factored(Context&, PointAssessment&, work);  (after factor at lambda = 0 succeeded there, with
+ *     four vectors of size() as scratch; false: cannot)
  */
 #ifndef PARDEL_RUNTIME_TRUST_REGION_HPP
 #define PARDEL_RUNTIME_TRUST_REGION_HPP
@@ -186,7 +187,8 @@ class TrustRegionNewton : public Method_ {
 
   /** At a minimum where accept_stop() factored the Hessian, the assessment reuses that factorization. */
   bool assess(Context& ctx, PointAssessment& out) override {
-    return stop_factored_ && space_.assess_factored(ctx, out);
+    double* const work[4] = {rhs_.data(), p_.data(), u_.data(), w_.data()};  // free once the iteration stopped
+    return stop_factored_ && space_.assess_factored(ctx, out, work);
   }
 
   StepOutcome iterate(Context& ctx, long iteration) override {

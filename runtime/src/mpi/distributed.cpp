@@ -515,7 +515,7 @@ class DistributedSpace {
     return globalize_residual(local_, pardel::detail::compute_residual(ctx));
   }
   double action(const Context&) const { return global_sum_Ld(local_); }
-  bool assess_factored(Context&, PointAssessment&) { return false; }  // assess_distributed does it over the ranks
+  bool assess_factored(Context&, PointAssessment&, double* const*) { return false; }  // assess_distributed does it over the ranks
 
  private:
   /** The blocks of the owned unknowns (and the coupling from the left separator), as
