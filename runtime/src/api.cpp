@@ -145,7 +145,8 @@ constexpr Named<Method> kMethods[] = {{Method::automatic, "auto"},
                                       {Method::jacobi, "jacobi"},
                                       {Method::jacobi_newton, "jacobi-newton"},
                                       {Method::newton, "newton"},
-                                      {Method::hybrid, "hybrid"}};
+                                      {Method::hybrid, "hybrid"},
+                                      {Method::stationary_newton, "stationary-newton"}};
 constexpr Named<LinearSolver> kLinearSolvers[] = {{LinearSolver::block_ldlt, "ldlt"},
                                                   {LinearSolver::cyclic_reduction, "cyclic-reduction"}};
 constexpr Named<NewtonShift> kNewtonShifts[] = {{NewtonShift::identity, "identity"},

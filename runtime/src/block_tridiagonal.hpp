@@ -7,9 +7,11 @@
  *  - block LDL^T (block Thomas), O(N) sequential; pivots S_k = D_k - C_{k-1}^T S_{k-1}^{-1} C_{k-1}
  *    are Cholesky-factored, so success certifies positive definiteness (Sylvester's law);
  *  - block cyclic reduction, O(N) work in O(log N) parallel levels; its pivots are those of an
- *    odd-even permutation of H, so success certifies positive definiteness just the same.
- * All storage is allocated by resize() and reserve_cyclic_reduction(); factorizations and solves
- * do not allocate.
+ *    odd-even permutation of H, so success certifies positive definiteness just the same;
+ *  - for an indefinite H, the same block elimination with each pivot inverted through its
+ *    symmetric eigendecomposition (inertia(), factor_indefinite()).
+ * All storage is allocated by resize(), reserve_cyclic_reduction() and the first
+ * factor_indefinite() at a size; factorizations and solves do not allocate otherwise.
  */
 #ifndef PARDEL_RUNTIME_BLOCK_TRIDIAGONAL_HPP
 #define PARDEL_RUNTIME_BLOCK_TRIDIAGONAL_HPP
@@ -121,6 +123,7 @@ class BlockTridiagonal {
    *  Fixed block sizes use an unrolled in-place Cholesky, other sizes Eigen::LLT. */
   bool factor_ldlt() {
     failed_ = -1;
+    indefinite_ = false;
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
       if (i == 0) {
@@ -149,7 +152,7 @@ class BlockTridiagonal {
     return true;
   }
 
-  /** Solves H x = b after factor_ldlt; b and x in node layout of nodes 1..N-1 (dim each). x may
+  /** Solves H x = b after factor_ldlt (or factor_indefinite); b and x in node layout of nodes 1..N-1 (dim each). x may
    *  be b; the forward substitution's intermediate is kept in x. */
   void solve_ldlt(const double* b, double* x) {
     const double* bs[1] = {b};
@@ -317,45 +320,20 @@ class BlockTridiagonal {
    * for a sign) counts as zero and is left out of the elimination (a pseudo-inverse). Overwrites
    * the LDL^T factorization (factor_ldlt() must be called again).
    */
-  Inertia inertia(double zero_tol) {
-    Inertia in;
-    const double global = std::max(1.0, gershgorin_bound());
-    for (int i = 0; i < n_; ++i) {
-      const std::size_t ii = static_cast<std::size_t>(i);
-      Mat S = diag_[ii];
-      if (i > 0) S.noalias() -= off_[ii - 1].transpose() * W_[ii - 1];
-      const double size = std::max(global, diag_[ii].cwiseAbs().maxCoeff());
-      Mat L = S;
-      bool pd = false;
-      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L);
-      if (pd) {
-        in.positive += d_;
-        W_[ii] = off_[ii];
-        cholesky_solve_columns(L, W_[ii]);
-        continue;
-      }
-      Eigen::SelfAdjointEigenSolver<Mat> eig(S);
-      if (eig.info() != Eigen::Success) {
-        in.zero += d_;
-        W_[ii].setZero();
-        continue;
-      }
-      Vec inv = eig.eigenvalues();
-      for (int a = 0; a < d_; ++a) {
-        const double v = inv(a);
-        if (!std::isfinite(v) || std::fabs(v) <= zero_tol * size) {
-          ++in.zero;
-          inv(a) = 0;
-        } else {
-          if (v > 0) ++in.positive; else ++in.negative;
-          inv(a) = 1 / v;
-        }
-      }
-      const Mat VtC = eig.eigenvectors().transpose() * off_[ii];
-      const Mat V = eig.eigenvectors();
-      W_[ii] = V * (inv.asDiagonal() * VtC);
-    }
-    return in;
+  Inertia inertia(double zero_tol) { return eliminate(zero_tol, false); }
+
+  /**
+   * Block LDL^T of H as assembled when it may be indefinite: the elimination of inertia(), each
+   * pivot's (pseudo-)inverse kept, so that solve_ldlt() solves with it. False where a pivot has an
+   * eigenvalue that counts as zero (H singular to working precision) or is not finite. Allocates
+   * the inverses on its first call at a size (the stationary-point Newton only).
+   */
+  bool factor_indefinite(double zero_tol, Inertia* inertia_out = nullptr) {
+    assign_within(inverse_, static_cast<std::size_t>(std::max(n_, 0)), diag_.capacity(), Mat::Zero(d_, d_));
+    const Inertia in = eliminate(zero_tol, true);
+    if (inertia_out) *inertia_out = in;
+    indefinite_ = in.zero == 0;
+    return indefinite_;
   }
 
   int failed_block() const { return failed_; }
@@ -397,6 +375,59 @@ class BlockTridiagonal {
     std::vector<unsigned char> ok;
   };
 
+  /** The elimination of inertia(); with `keep`, each pivot's (pseudo-)inverse in inverse_. */
+  Inertia eliminate(double zero_tol, bool keep) {
+    Inertia in;
+    indefinite_ = false;
+    const double global = std::max(1.0, gershgorin_bound());
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      Mat S = diag_[ii];
+      if (i > 0) S.noalias() -= off_[ii - 1].transpose() * W_[ii - 1];
+      const double size = std::max(global, diag_[ii].cwiseAbs().maxCoeff());
+      Mat L = S;
+      bool pd = false;
+      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L);
+      if (pd) {
+        in.positive += d_;
+        W_[ii] = off_[ii];
+        cholesky_solve_columns(L, W_[ii]);
+        if (keep) {
+          inverse_[ii].setIdentity(d_, d_);
+          cholesky_solve_columns(L, inverse_[ii]);
+        }
+        continue;
+      }
+      Eigen::SelfAdjointEigenSolver<Mat> eig(S);
+      if (eig.info() != Eigen::Success) {
+        in.zero += d_;
+        W_[ii].setZero();
+        if (keep) inverse_[ii].setZero(d_, d_);
+        continue;
+      }
+      Vec inv = eig.eigenvalues();
+      for (int a = 0; a < d_; ++a) {
+        const double v = inv(a);
+        if (!std::isfinite(v) || std::fabs(v) <= zero_tol * size) {
+          ++in.zero;
+          inv(a) = 0;
+        } else {
+          if (v > 0) ++in.positive; else ++in.negative;
+          inv(a) = 1 / v;
+        }
+      }
+      const Mat V = eig.eigenvectors();
+      if (keep) {
+        inverse_[ii].noalias() = V * inv.asDiagonal() * V.transpose();
+        W_[ii].noalias() = inverse_[ii] * off_[ii];
+      } else {
+        const Mat VtC = V.transpose() * off_[ii];
+        W_[ii] = V * (inv.asDiagonal() * VtC);
+      }
+    }
+    return in;
+  }
+
   /** n factorizations of size d, each constructed in place: a copy of an Eigen::LLT built with
    *  LLT(Index) would read its uninitialized status (undefined behaviour, reported by UBSan). */
   static void emplace_factorizations(std::vector<Eigen::LLT<Mat>>& v, std::size_t n, int d) {
@@ -422,7 +453,9 @@ class BlockTridiagonal {
       const std::size_t ii = static_cast<std::size_t>(i);
       for (int c = 0; c < C; ++c) {
         VecMapMut xi(x[c] + ii * d, d);
-        if constexpr (D == Eigen::Dynamic)
+        if (indefinite_)
+          xi = inverse_[ii] * xi;  // a temporary: Eigen evaluates the product before assigning
+        else if constexpr (D == Eigen::Dynamic)
           llt_[ii].solveInPlace(xi);
         else
           cholesky_solve(factor_[ii], xi.data());
@@ -482,6 +515,8 @@ class BlockTridiagonal {
   std::vector<Mat> diag_, off_, W_;
   std::vector<Eigen::LLT<Mat>> llt_;  ///< pivots' factorizations (dynamic block size)
   std::vector<Mat> factor_;           ///< pivots' Cholesky factors (fixed block sizes)
+  std::vector<Mat> inverse_;          ///< pivots' (pseudo-)inverses after factor_indefinite()
+  bool indefinite_ = false;           ///< the last factorization was factor_indefinite()
   mutable Eigen::LLT<Mat> pivot_scratch_;
   std::vector<Level> levels_;
 };

@@ -219,6 +219,7 @@ std::unique_ptr<Method_> make_jacobi(const Options& options, int dim);
 std::unique_ptr<Method_> make_jacobi_newton(const Options& options, int dim);
 std::unique_ptr<Method_> make_newton(const Options& options, int dim);
 std::unique_ptr<Method_> make_hybrid(const Options& options, int dim);
+std::unique_ptr<Method_> make_stationary_newton(const Options& options, int dim);
 
 /** The residual that counts as converged at the context's iterate: Options::tol when set, else
  *  max(rtol x residual_scale, 10 x residual_floor). */

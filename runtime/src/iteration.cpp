@@ -6,6 +6,8 @@
  */
 #include "iteration.hpp"
 
+#include "levels.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -121,7 +123,7 @@ bool Iteration::converged_at_tolerance(bool last, double r, double target, bool*
   // the target and still a smooth error of any size: the Hessian's smallest eigenvalues are O(h),
   // so a small residual bounds only the rough part of the error. Newton takes one step on each
   // level before it stops; that step removes a smooth error.
-  if (options_.method == Method::newton && level_.level_it == 0) return false;
+  if (whole_system_newton(options_.method) && level_.level_it == 0) return false;
   const bool at_target = r <= target && method_.accept_stop(ctx_, last);
   if (!at_target) return false;
   if (last) {
@@ -131,7 +133,7 @@ bool Iteration::converged_at_tolerance(bool last, double r, double target, bool*
   }
   // Nested iteration: a coarse level is solved to the tolerance (quadratic convergence makes the
   // last digits cheap), so that the next level can start from a solution.
-  if (options_.method != Method::newton) return false;
+  if (!whole_system_newton(options_.method)) return false;
   *settled = true;
   return true;
 }
@@ -139,7 +141,7 @@ bool Iteration::converged_at_tolerance(bool last, double r, double target, bool*
 /** A coarse level of the other methods' refinement: its residual fell by refine_settle, or it
  *  stagnates (less than 1% over 50 iterations). */
 bool Iteration::intermediate_level_settled(bool last, double r, double target, bool* settled) {
-  if (last || options_.method == Method::newton) return false;
+  if (last || whole_system_newton(options_.method)) return false;
   *settled = true;
   if (r <= std::max(target, options_.refine_settle * level_.r_level0)) return true;
   if (level_.level_it > 0 && level_.level_it % 50 == 0) {
@@ -181,10 +183,11 @@ bool Iteration::diverged(double r) {
   if (!(iteration_ > 0 && r_initial_ > 0 && r > options_.divergence_factor * r_initial_)) return false;
   finish(Termination::diverged,
          format("DEL residual %.3g grew beyond divergence_factor x initial residual %.3g at iteration %.0f. pardel's "
-                "methods converge to minima of the action (docs/solvers.md); the usual causes are an action that is "
-                "unbounded below along the iterates (where the DEL equations have a solution then, it is a saddle "
-                "of the action, e.g. past a conjugate point: an oscillator over more than half its period) or no "
-                "solution near the start",
+                "minimizing methods (all but stationary-newton) converge to minima of the action (docs/solvers.md); "
+                "the usual causes are an action that is unbounded below along the iterates (where the DEL equations "
+                "have a solution then, it is a saddle of the action, e.g. past a conjugate point: an oscillator over "
+                "more than half its period; method stationary-newton converges to saddles) or no solution near the "
+                "start",
                 r, r_initial_, static_cast<double>(iteration_)));
   return true;
 }

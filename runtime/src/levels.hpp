@@ -18,6 +18,12 @@
 
 namespace pardel::detail {
 
+/** Newton on the whole DEL system, minimizing (trust region) or not (stationary): nested iteration
+ *  solves each coarse level to the tolerance, and each level takes a step before it stops. */
+inline bool whole_system_newton(Method method) {
+  return method == Method::newton || method == Method::stationary_newton;
+}
+
 /** Whether every knot lies on an interior node of the uniform grid with n intervals. */
 bool knots_on_grid(const Problem& problem, int n);
 
@@ -54,7 +60,7 @@ Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, 
 class LevelStarts {
  public:
   LevelStarts(const Problem& problem, const Options& options)
-      : problem_(problem), extrapolate_(options.method == Method::newton && problem.clock == ClockMode::none) {}
+      : problem_(problem), extrapolate_(whole_system_newton(options.method) && problem.clock == ClockMode::none) {}
 
   /** Whether a level starts from the extrapolation of the two before it (Newton without a clock). */
   bool extrapolates() const { return extrapolate_; }

@@ -128,17 +128,18 @@ std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, st
     case Method::automatic:
     case Method::newton: return detail::make_newton(options, dim);
     case Method::hybrid: return detail::make_hybrid(options, dim);
+    case Method::stationary_newton: return detail::make_stationary_newton(options, dim);
   }
   *message = "unknown method";
   return nullptr;
 }
 
-}  // namespace
-
-Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
+/** One solve with the requested method (solve() may make two). */
+Summary solve_once(const Problem& problem, const Options& requested, Trajectory& trajectory) {
   const auto start = std::chrono::steady_clock::now();
-  // The automatic method is Newton with grid sequencing (refinement_levels).
-  const bool automatic = requested.method == Method::automatic;
+  // The automatic method is Newton with grid sequencing (refinement_levels), and so is the
+  // stationary Newton.
+  const bool automatic = requested.method == Method::automatic || requested.method == Method::stationary_newton;
   Summary summary;
   const Options options = detail::resolved_options(requested, problem, summary);
   std::string error;
@@ -203,6 +204,66 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   detail::note_stopped_level(problem, trajectory.N, summary);
   if (warm) detail::note_warm_start(*warm, summary);
   return summary;
+}
+
+/** Whether a saddle of the action is an answer to the automatic method: the model declares no cost
+ *  (a mechanical system, whose motion is any DEL solution; a declared cost asks for a minimum, and
+ *  a saddle of it is no answer), and the solve is a fresh one (no resumed or warm state). */
+bool saddles_answer(const Problem& problem, const Options& requested) {
+  return requested.method == Method::automatic && !requested.resume_from && problem.model && !problem.model->cost_name;
+}
+
+/** The minimizing Newton failed numerically (neither converged, interrupted nor refused). */
+bool failed_numerically(const Summary& first) {
+  switch (first.termination) {
+    case Termination::diverged:
+    case Termination::stalled:
+    case Termination::non_finite:
+    case Termination::max_iterations: return true;
+    default: return false;
+  }
+}
+
+/** The automatic method's two attempts as one summary: the second's result and point, the
+ *  iterations and history of both (the second's numbered on from the first's), the total time,
+ *  and a message that says what happened to the first. */
+Summary combined(Summary first, Summary second) {
+  const std::string first_outcome = std::string(to_string(first.termination)) + ": " + first.message;
+  if (second.termination != Termination::converged) {
+    first.message += std::string("; then Newton on the DEL residual (stationary-newton), which also converges to "
+                                 "saddles of the action, from the same start ended ") +
+                     to_string(second.termination) + ": " + second.message;
+    first.wall_seconds += second.wall_seconds;
+    return first;
+  }
+  for (IterationRecord rec : second.history) {
+    rec.iteration += first.iterations;
+    rec.seconds += first.wall_seconds;
+    first.history.push_back(rec);
+  }
+  second.history = std::move(first.history);
+  second.iterations += first.iterations;
+  second.wall_seconds += first.wall_seconds;
+  second.message += " by Newton on the DEL residual (stationary-newton), after the minimizing Newton found no "
+                    "minimum of the action near the start (" + first_outcome + ")";
+  return second;
+}
+
+}  // namespace
+
+Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
+  // The automatic method minimizes first; where no minimum is found near the start and a saddle
+  // would do, Newton on the DEL residual tries again from the same start.
+  if (!saddles_answer(problem, requested)) return solve_once(problem, requested, trajectory);
+  const Trajectory guess = trajectory;
+  Summary first = solve_once(problem, requested, trajectory);
+  if (!failed_numerically(first)) return first;
+  Options options = requested;
+  options.method = Method::stationary_newton;
+  Trajectory second_trajectory = guess;
+  Summary second = solve_once(problem, options, second_trajectory);
+  if (second.termination == Termination::converged) trajectory = std::move(second_trajectory);
+  return combined(std::move(first), std::move(second));
 }
 
 double residual_norm(const Problem& problem, const Trajectory& trajectory) {

@@ -267,7 +267,7 @@ TEST(PardelSolve, ExitCodeSaysHowItEnded) {
                                   "' --no-plot --set solver.method=multigrid");
   EXPECT_EQ(multigrid.code, 2);
   EXPECT_NE(multigrid.err.find("unknown method 'multigrid'"), std::string::npos) << multigrid.err;
-  EXPECT_NE(multigrid.err.find("(methods: auto, jacobi, jacobi-newton, newton, hybrid)"), std::string::npos)
+  EXPECT_NE(multigrid.err.find("(methods: auto, jacobi, jacobi-newton, newton, hybrid, stationary-newton)"), std::string::npos)
       << multigrid.err;
   EXPECT_TRUE(multigrid.out.empty()) << multigrid.out;
   EXPECT_FALSE(fs::exists(dir / "mg"));

@@ -913,6 +913,13 @@ TEST(Refusal, UnsupportedCombinationsNameTheKey) {
   s = pardel::mpi::solve_distributed(small, pardel::Options{}, guess);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
   EXPECT_NE(s.message.find("grid.N = 4"), std::string::npos) << s.message;
+  // Newton on the DEL residual runs in one process only.
+  pardel::Options stationary;
+  stationary.method = pardel::Method::stationary_newton;
+  guess = pardel::linear_guess(problem);
+  s = pardel::mpi::solve_distributed(problem, stationary, guess);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("\"stationary-newton\" runs in one process only"), std::string::npos) << s.message;
 }
 
 // A harmonic oscillator whose kernels return NaN once x exceeds 1.05 in the second half of the

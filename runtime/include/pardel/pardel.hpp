@@ -109,9 +109,10 @@ enum class Method {
   jacobi_newton,  ///< the seed's m-step block Jacobi-Newton (eq. NewtonRaphson)
   newton,         ///< globalized Newton on the whole DEL system, block-tridiagonal solves
   hybrid,         ///< Jacobi-Newton until the certificate holds, then Newton
+  stationary_newton,  ///< Newton globalized on the DEL residual: converges to saddles of the action too
 };
 const char* to_string(Method method);
-/** Parses "auto", "jacobi", "jacobi-newton", "newton", "hybrid"; false if unknown. */
+/** Parses "auto", "jacobi", "jacobi-newton", "newton", "hybrid", "stationary-newton"; false if unknown. */
 bool parse_method(std::string_view text, Method* method);
 /** Every method's name, in the order of the enum. */
 std::vector<std::string> method_names();

@@ -67,7 +67,10 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
     if (message) *message = std::move(text);
     return false;
   };
-  (void)options;  // every method runs over ranks
+  if (options.method == Method::stationary_newton)
+    return fail("solver.method = \"stationary-newton\" runs in one process only: its indefinite block "
+                "factorization has no counterpart in the distributed Schur-complement solver (run it without "
+                "mpirun, or use \"newton\" or \"auto\" over ranks)");
   if (!fits_ranks(problem.N, ranks))
     return fail("grid.N = " + std::to_string(problem.N) + " is too small for " + std::to_string(ranks) +
                 " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks)");
