@@ -387,7 +387,7 @@ class BlockTridiagonal {
       const double size = std::max(global, diag_[ii].cwiseAbs().maxCoeff());
       Mat L = S;
       bool pd = false;
-      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L);
+      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L) && !tiny_cholesky_pivot(L, zero_tol * size);
       if (pd) {
         in.positive += d_;
         W_[ii] = off_[ii];
@@ -481,6 +481,14 @@ class BlockTridiagonal {
       }
     }
     return true;
+  }
+  /** Whether a factor of cholesky_in_place has a diagonal entry L(j, j)^2 <= `tiny`: the pivot may
+   *  then have an eigenvalue that counts as zero (L(j, j)^2 bounds the smallest one from above
+   *  only for the last j), and its eigendecomposition decides. */
+  static bool tiny_cholesky_pivot(const Mat& L, double tiny) {
+    for (int j = 0; j < D; ++j)
+      if (1 / (L(j, j) * L(j, j)) <= tiny) return true;
+    return false;
   }
   /** x <- (L L^T)^{-1} x for the factor of cholesky_in_place (inverse diagonal). */
   static void cholesky_solve(const Mat& L, double* x) {

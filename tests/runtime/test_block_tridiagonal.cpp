@@ -2,8 +2,9 @@
  * @file test_block_tridiagonal.cpp
  * The block-tridiagonal Hessian solvers (runtime/src/block_tridiagonal.hpp): block LDL^T and
  * block cyclic reduction against a dense Eigen solve on random symmetric positive definite
- * systems, detection of indefiniteness, restriction to free components, and fixed-size versus
- * dynamic block sizes giving the same answer.
+ * systems, detection of indefiniteness, the indefinite factorization (solves and inertia against
+ * a dense eigendecomposition, a singular matrix refused), restriction to free components, and
+ * fixed-size versus dynamic block sizes giving the same answer.
  */
 #include <gtest/gtest.h>
 
@@ -134,6 +135,85 @@ TEST(BlockTridiagonal, IndefiniteIsDetectedAndShiftRestoresDefiniteness) {
   T.assemble(ctx, 0.2);  // lambda_min = 2 - 2 cos(pi/30) - 0.1 > -0.2
   EXPECT_TRUE(T.factor_ldlt());
   EXPECT_TRUE(T.solve_cyclic_reduction(b.data(), x.data(), 1));
+}
+
+template <int D>
+void check_indefinite(int N, int d, unsigned seed, bool with_fixed) {
+  // Random blocks shifted down so that H has eigenvalues of both signs.
+  Context ctx = random_context(N, d, 0.0, seed);
+  const std::size_t dd = static_cast<std::size_t>(d) * d;
+  for (int k = 0; k < N; ++k)
+    for (int i = 0; i < d; ++i) ctx.D11[k * dd + i * d + i] -= 1.5;
+  if (with_fixed) ctx.is_free[2 * d] = 0;
+  const Eigen::MatrixXd H = dense_hessian(ctx);
+  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
+  long negative = 0, positive = 0;
+  for (int i = 0; i < ev.size(); ++i) (ev[i] < 0 ? negative : positive) += 1;
+  ASSERT_GT(negative, 0);
+  ASSERT_GT(positive, 0);
+  ASSERT_GT(ev.cwiseAbs().minCoeff(), 1e-6) << "the random matrix is nearly singular";
+  const int n = (N - 1) * d;
+  Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1, 2);
+  for (int k = 1; k < N; ++k)
+    for (int i = 0; i < d; ++i)
+      if (!ctx.is_free[k * d + i]) b[(k - 1) * d + i] = 0;
+  const Eigen::VectorXd exact = H.fullPivLu().solve(b);
+
+  BlockTridiagonal<D> T;
+  T.resize(N, d);
+  T.assemble(ctx, 0.0);
+  EXPECT_FALSE(T.factor_ldlt());
+  T.assemble(ctx, 0.0);
+  typename BlockTridiagonal<D>::Inertia in;
+  ASSERT_TRUE(T.factor_indefinite(1e-12, &in));
+  EXPECT_EQ(in.negative, negative);
+  EXPECT_EQ(in.positive, positive);
+  EXPECT_EQ(in.zero, 0);
+  Eigen::VectorXd x(n);
+  T.solve_ldlt(b.data(), x.data());
+  const double cond = ev.cwiseAbs().maxCoeff() / ev.cwiseAbs().minCoeff();
+  EXPECT_LT((x - exact).norm(), 1e-13 * cond * exact.norm()) << "condition " << cond;
+  // A positive definite factorization afterwards solves with its own pivots again.
+  T.assemble(ctx, 10.0 * d);
+  ASSERT_TRUE(T.factor_ldlt());
+  const Eigen::MatrixXd shifted = dense_hessian(ctx) + 10.0 * d * [&] {
+    Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+    for (int k = 1; k < N; ++k)
+      for (int i = 0; i < d; ++i)
+        if (!ctx.is_free[k * d + i]) I((k - 1) * d + i, (k - 1) * d + i) = 0;
+    return I;
+  }();
+  T.solve_ldlt(b.data(), x.data());
+  EXPECT_LT((x - shifted.ldlt().solve(b)).norm(), 1e-10 * x.norm());
+}
+
+TEST(BlockTridiagonal, IndefiniteFactorizationSolvesAndCountsTheInertia) {
+  for (int N : {3, 8, 25}) {
+    check_indefinite<2>(N, 2, 30u + N, false);
+    check_indefinite<2>(N, 2, 40u + N, N > 5);
+  }
+  check_indefinite<1>(40, 1, 5u, false);
+  check_indefinite<4>(12, 4, 6u, true);
+  check_indefinite<Eigen::Dynamic>(10, 3, 8u, true);
+}
+
+TEST(BlockTridiagonal, IndefiniteFactorizationRefusesASingularMatrix) {
+  // The 1-D Laplacian shifted by its smallest eigenvalue 2 - 2 cos(pi/N): exactly singular.
+  const int N = 20;
+  Context ctx = random_context(N, 1, 0.0, 2u);
+  const double shift = 1 - std::cos(3.14159265358979323846 / N);
+  for (int k = 0; k < N; ++k) {
+    ctx.D11[k] = 1.0 - shift;
+    ctx.D22[k] = 1.0 - shift;
+    ctx.D12[k] = -1.0;
+  }
+  BlockTridiagonal<1> T;
+  T.resize(N, 1);
+  T.assemble(ctx, 0.0);
+  typename BlockTridiagonal<1>::Inertia in;
+  EXPECT_FALSE(T.factor_indefinite(1e-12, &in));
+  EXPECT_EQ(in.zero, 1);
+  EXPECT_EQ(in.positive, N - 2);
 }
 
 }  // namespace
