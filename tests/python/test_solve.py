@@ -1,6 +1,7 @@
 """pardel.solve on .lag text: the answer is the exact solution of the discrete Euler-Lagrange
 recursion, approaches the continuous one at second order, has the documented shapes, and reports
-momenta, the point's inertia and smallest Hessian eigenvalues, the cost and the history."""
+momenta, the point's inertia and smallest Hessian eigenvalues, the cost and the history; a saddle
+past a conjugate point by stationary-newton and by the automatic method's second attempt."""
 import math
 
 import numpy as np
@@ -34,6 +35,21 @@ def test_second_order_convergence_to_the_continuous_solution(spring_lag):
     assert e[0] < 0.2
     for coarse, fine in zip(e, e[1:]):
         assert 3.5 < coarse / fine < 4.5
+
+
+def test_a_saddle_past_the_conjugate_point_by_method_name_and_by_default(spring_lag, exact):
+    # T = 3 lies past the first conjugate time pi/1.5 of the x spring (and before pi/0.7 of the y
+    # spring): the DEL solution is a saddle of index 1, which stationary-newton converges to and
+    # the automatic method reaches by its second attempt.
+    N, duration = 60, 3.0
+    for method in ("stationary-newton", "auto"):
+        r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=duration, N=N, method=method)
+        assert r.status == "converged", r.message
+        assert r.point["kind"] == "saddle"
+        assert r.point["inertia"] == {"positive": 2 * (N - 1) - 1, "negative": 1, "zero": 0}
+        np.testing.assert_allclose(r.q[:, 0], exact(A, duration, N, 1.0, "trapezoid"), rtol=0, atol=1e-10)
+        np.testing.assert_allclose(r.q[:, 1], exact(B, duration, N, 2.0, "trapezoid"), rtol=0, atol=1e-10)
+    assert "after the minimizing Newton found no minimum" in r.message
 
 
 def test_params_by_name_and_by_position(spring_lag, exact):
