@@ -71,6 +71,16 @@ Eigen::MatrixXd dense_hessian(const Context& ctx) {
   return H;
 }
 
+/** A right-hand side over nodes 1..N-1, zero on fixed components. */
+Eigen::VectorXd right_hand_side(const Context& ctx) {
+  const int d = ctx.dim, N = ctx.N;
+  Eigen::VectorXd b = Eigen::VectorXd::LinSpaced((N - 1) * d, -1, 2);
+  for (int k = 1; k < N; ++k)
+    for (int i = 0; i < d; ++i)
+      if (!ctx.is_free[k * d + i]) b[(k - 1) * d + i] = 0;
+  return b;
+}
+
 template <int D>
 void check_solvers(int N, int d, unsigned seed, bool with_fixed) {
   Context ctx = random_context(N, d, 3.0 * d, seed);
@@ -81,10 +91,7 @@ void check_solvers(int N, int d, unsigned seed, bool with_fixed) {
   Eigen::MatrixXd H = dense_hessian(ctx);
   if (H.llt().info() != Eigen::Success) GTEST_SKIP() << "random matrix not p.d.";
   const int n = (N - 1) * d;
-  Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1, 2);
-  for (int k = 1; k < N; ++k)
-    for (int i = 0; i < d; ++i)
-      if (!ctx.is_free[k * d + i]) b[(k - 1) * d + i] = 0;
+  const Eigen::VectorXd b = right_hand_side(ctx);
   const Eigen::VectorXd exact = H.ldlt().solve(b);
 
   BlockTridiagonal<D> T;
@@ -153,10 +160,7 @@ void check_indefinite(int N, int d, unsigned seed, bool with_fixed) {
   ASSERT_GT(positive, 0);
   ASSERT_GT(ev.cwiseAbs().minCoeff(), 1e-6) << "the random matrix is nearly singular";
   const int n = (N - 1) * d;
-  Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1, 2);
-  for (int k = 1; k < N; ++k)
-    for (int i = 0; i < d; ++i)
-      if (!ctx.is_free[k * d + i]) b[(k - 1) * d + i] = 0;
+  const Eigen::VectorXd b = right_hand_side(ctx);
   const Eigen::VectorXd exact = H.fullPivLu().solve(b);
 
   BlockTridiagonal<D> T;
