@@ -330,13 +330,13 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
 }
 
 template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&,
-                                                       double* const*);
+                                          double* const*);
 template void assess_positive_definite<2>(Context&, BlockTridiagonal<2>&, PointAssessment&,
-                                                       double* const*);
+                                          double* const*);
 template void assess_positive_definite<4>(Context&, BlockTridiagonal<4>&, PointAssessment&,
-                                                       double* const*);
+                                          double* const*);
 template void assess_positive_definite<6>(Context&, BlockTridiagonal<6>&, PointAssessment&,
-                                                       double* const*);
+                                          double* const*);
 template void assess_positive_definite<Eigen::Dynamic>(Context&, BlockTridiagonal<Eigen::Dynamic>&, PointAssessment&,
                                                        double* const*);
 

@@ -10,24 +10,20 @@
  * indefinite) by block LDL^T with eigen-split pivots and takes the Newton direction p = -H^-1 r.
  * For the merit phi = |r|^2 / 2 its slope is r.H p = -|r|^2 < 0, so p descends whatever the
  * inertia of H, and a backtracking (Armijo) line search on phi globalizes it. Where H is singular
- * to working precision it is shifted, H + mu K (K the kinetic metric tridiag(-1, 2, -1) per
- * component), mu growing from 1e-10 of H's diagonal, as long as the shifted direction still
- * descends (slope -|r|^2 - mu r.K p < 0). One process only.
+ * to working precision it is shifted, H + mu M (M the metric of Options::newton_shift, by default
+ * the kinetic tridiag(-1, 2, -1) per component), mu growing from 1e-10 of H's diagonal, as long as
+ * the shifted direction still descends (slope -|r|^2 - mu r.M p < 0). One process only: the
+ * Hessian, metric and trial points are those of the one-process Newton (local_space.hpp).
  */
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 
-#include "block_tridiagonal.hpp"
-#include "engine.hpp"
+#include "local_space.hpp"
 #include "trust_region.hpp"
 
 namespace pardel::detail {
 namespace {
 
-/** Pivot eigenvalues below this fraction of their block's size count as zero. */
-constexpr double kZeroPivot = 1e-12;
 /** Armijo's fraction of the predicted decrease of the merit. */
 constexpr double kArmijo = 1e-4;
 /** Backtracking halvings before the iteration reports a stall. */
@@ -36,11 +32,12 @@ constexpr int kMaxHalvings = 40;
 template <int D>
 class StationaryNewton : public Method_ {
  public:
+  explicit StationaryNewton(const Options& options) : space_(options) {}
+
   void reset(Context& ctx) override {
-    H_.resize(ctx.N, ctx.dim, ctx.capacity(static_cast<std::size_t>(std::max(ctx.N - 1, 0))));
-    dz_ = static_cast<std::size_t>(ctx.dim);
-    n_ = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * dz_;
-    for (std::vector<double>* v : {&rhs_, &p_}) assign_within(*v, n_, ctx.capacity(n_), 0.0);
+    space_.resize(ctx);
+    const std::size_t n = space_.size();
+    for (std::vector<double>* v : {&rhs_, &p_, &w_}) assign_within(*v, n, ctx.capacity(n), 0.0);
     ensure_interval_arrays(ctx, Evaluated::full);
     trial_.size_like(ctx);
   }
@@ -48,13 +45,14 @@ class StationaryNewton : public Method_ {
   int evaluate(Context& ctx) override {
     if (ctx.evaluated != Evaluated::full) eval_full(ctx, ctx.q);
     const int bad = compute_residual(ctx);
-    ctx.action = sum_action(ctx);
+    ctx.action = space_.action(ctx);
     ctx.action_known = true;
     return bad;
   }
 
   StepOutcome iterate(Context& ctx, long iteration) override {
-    for (std::size_t i = 0; i < n_; ++i) rhs_[i] = -ctx.res[dz_ + i];
+    const std::size_t o = space_.offset();
+    for (std::size_t i = 0; i < rhs_.size(); ++i) rhs_[i] = -ctx.res[o + i];
     const double phi0 = merit(ctx);
     double slope = 0;
     if (!direction(ctx, phi0, &slope)) {
@@ -66,16 +64,14 @@ class StationaryNewton : public Method_ {
     }
     const double r0 = ctx.residual;
     const double F0 = ctx.action;
-    double alpha = 1;
-    for (int halving = 0; halving <= kMaxHalvings; ++halving, alpha *= 0.5) {
-      trial_point(ctx, alpha);
+    double alpha = 1;  // p_ holds alpha times the Newton direction
+    for (int halving = 0; halving <= kMaxHalvings; ++halving) {
+      space_.trial_point(ctx, p_.data());
       trial_.swap_with(ctx);
-      eval_full(ctx, ctx.q_next);
-      const int bad = compute_residual(ctx);
-      if (bad < 0) {
+      if (space_.evaluate(ctx, ctx.q_next) < 0) {
         const double phi = merit(ctx);
         if (std::isfinite(phi) && phi <= phi0 + kArmijo * alpha * slope) {
-          ctx.action = sum_action(ctx);
+          ctx.action = space_.action(ctx);
           ctx.action_known = true;
           StepOutcome done;
           done.next_evaluated = true;
@@ -85,6 +81,8 @@ class StationaryNewton : public Method_ {
       trial_.swap_with(ctx);  // back to the evaluation at q
       ctx.residual = r0;
       ctx.action = F0;
+      alpha *= 0.5;
+      for (double& v : p_) v *= 0.5;
     }
     char buf[640];
     std::snprintf(buf, sizeof buf,
@@ -92,7 +90,7 @@ class StationaryNewton : public Method_ {
                   "reduces the DEL residual %.3g (round-off level %.3g): the residual has a local minimum here, where "
                   "the Hessian of the action is nearly singular (a fold of the boundary-value problem), so no DEL "
                   "solution is near this iterate; a guess closer to the wanted motion may reach one",
-                  iteration, alpha, r0, ctx.residual_floor);
+                  iteration, 2 * alpha, r0, ctx.residual_floor);
     return failure(Termination::stalled, buf);
   }
 
@@ -106,64 +104,43 @@ class StationaryNewton : public Method_ {
 
   /** |r|^2 / 2 over the unknowns (fixed components hold zero residuals). */
   double merit(const Context& ctx) const {
+    const std::size_t o = space_.offset();
     double s = 0;
-    for (std::size_t i = 0; i < n_; ++i) s += ctx.res[dz_ + i] * ctx.res[dz_ + i];
+    for (std::size_t i = 0; i < rhs_.size(); ++i) s += ctx.res[o + i] * ctx.res[o + i];
     return 0.5 * s;
   }
 
   /** The Newton direction into p_ (shifted where H is singular) and the merit's slope along it;
    *  false when no shift up to H's scale gives a descent direction. */
   bool direction(const Context& ctx, double phi0, double* slope) {
-    double scale = BlockTridiagonal<D>::max_abs_diagonal(ctx);
+    double scale = space_.max_abs_diagonal(ctx);
     if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
     for (double mu = 0; mu <= scale; mu = mu > 0 ? mu * 100 : 1e-10 * scale) {
-      H_.assemble(ctx, mu, true);
-      if (!H_.factor_indefinite(kZeroPivot)) continue;
-      H_.solve_ldlt(rhs_.data(), p_.data());
-      // slope = r.H p with (H + mu K) p = -r: -|r|^2 - mu r.K p.
-      *slope = -2 * phi0 - mu * metric_product(ctx);
+      if (!space_.factor_indefinite(ctx, mu, rhs_.data(), p_.data())) continue;
+      // slope = r.H p with (H + mu M) p = -r: -|r|^2 - mu r.M p, and r = -rhs_.
+      double rMp = 0;
+      if (mu > 0) {
+        space_.apply_metric(ctx, p_.data(), w_.data());
+        for (std::size_t i = 0; i < w_.size(); ++i) rMp -= rhs_[i] * w_[i];
+      }
+      *slope = -2 * phi0 - mu * rMp;
       bool finite = true;
-      for (std::size_t i = 0; i < n_ && finite; ++i) finite = std::isfinite(p_[i]);
+      for (std::size_t i = 0; i < p_.size() && finite; ++i) finite = std::isfinite(p_[i]);
       if (finite && *slope < 0) return true;
     }
     return false;
   }
 
-  /** r.K p with r = -rhs_, K = tridiag(-1, 2, -1) per component on the free components. */
-  double metric_product(const Context& ctx) const {
-    double s = 0;
-    for (std::size_t i = 0; i < n_; ++i) {
-      if (!ctx.is_free[dz_ + i]) continue;
-      double kp = 2 * p_[i];
-      if (i >= dz_ && ctx.is_free[i]) kp -= p_[i - dz_];
-      if (i + dz_ < n_ && ctx.is_free[2 * dz_ + i]) kp -= p_[i + dz_];
-      s -= rhs_[i] * kp;
-    }
-    return s;
-  }
-
-  /** ctx.q_next = ctx.q + alpha p on the unknowns, the end nodes copied. */
-  void trial_point(Context& ctx, double alpha) const {
-    const std::size_t last = static_cast<std::size_t>(ctx.N) * dz_;
-    for (std::size_t i = 0; i < dz_; ++i) {
-      ctx.q_next[i] = ctx.q[i];
-      ctx.q_next[last + i] = ctx.q[last + i];
-    }
-    for (std::size_t i = 0; i < n_; ++i) ctx.q_next[dz_ + i] = ctx.q[dz_ + i] + alpha * p_[i];
-  }
-
-  BlockTridiagonal<D> H_;
-  std::vector<double> rhs_, p_;
+  LocalSpace<D> space_;
+  std::vector<double> rhs_, p_, w_;
   TrialEvaluation trial_;
-  std::size_t dz_ = 0, n_ = 0;
 };
 
 }  // namespace
 
 std::unique_ptr<Method_> make_stationary_newton(const Options& options, int dim) {
-  (void)options;
   return dispatch_dim(dim, [&](auto D) -> std::unique_ptr<Method_> {
-    return std::make_unique<StationaryNewton<decltype(D)::value>>();
+    return std::make_unique<StationaryNewton<decltype(D)::value>>(options);
   });
 }
 
