@@ -62,6 +62,24 @@ void assess_dim(Context& ctx, PointAssessment& out) {
   }
 }
 
+/** Scales the rows, then the columns, of a d x d row-major block by their largest |entry| (a zero
+ *  row or column is left as it is): a congruence of diagonal matrices, which keeps the rank. */
+void equilibrate(double* block, int d) {
+  const std::size_t dz = static_cast<std::size_t>(d);
+  for (std::size_t i = 0; i < dz; ++i) {
+    double m = 0;
+    for (std::size_t j = 0; j < dz; ++j) m = std::max(m, std::fabs(block[i * dz + j]));
+    if (m > 0)
+      for (std::size_t j = 0; j < dz; ++j) block[i * dz + j] /= m;
+  }
+  for (std::size_t j = 0; j < dz; ++j) {
+    double m = 0;
+    for (std::size_t i = 0; i < dz; ++i) m = std::max(m, std::fabs(block[i * dz + j]));
+    if (m > 0)
+      for (std::size_t i = 0; i < dz; ++i) block[i * dz + j] /= m;
+  }
+}
+
 /** The smallest singular value of a d x d row-major block against its largest. */
 double relative_smallest_singular_value(const double* block, int d) {
   Eigen::MatrixXd A = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(block, d, d);
@@ -399,6 +417,9 @@ bool lagrangian_regular(const Context& ctx, std::string* message) {
     const double h = std::fabs(ctx.hk[kk]) > 0 ? std::fabs(ctx.hk[kk]) : 1.0;
     for (int i = 0; i < d; ++i)
       for (int j = 0; j < d; ++j) D12[static_cast<std::size_t>(i * d + j)] *= std::pow(h, -(i / nc + j / nc));
+    // Then rows and columns by their largest entries (the rank is unchanged): coordinates in units
+    // whose terms differ by 10^12 (W = diag(1e12, 1)) are not taken for a singular D12.
+    equilibrate(D12.data(), d);
     if (relative_smallest_singular_value(D12.data(), d) <= 1e-12) ++singular;
   }
   if (singular < samples) return true;

@@ -18,6 +18,19 @@ namespace pardel::detail {
 /** Assesses ctx.q (evaluating the full kernel there if needed) into `out`. */
 void assess(Context& ctx, PointAssessment& out);
 
+/** Whether a solve that ended with `termination` has its point assessed: only a converged one.
+ *  Any other iterate is no solution of the DEL equations, and what its Hessian is says nothing
+ *  about an answer (an interrupted solve also stops sooner without it). */
+inline bool point_assessed(Termination termination) { return termination == Termination::converged; }
+
+/** The point of a solve that is not assessed: kind unknown, and a note that says why. */
+inline PointAssessment not_assessed(Termination termination) {
+  PointAssessment out;
+  out.note = std::string("not assessed: the solve ended ") + to_string(termination) +
+             ", and its iterate is no solution of the DEL equations";
+  return out;
+}
+
 /** Assesses ctx.q given H, the unshifted Hessian there, already factored by block LDL^T (positive
  *  definite): a minimum, with its smallest eigenvalues. `work` as LanczosOperator::work (optional).
  *  Instantiated for the block sizes of dispatch_dim. */

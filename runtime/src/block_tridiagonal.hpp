@@ -313,12 +313,16 @@ class BlockTridiagonal {
 
   /**
    * The inertia of H as assembled, by block elimination (Haynsworth: the inertia of H is the sum of
-   * the inertias of the pivots S_i = D_i - C_{i-1}^T S_{i-1}^{-1} C_{i-1}). A pivot that is not
-   * positive definite is split by its symmetric eigendecomposition; an eigenvalue of a pivot with
-   * |value| <= zero_tol * max(1, |D_i|, |H|) (|H| Gershgorin's bound: the size of what the
-   * elimination rounds, so that a pivot lost to round-off in an ill-conditioned H is not taken
-   * for a sign) counts as zero and is left out of the elimination (a pseudo-inverse). Overwrites
-   * the LDL^T factorization (factor_ldlt() must be called again).
+   * the inertias of the pivots S_i = D_i - C_{i-1}^T S_{i-1}^{-1} C_{i-1}). Zero is judged in the
+   * Jacobi-scaled H~ = J H J, J = diag(|H_aa|^{-1/2}) (1 where a diagonal entry vanishes), whose
+   * inertia is H's (Sylvester's law) and whose rows have one size whatever the units of the
+   * coordinates: a coordinate whose terms are 10^12 times another's does not make the other's
+   * eigenvalues look like zeros. A pivot that is not positive definite is split by the symmetric
+   * eigendecomposition of its scaled form; an eigenvalue with |value| <= zero_tol * max(1, |H~|)
+   * (Gershgorin's bound of H~: the size of what the elimination rounds, so that a pivot lost to
+   * round-off in an ill-conditioned H is not taken for a sign) counts as zero and is left out of
+   * the elimination (a pseudo-inverse). Overwrites the LDL^T factorization (factor_ldlt() must be
+   * called again).
    */
   Inertia inertia(double zero_tol) { return eliminate(zero_tol, false); }
 
@@ -379,15 +383,15 @@ class BlockTridiagonal {
   Inertia eliminate(double zero_tol, bool keep) {
     Inertia in;
     indefinite_ = false;
-    const double global = std::max(1.0, gershgorin_bound());
+    const double size = std::max(1.0, jacobi_scaling());
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
       Mat S = diag_[ii];
       if (i > 0) S.noalias() -= off_[ii - 1].transpose() * W_[ii - 1];
-      const double size = std::max(global, diag_[ii].cwiseAbs().maxCoeff());
+      const double* J = scaling_.data() + ii * static_cast<std::size_t>(d_);
       Mat L = S;
       bool pd = false;
-      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L) && !tiny_cholesky_pivot(L, zero_tol * size);
+      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L) && !tiny_cholesky_pivot(L, J, zero_tol * size);
       if (pd) {
         in.positive += d_;
         W_[ii] = off_[ii];
@@ -398,7 +402,10 @@ class BlockTridiagonal {
         }
         continue;
       }
-      Eigen::SelfAdjointEigenSolver<Mat> eig(S);
+      Mat St = S;  // the scaled pivot J S J: its inertia is S's
+      for (int a = 0; a < d_; ++a)
+        for (int b = 0; b < d_; ++b) St(a, b) *= J[a] * J[b];
+      Eigen::SelfAdjointEigenSolver<Mat> eig(St);
       if (eig.info() != Eigen::Success) {
         in.zero += d_;
         W_[ii].setZero();
@@ -416,7 +423,9 @@ class BlockTridiagonal {
           inv(a) = 1 / v;
         }
       }
-      const Mat V = eig.eigenvectors();
+      // S^+ = J (V inv V^T) J from the scaled pivot's eigenvectors.
+      Mat V = eig.eigenvectors();
+      for (int a = 0; a < d_; ++a) V.row(a) *= J[a];
       if (keep) {
         inverse_[ii].noalias() = V * inv.asDiagonal() * V.transpose();
         W_[ii].noalias() = inverse_[ii] * off_[ii];
@@ -426,6 +435,32 @@ class BlockTridiagonal {
       }
     }
     return in;
+  }
+
+  /** Fills scaling_ with J = |H_aa|^{-1/2} per row (1 where the diagonal entry is zero or not
+   *  finite) and returns Gershgorin's bound of J H J. */
+  double jacobi_scaling() {
+    const std::size_t d = static_cast<std::size_t>(d_), n = static_cast<std::size_t>(std::max(n_, 0));
+    assign_within(scaling_, n * d, diag_.capacity() * d, 1.0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (int a = 0; a < d_; ++a) {
+        const double h = std::fabs(diag_[i](a, a));
+        if (h > 0 && std::isfinite(h)) scaling_[i * d + static_cast<std::size_t>(a)] = 1 / std::sqrt(h);
+      }
+    double bound = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double* J = scaling_.data() + i * d;
+      for (int a = 0; a < d_; ++a) {
+        double row = 0;
+        for (int b = 0; b < d_; ++b) {
+          row += std::fabs(diag_[i](a, b)) * J[a] * J[b];
+          if (i + 1 < n) row += std::fabs(off_[i](a, b)) * J[a] * J[d + static_cast<std::size_t>(b)];
+          if (i > 0) row += std::fabs(off_[i - 1](b, a)) * J[a] * (J - d)[b];
+        }
+        bound = std::max(bound, row);
+      }
+    }
+    return bound;
   }
 
   /** n factorizations of size d, each constructed in place: a copy of an Eigen::LLT built with
@@ -482,12 +517,13 @@ class BlockTridiagonal {
     }
     return true;
   }
-  /** Whether a factor of cholesky_in_place has a diagonal entry L(j, j)^2 <= `tiny`: the pivot may
-   *  then have an eigenvalue that counts as zero (L(j, j)^2 bounds the smallest one from above
-   *  only for the last j), and its eigendecomposition decides. */
-  static bool tiny_cholesky_pivot(const Mat& L, double tiny) {
+  /** Whether a factor of cholesky_in_place has a diagonal entry with (J_j L(j, j))^2 <= `tiny`
+   *  (J L is the factor of the scaled pivot J S J): the pivot may then have an eigenvalue that
+   *  counts as zero (L(j, j)^2 bounds the smallest one from above only for the last j), and its
+   *  eigendecomposition decides. */
+  static bool tiny_cholesky_pivot(const Mat& L, const double* J, double tiny) {
     for (int j = 0; j < D; ++j)
-      if (1 / (L(j, j) * L(j, j)) <= tiny) return true;
+      if (J[j] * J[j] / (L(j, j) * L(j, j)) <= tiny) return true;
     return false;
   }
   /** x <- (L L^T)^{-1} x for the factor of cholesky_in_place (inverse diagonal). */
@@ -524,6 +560,7 @@ class BlockTridiagonal {
   std::vector<Eigen::LLT<Mat>> llt_;  ///< pivots' factorizations (dynamic block size)
   std::vector<Mat> factor_;           ///< pivots' Cholesky factors (fixed block sizes)
   std::vector<Mat> inverse_;          ///< pivots' (pseudo-)inverses after factor_indefinite()
+  std::vector<double> scaling_;       ///< the inertia's Jacobi scaling |H_aa|^{-1/2}, n*d
   bool indefinite_ = false;           ///< the last factorization was factor_indefinite()
   mutable Eigen::LLT<Mat> pivot_scratch_;
   std::vector<Level> levels_;

@@ -63,6 +63,9 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   fit(ctx.node_max, n1, 0.0);
   fit(ctx.node_scale, n1, 0.0);
   fit(ctx.node_hq, n1, 0.0);
+  ctx.comp_residual.assign(d, 0.0);
+  ctx.comp_scale.assign(d, 0.0);
+  ctx.comp_hq.assign(d, 0.0);
   ctx.evaluated = Evaluated::nothing;
   ctx.residual = 0;
   ctx.action = 0;
@@ -179,7 +182,15 @@ int compute_residual(Context& ctx) {
   const std::size_t dz = static_cast<std::size_t>(d);
   // The Hessian term of the round-off level needs the full kernel's arrays at ctx.q.
   const bool hessian = ctx.evaluated == Evaluated::full && ctx.D12.size() >= static_cast<std::size_t>(N) * dz * dz;
-#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
+  ctx.comp_residual.assign(dz, 0.0);
+  ctx.comp_scale.assign(dz, 0.0);
+  ctx.comp_hq.assign(dz, 0.0);
+  // Per-component maxima by an array reduction (max is exact in any order: the same for any team).
+  double* c_res = ctx.comp_residual.data();
+  double* c_scale = ctx.comp_scale.data();
+  double* c_hq = ctx.comp_hq.data();
+#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static) \
+    reduction(max : c_res[:d], c_scale[:d], c_hq[:d])
   for (int k = 0; k <= N; ++k) {
     const std::size_t kk = static_cast<std::size_t>(k);
     double* r = ctx.res.data() + kk * dz;
@@ -193,6 +204,8 @@ int compute_residual(Context& ctx) {
         v = a + b;
         if (!std::isfinite(v)) finite = false;
         scale = std::max(scale, std::fabs(a) + std::fabs(b));
+        c_res[i] = std::max(c_res[i], std::fabs(v));
+        c_scale[i] = std::max(c_scale[i], std::fabs(a) + std::fabs(b));
       }
       r[i] = v;
       mx = std::max(mx, std::fabs(v));
@@ -218,6 +231,7 @@ int compute_residual(Context& ctx) {
           row += std::fabs(A[i * d + j] * q0[j]) + std::fabs(B[i * d + j] * q0[j]) + std::fabs(Cm[j * d + i] * qm[j]) +
                  std::fabs(Cp[i * d + j] * qp[j]);
         hq = std::max(hq, row);
+        c_hq[i] = std::max(c_hq[i], row);
       }
       ctx.node_hq[kk] = hq;
     }

@@ -85,6 +85,11 @@ struct Context {
   double residual_floor = 0;
   /** Size of the terms that cancel in the residual, max_k (|D2(k-1)| + |D1(k)|) (relative tolerance). */
   double residual_scale = 0;
+  /** Per component i (dim values each), over the nodes: the largest |r_{k,i}| (comp_residual), the
+   *  size of its cancelling terms |D2_i(k-1)| + |D1_i(k)| (comp_scale) and its row of |H_k| |q|
+   *  (comp_hq, full evaluations only). The relative test holds every component to its own scale,
+   *  so that a coordinate whose terms are orders of magnitude smaller than another's is solved too. */
+  std::vector<double> comp_residual, comp_scale, comp_hq;
   double action = 0;
   bool action_known = false;     ///< whether `action` belongs to q
 
@@ -226,6 +231,36 @@ std::unique_ptr<Method_> make_stationary_newton(const Options& options, int dim)
 inline double target_residual(const Options& options, const Context& ctx) {
   if (options.tol > 0) return options.tol;
   return std::max(options.rtol * ctx.residual_scale, 10 * ctx.residual_floor);
+}
+
+/** Component i's name for messages: its coordinate, with a prime per derivative (order > 1). */
+inline std::string component_name(const Context& ctx, int i) {
+  const int nc = ctx.ncoords > 0 ? ctx.ncoords : std::max(ctx.dim, 1);
+  const int c = i % nc, derivative = i / nc;
+  std::string name = ctx.model && ctx.model->coords && c < ctx.model->ncoords ? std::string(ctx.model->coords[c])
+                                                                               : std::to_string(i);
+  return name + std::string(static_cast<std::size_t>(derivative), '\'');
+}
+
+/** Component i's round-off level: 16 eps of its terms plus 2 eps of its row of |H| |q|. */
+inline double component_floor(const Context& ctx, int i) {
+  const std::size_t ii = static_cast<std::size_t>(i);
+  const double eps = 2.220446049250313e-16;
+  return 16 * eps * ctx.comp_scale[ii] + 2 * eps * ctx.comp_hq[ii];
+}
+
+/**
+ * The residual that counts as resolved for component i at the context's iterate: Options::tol when
+ * set; else max(rtol x the component's own scale, 10 x its round-off level, 10 x the round-off level
+ * of its terms at the solve's start (`start_scale`, the size of the component's terms at the first
+ * iterate: a component whose terms vanish at the solution, a coordinate at rest, has no scale of its
+ * own there; its residual is then resolved once it is below the rounding of what it was).
+ */
+inline double component_target(const Options& options, const Context& ctx, int i, double start_scale) {
+  if (options.tol > 0) return options.tol;
+  const double eps = 2.220446049250313e-16;
+  return std::max({options.rtol * ctx.comp_scale[static_cast<std::size_t>(i)], 10 * component_floor(ctx, i),
+                   160 * eps * start_scale});
 }
 
 /** Number of threads to use for Options::threads (0: all cores). */

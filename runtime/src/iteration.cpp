@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 namespace pardel::detail {
@@ -36,16 +37,19 @@ bool Iteration::run_level(bool last) {
   const bool clocked = ctx_.clock != ClockMode::none;
   bool recheck_times = false;  // the nodes moved to the clock's times at the tolerance: check them again
   int placements = 0;          // such moves since the last step
+  if (clocked && times_stop_increasing()) return false;  // the start's times
   for (;;) {
     if (clocked && level_.since_clock >= options_.clock_update_every) {
       partition_.update_times(ctx_, Positions::follow_times);
+      if (times_stop_increasing()) return false;
       method_.times_changed();
       level_.since_clock = 0;
     }
     int bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
     if (bad >= 0) return non_finite_residual(bad);
+    if (start_scale_.size() != ctx_.comp_scale.size()) start_scale_ = ctx_.comp_scale;  // the solve's first iterate
     double r = ctx_.residual;
-    if (clocked && r <= target_residual() && (level_.since_clock > 0 || recheck_times)) {
+    if (clocked && at_target(r, target_residual()) && (level_.since_clock > 0 || recheck_times)) {
       // Declare convergence only with node times consistent with this trajectory: the times the
       // clock gives at these nodes, which keep their values (moved along the trajectory, they would
       // no longer be where the clock was read).
@@ -53,10 +57,11 @@ bool Iteration::run_level(bool last) {
       ctx_.t_kept = ctx_.t;
       ctx_.hk_kept = ctx_.hk;
       partition_.update_times(ctx_, Positions::stay);
+      if (times_stop_increasing()) return false;
       method_.times_changed();
       level_.since_clock = 0;
       bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
-      if (bad >= 0 || !(ctx_.residual <= target_residual())) {
+      if (bad >= 0 || !at_target(ctx_.residual, target_residual())) {
         // The times had not settled (the DEL residual at the clock's times is above the target):
         // back to the previous times, from which the nodes move along the trajectory to the
         // clock's times; the times are checked again when the residual is at the target.
@@ -64,6 +69,7 @@ bool Iteration::run_level(bool last) {
         std::swap(ctx_.hk, ctx_.hk_kept);
         ctx_.evaluated = Evaluated::nothing;
         partition_.update_times(ctx_, Positions::follow_times);
+        if (times_stop_increasing()) return false;
         bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
         if (bad >= 0) return non_finite_residual(bad);
         if (times_unsettled(++placements)) return false;
@@ -86,8 +92,11 @@ bool Iteration::run_level(bool last) {
     bool settled = false;
     if (converged_at_tolerance(last, r, target, &settled) || intermediate_level_settled(last, r, target, &settled))
       return settled;
-    if (r < 0.99 * best_residual_) {
-      best_residual_ = r;
+    // Progress is measured against the test itself, so that a component far from its own target
+    // counts as progress while the largest residual stays put.
+    const double distance = distance_to_target(r, target);
+    if (distance < 0.99 * best_residual_) {
+      best_residual_ = distance;
       best_iteration_ = iteration_;
     }
     if (answer_at_tolerance(last, r, target, &settled)) return settled;
@@ -102,6 +111,34 @@ bool Iteration::run_level(bool last) {
     ++level_.since_clock;
     placements = 0;
   }
+}
+
+/** Under a clock: whether the node times fail to increase (the model's clock is <= 0, or not
+ *  finite, on an interval). At the start (the guess or a resumed iterate) that is invalid input;
+ *  later the iterate has left the region where the clock is positive, and the solve ends diverged.
+ *  Either way nothing is called converged with time running backwards. */
+bool Iteration::times_stop_increasing() {
+  int bad = -1;
+  for (int k = 0; k < ctx_.N && bad < 0; ++k)
+    if (!(ctx_.t[static_cast<std::size_t>(k) + 1] > ctx_.t[static_cast<std::size_t>(k)])) bad = k;
+  if (partition_.all(bad < 0)) return false;
+  std::string where = "on an interval";
+  if (bad >= 0)
+    where = "on interval " + std::to_string(bad) +
+            format(" (t = %.6g to %.6g)", ctx_.t[static_cast<std::size_t>(bad)], ctx_.t[static_cast<std::size_t>(bad) + 1]);
+  const bool start = iteration_ == 0 && level_.level_it == 0 && !resumed_level_;
+  if (start) {
+    finish(Termination::invalid_input,
+           "the node times do not increase " + where +
+               " at the start: the model's clock (dt/ds) must be positive and finite along the path; a guess on "
+               "which it is <= 0 gives no trajectory in time");
+  } else {
+    finish(Termination::diverged,
+           "the node times stopped increasing " + where + format(" at iteration %.0f", static_cast<double>(iteration_)) +
+               ": the iterate left the region where the model's clock (dt/ds) is positive; the iterate is returned "
+               "but is no trajectory in time");
+  }
+  return true;
 }
 
 /** At the tolerance under a clock, the nodes moved to the clock's times `placements` times
@@ -124,8 +161,8 @@ bool Iteration::converged_at_tolerance(bool last, double r, double target, bool*
   // so a small residual bounds only the rough part of the error. Newton takes one step on each
   // level before it stops; that step removes a smooth error.
   if (whole_system_newton(options_.method) && level_.level_it == 0) return false;
-  const bool at_target = r <= target && method_.accept_stop(ctx_, last);
-  if (!at_target) return false;
+  const bool stop = at_target(r, target) && method_.accept_stop(ctx_, last);
+  if (!stop) return false;
   if (last) {
     finish(Termination::converged, converged_message(r, target));
     *settled = false;
@@ -156,7 +193,7 @@ bool Iteration::intermediate_level_settled(bool last, double r, double target, b
  *  nothing better in 200 iterations: this point is the answer (the point assessment says what
  *  it is). */
 bool Iteration::answer_at_tolerance(bool last, double r, double target, bool* settled) {
-  if (!(r <= target && iteration_ - best_iteration_ >= 200)) return false;
+  if (!(at_target(r, target) && iteration_ - best_iteration_ >= 200)) return false;
   *settled = !last;
   if (last) finish(Termination::converged, converged_message(r, target));
   return true;
@@ -165,6 +202,14 @@ bool Iteration::answer_at_tolerance(bool last, double r, double target, bool* se
 /** At the round-off level of the residual and no 1% improvement in 200 iterations. */
 bool Iteration::stalled_at_round_off(double r, double target) {
   if (!(r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200)) return false;
+  if (unresolved_component() >= 0) {
+    finish(Termination::stalled,
+           format("stalled: the DEL residual %.3g is at the round-off level %.3g of the largest terms and no "
+                  "component has come 1%% closer to its own target in 200 iterations",
+                  r, ctx_.residual_floor) +
+               unresolved_note());
+    return true;
+  }
   finish(Termination::stalled,
          format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and has not "
                 "improved in 200 iterations; tol %.3g cannot be reached in double precision",
@@ -175,7 +220,8 @@ bool Iteration::stalled_at_round_off(double r, double target) {
 bool Iteration::reached_max_iterations(double r, double target) {
   if (iteration_ < options_.max_iterations) return false;
   finish(Termination::max_iterations, format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
-                                             static_cast<double>(options_.max_iterations), r, target));
+                                             static_cast<double>(options_.max_iterations), r, target) +
+                                          (r <= target ? unresolved_note() : std::string()));
   return true;
 }
 
@@ -197,7 +243,7 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
   *settled = false;
   if (!partition_.agree_on_outcome(outcome)) {
     // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer.
-    if (outcome.failure == Termination::stalled && r <= target) {
+    if (outcome.failure == Termination::stalled && at_target(r, target)) {
       *settled = !last;
       if (last) finish(Termination::converged, converged_message(r, target));
       return true;
@@ -219,6 +265,41 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
     return true;
   }
   return false;
+}
+
+int Iteration::unresolved_component() const {
+  const int d = static_cast<int>(ctx_.comp_residual.size());
+  for (int i = 0; i < d; ++i) {
+    const double start = static_cast<std::size_t>(i) < start_scale_.size() ? start_scale_[static_cast<std::size_t>(i)] : 0.0;
+    if (!(ctx_.comp_residual[static_cast<std::size_t>(i)] <= component_target(options_, ctx_, i, start))) return i;
+  }
+  return -1;
+}
+
+double Iteration::distance_to_target(double r, double target) const {
+  auto ratio = [](double a, double b) {
+    if (a == 0) return 0.0;
+    return b > 0 ? a / b : std::numeric_limits<double>::infinity();
+  };
+  double distance = ratio(r, target);
+  const int d = static_cast<int>(ctx_.comp_residual.size());
+  for (int i = 0; i < d; ++i) {
+    const std::size_t ii = static_cast<std::size_t>(i);
+    const double start = ii < start_scale_.size() ? start_scale_[ii] : 0.0;
+    distance = std::max(distance, ratio(ctx_.comp_residual[ii], component_target(options_, ctx_, i, start)));
+  }
+  return distance;
+}
+
+std::string Iteration::unresolved_note() const {
+  const int i = unresolved_component();
+  if (i < 0) return std::string();
+  const std::size_t ii = static_cast<std::size_t>(i);
+  const double start = ii < start_scale_.size() ? start_scale_[ii] : 0.0;
+  return "; component " + component_name(ctx_, i) +
+         format("'s equations are resolved only to %.3g, above its own target %.3g (rtol x the size %.3g of its "
+                "terms): the solve is not converged",
+                ctx_.comp_residual[ii], component_target(options_, ctx_, i, start), ctx_.comp_scale[ii]);
 }
 
 bool Iteration::non_finite_residual(int node) {
@@ -332,6 +413,7 @@ void Iteration::capture_counters(SolverState& st) const {
   st.level_checkpoint_residual = level_.r_checkpoint;
   st.seconds = seconds();
   st.history = s_.history;
+  st.component_start_scale = start_scale_;
 }
 
 void Iteration::continue_count(const SolverState& st) {
@@ -341,6 +423,7 @@ void Iteration::continue_count(const SolverState& st) {
   r_initial_ = st.initial_residual;
   have_initial_ = st.have_initial_residual;
   s_.history = st.history;
+  start_scale_ = st.component_start_scale;
   start_ -= steady_seconds(st.seconds);
 }
 

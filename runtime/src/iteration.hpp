@@ -11,6 +11,7 @@
 #include <chrono>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "engine.hpp"
 
@@ -90,6 +91,7 @@ class Iteration {
   bool answer_at_tolerance(bool last, double r, double target, bool* settled);
   bool stalled_at_round_off(double r, double target);
   bool times_unsettled(int placements);
+  bool times_stop_increasing();
   /** Re-placements of the nodes at the tolerance, in a row, before times_unsettled(). */
   static constexpr int kMaxPlacements = 20;
   /** A converged message warns where the round-off level sets the target above this many rtol. */
@@ -102,6 +104,17 @@ class Iteration {
 
   /** The residual that counts as converged at the current iterate (Options::rtol or tol). */
   double target_residual() const { return detail::target_residual(options_, ctx_); }
+  /** The first component whose equations do not hold yet against its own target
+   *  (detail::component_target), or -1 when every one holds. */
+  int unresolved_component() const;
+  /** Whether the DEL equations hold at the current iterate: the residual at most `target` and every
+   *  component at most its own target. */
+  bool at_target(double r, double target) const { return r <= target && unresolved_component() < 0; }
+  /** How far the iterate is from the test, max(r / target, max_i r_i / target_i): at most 1 when
+   *  the equations hold; the stall rules watch it for progress. */
+  double distance_to_target(double r, double target) const;
+  /** ", component NAME's equations are resolved to X > its target Y" for an unresolved component. */
+  std::string unresolved_note() const;
   std::string converged_message(double r, double target) const;
   bool should_record();
   bool record();
@@ -116,6 +129,8 @@ class Iteration {
   LevelCounters level_;
   bool resumed_level_ = false;
   long iteration_ = 0, next_record_ = 0;
+  /** Per component: the size of its terms at the solve's first iterate (detail::component_target). */
+  std::vector<double> start_scale_;
   double r_initial_ = 0, last_good_residual_ = 0;
   double best_residual_ = std::numeric_limits<double>::infinity();
   long best_iteration_ = 0;

@@ -47,10 +47,11 @@ struct NodeScratch {
   IntervalDerivatives left, right, ahead, a, b;  // rolling buffer; a, b: the node's own re-evaluations
   // What the thread found in its range.
   double residual = 0, scale = 0, qmax = 0;
+  std::vector<double> comp_residual, comp_scale;  ///< per component: max |r_i| and max |D2_i| + |D1_i|
   int bad_residual = -1, singular = -1, bad_value = -1;
   explicit NodeScratch(int d)
       : M(Mat::Zero(d, d)), r(Vec::Zero(d)), x(Vec::Zero(d)), dx(Vec::Zero(d)), lu(d), left(d), right(d), ahead(d),
-        a(d), b(d) {}
+        a(d), b(d), comp_residual(static_cast<std::size_t>(d)), comp_scale(static_cast<std::size_t>(d)) {}
 };
 
 /** Solves M dx = r for a node block and subtracts dx from x; false when M is singular (reciprocal
@@ -92,8 +93,7 @@ class JacobiSweeps : public Method_ {
   using RowMap = Eigen::Map<const Eigen::Matrix<double, D, D, (D == 1 ? Eigen::ColMajor : Eigen::RowMajor)>>;
 
   JacobiSweeps(const Options& o, bool nonlinear)
-      : nonlinear_(nonlinear), damping_(o.damping), substeps_(o.newton_substeps),
-        inner_tol_(0.1 * o.tol) {}
+      : nonlinear_(nonlinear), damping_(o.damping), substeps_(o.newton_substeps), tol_(o.tol), rtol_(o.rtol) {}
 
   void reset(Context& ctx) override {
     scratch_.clear();
@@ -136,6 +136,17 @@ class JacobiSweeps : public Method_ {
     }
     ctx.residual_floor = 16 * std::numeric_limits<double>::epsilon() * scale;
     ctx.residual_scale = scale;
+    const std::size_t d = static_cast<std::size_t>(ctx.dim);
+    ctx.comp_residual.assign(d, 0.0);
+    ctx.comp_scale.assign(d, 0.0);
+    ctx.comp_hq.assign(d, 0.0);
+    for (int t = 0; t < team_; ++t) {
+      const NodeScratch<D>& s = scratch_[static_cast<std::size_t>(t)];
+      for (std::size_t i = 0; i < d; ++i) {
+        ctx.comp_residual[i] = std::max(ctx.comp_residual[i], s.comp_residual[i]);
+        ctx.comp_scale[i] = std::max(ctx.comp_scale[i], s.comp_scale[i]);
+      }
+    }
     ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : residual;
     ctx.action_known = false;
     have_next_ = true;
@@ -176,6 +187,8 @@ class JacobiSweeps : public Method_ {
     double residual = 0, residual_scale = 0, qmax = 0;
     int bad_residual = -1, singular = -1, bad_value = -1;
     double probe = 0;
+    std::fill(s.comp_residual.begin(), s.comp_residual.end(), 0.0);
+    std::fill(s.comp_scale.begin(), s.comp_scale.end(), 0.0);
     auto eval = [&](int k, IntervalDerivatives& out) {
       const std::size_t kk = static_cast<std::size_t>(k);
       kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q + kk * dz, q + (kk + 1) * dz, p, out.D1.data(), out.D2.data(),
@@ -207,6 +220,8 @@ class JacobiSweeps : public Method_ {
             v = a + b;
             if (!std::isfinite(v)) finite = false;
             scale = std::max(scale, std::fabs(a) + std::fabs(b));
+            s.comp_residual[static_cast<std::size_t>(i)] = std::max(s.comp_residual[static_cast<std::size_t>(i)], std::fabs(v));
+            s.comp_scale[static_cast<std::size_t>(i)] = std::max(s.comp_scale[static_cast<std::size_t>(i)], std::fabs(a) + std::fabs(b));
           }
           s.r[i] = v;
           mx = std::max(mx, std::fabs(v));
@@ -228,12 +243,19 @@ class JacobiSweeps : public Method_ {
                s.a.D11.data(), s.a.D22.data());
           kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], s.x.data(), qb, p, s.b.D1.data(), s.b.D2.data(), s.b.D11.data(),
                s.b.D22.data());
-          double rmax = 0;
+          // The inner Newton stops when every component of the node's equations is a tenth of the
+          // way to the outer test: 0.1 tol, or 0.1 rtol of the component's own terms (never below
+          // their rounding).
+          bool inner_done = true;
           for (int i = 0; i < d; ++i) {
-            s.r[i] = f[i] ? s.a.D2[static_cast<std::size_t>(i)] + s.b.D1[static_cast<std::size_t>(i)] : 0.0;
-            rmax = std::max(rmax, std::fabs(s.r[i]));
+            const std::size_t ii = static_cast<std::size_t>(i);
+            s.r[i] = f[i] ? s.a.D2[ii] + s.b.D1[ii] : 0.0;
+            const double terms = f[i] ? std::fabs(s.a.D2[ii]) + std::fabs(s.b.D1[ii]) : 0.0;
+            const double inner_tol =
+                tol_ > 0 ? 0.1 * tol_ : std::max(0.1 * rtol_, 160 * std::numeric_limits<double>::epsilon()) * terms;
+            if (!(std::fabs(s.r[i]) <= inner_tol)) inner_done = false;
           }
-          if (nonlinear_ && rmax <= inner_tol_) break;
+          if (nonlinear_ && inner_done) break;
           s.M = RowMap(s.a.D22.data(), d, d);
           s.M += RowMap(s.b.D11.data(), d, d);
           fine = step(s, f, d);
@@ -279,7 +301,7 @@ class JacobiSweeps : public Method_ {
   bool nonlinear_;
   double damping_;
   int substeps_;
-  double inner_tol_;
+  double tol_, rtol_;  ///< the outer tolerances; the inner Newton of the nonlinear sweep stops at a tenth of them
   std::vector<NodeScratch<D>> scratch_;
   std::vector<double> next_;  ///< the next iterate, written by evaluate()
   bool have_next_ = false;

@@ -110,9 +110,15 @@ Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, 
   return start;
 }
 
-void note_stopped_level(const Problem& problem, int reached, Summary& summary) {
-  if (summary.termination != Termination::converged && reached != problem.N)
-    summary.message += " (stopped at the refinement level N = " + std::to_string(reached) + ")";
+void note_stopped_level(const Problem& problem, Trajectory& trajectory, Summary& summary) {
+  const int reached = trajectory.N;
+  if (summary.termination == Termination::converged || reached == problem.N || reached < 1 || trajectory.q.empty())
+    return;
+  trajectory = resample(problem, trajectory, problem.N);
+  summary.N = problem.N;
+  summary.message += " (stopped at the refinement level N = " + std::to_string(reached) +
+                     "; the trajectory returned is that level's iterate interpolated to the requested N = " +
+                     std::to_string(problem.N) + ")";
 }
 
 namespace {

@@ -120,9 +120,10 @@ struct LevelSteps {
 long run_levels(const std::vector<int>& levels, std::size_t first, const SolverState* resume,
                 const SolverState* warm, const LevelSteps& steps);
 
-/** Appends to a summary that did not converge the note that it stopped at the refinement level
- *  N = `reached` below problem.N (nothing when reached == problem.N). */
-void note_stopped_level(const Problem& problem, int reached, Summary& summary);
+/** A solve that did not converge and stopped at a refinement level below problem.N: its
+ *  trajectory (that level's iterate) is interpolated to the requested grid, so that the result
+ *  has the shape asked for, and the message says so (nothing when the level is problem.N). */
+void note_stopped_level(const Problem& problem, Trajectory& trajectory, Summary& summary);
 
 // ---- resuming an interrupted solve (Options::resume_from, warm_start), in one process or over ranks
 

@@ -194,14 +194,17 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     driver.capture(summary.state, static_cast<int>(l));
     if (starts.extrapolates()) summary.state.previous_level = starts.previous();
   }
-  // What the returned point is: from Newton's factorization at a minimum where it stopped, else
-  // from a new one, the method's storage released first so as not to add to the peak memory.
-  if (!method->assess(driver.context(), summary.point)) {
+  // What the returned point is (a converged one only): from Newton's factorization at a minimum
+  // where it stopped, else from a new one, the method's storage released first so as not to add
+  // to the peak memory.
+  if (!detail::point_assessed(summary.termination)) {
+    summary.point = detail::not_assessed(summary.termination);
+  } else if (!method->assess(driver.context(), summary.point)) {
     method.reset();
     detail::assess(driver.context(), summary.point);
   }
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  detail::note_stopped_level(problem, trajectory.N, summary);
+  detail::note_stopped_level(problem, trajectory, summary);
   if (warm) detail::note_warm_start(*warm, summary);
   return summary;
 }

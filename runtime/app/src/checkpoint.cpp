@@ -136,6 +136,7 @@ json body_json(const Checkpoint& c) {
       {"level_checkpoint_residual", number(s.level_checkpoint_residual)},
       {"seconds", number(s.seconds)},
       {"method_state", numbers(s.method_state)},
+      {"component_start_scale", numbers(s.component_start_scale)},
       {"dim", s.trajectory.dim},
       {"t", numbers(s.trajectory.t)},
       {"q", numbers(s.trajectory.q)},
@@ -261,6 +262,12 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
   s.level_checkpoint_residual = rd.real(st, "level_checkpoint_residual", "state");
   s.seconds = rd.real(st, "seconds", "state");
   s.method_state = rd.reals(st, "method_state", "state");
+  if (st.contains("component_start_scale")) {  // absent in checkpoints written before it was kept
+    s.component_start_scale = rd.reals(st, "component_start_scale", "state");
+    if (!s.component_start_scale.empty() && s.component_start_scale.size() != static_cast<std::size_t>(c.dim))
+      rd.fail(fmt::format("key state.component_start_scale has {} values; dim = {} needs {}",
+                          s.component_start_scale.size(), c.dim, c.dim));
+  }
   s.trajectory.N = s.N;
   s.trajectory.dim = static_cast<int>(rd.integer(st, "dim", "state", 1, 1 << 20));
   s.trajectory.t = rd.reals(st, "t", "state");

@@ -190,6 +190,9 @@ struct SolverState {
   std::vector<double> method_state;     ///< the method's own (newton: its trust region; hybrid: its
                                         ///< phase and Newton's state); jacobi methods none
   std::vector<IterationRecord> history; ///< the history recorded so far
+  /** Per component, the size of its terms at the solve's first iterate (the convergence test's
+   *  reference for a component at rest; empty: taken from the resumed iterate). */
+  std::vector<double> component_start_scale;
   /** newton with refinement: the solution of the level before `level` (N = 0: none), which with
    *  this level's solution extrapolates the start of the next level. */
   Trajectory previous_level;

@@ -103,6 +103,7 @@ struct Local {
   std::vector<unsigned char> global_free;  ///< (hi-lo+1)*dim
   std::vector<double> interval_scratch;    ///< one value per owned interval
   int u0 = 0, u1 = -1;                     ///< owned unknown nodes (global), u0 >= 1, u1 <= N-1
+  std::vector<double> reduce_buffer;       ///< the residual reduction's in and out (globalize_residual)
 
   int owned_intervals() const { return layout.last_interval() - layout.first_interval() + 1; }
   int owned_unknowns() const { return u1 - u0 + 1; }
@@ -366,13 +367,30 @@ int globalize_residual(Local& local, int local_bad) {
   Context& ctx = local.ctx;
   // One reduction: max residual, max round-off level (non-finite nodes are skipped by both, as
   // in compute_residual) and the lowest non-finite node as the max of its negative.
+  // The per-component maxima (residual, scale, |H||q| row) travel in the same reduction.
   const bool bad_here = local_bad >= 0;
-  double in[4] = {bad_here ? 0.0 : ctx.residual, ctx.residual_floor,
-                  bad_here ? -static_cast<double>(local.layout.lo + local_bad) : -1e300, ctx.residual_scale};
-  double out[4] = {0, 0, 0, 0};
-  MPI_Allreduce(in, out, 4, MPI_DOUBLE, MPI_MAX, local.comm);
+  const std::size_t d = static_cast<std::size_t>(ctx.dim), n = 4 + 3 * d;
+  std::vector<double>& buf = local.reduce_buffer;
+  if (buf.size() != 2 * n) buf.assign(2 * n, 0.0);  // once: the size never changes
+  double* in = buf.data();
+  double* out = buf.data() + n;
+  in[0] = bad_here ? 0.0 : ctx.residual;
+  in[1] = ctx.residual_floor;
+  in[2] = bad_here ? -static_cast<double>(local.layout.lo + local_bad) : -1e300;
+  in[3] = ctx.residual_scale;
+  for (std::size_t i = 0; i < d; ++i) {
+    in[4 + i] = ctx.comp_residual[i];
+    in[4 + d + i] = ctx.comp_scale[i];
+    in[4 + 2 * d + i] = ctx.comp_hq[i];
+  }
+  MPI_Allreduce(in, out, static_cast<int>(n), MPI_DOUBLE, MPI_MAX, local.comm);
   ctx.residual_floor = out[1];
   ctx.residual_scale = out[3];
+  for (std::size_t i = 0; i < d; ++i) {
+    ctx.comp_residual[i] = out[4 + i];
+    ctx.comp_scale[i] = out[4 + d + i];
+    ctx.comp_hq[i] = out[4 + 2 * d + i];
+  }
   if (out[2] > -1e300) {
     ctx.residual = std::numeric_limits<double>::quiet_NaN();
     return static_cast<int>(-out[2]);
@@ -995,11 +1013,13 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
     driver.capture(summary.state, static_cast<int>(l), trajectory);
     if (rank == 0 && starts.extrapolates()) summary.state.previous_level = starts.previous();
   }
-  pardel::detail::note_stopped_level(problem, trajectory.N, summary);
+  pardel::detail::note_stopped_level(problem, trajectory, summary);
   // What the returned point is; the method's storage is released first, as in one process.
   method.reset();
-  if (summary.termination != Termination::invalid_input && summary.termination != Termination::non_finite)
+  if (pardel::detail::point_assessed(summary.termination))
     assess_distributed(options, local, summary.point);
+  else
+    summary.point = pardel::detail::not_assessed(summary.termination);
   if (warm) pardel::detail::note_warm_start(*warm, summary);
   return summary;
 }
