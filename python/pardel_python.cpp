@@ -4,8 +4,9 @@
  * runtime (pardel::runtime), the model loader (pardel::model_loader) and the application library
  * (pardel::app: the scene reader, summary.json, sweeps). Keyword arguments of pardel.solve are
  * written as a scene (a TOML table) and read by the scene reader, so their checks and messages are
- * those of `pardel solve`; solves run with the GIL released and stop at Ctrl-C through
- * Options::on_iteration; results come back as NumPy arrays and summary.json's dictionary (as text).
+ * those of `pardel solve` (the package checks the arguments' types before); solves and .lag
+ * compiles run with the GIL released and stop at Ctrl-C (solves through Options::on_iteration);
+ * results come back as NumPy arrays and summary.json's dictionary (as text).
  * Sweeps are pardel::app's (`pardel sweep` without its command line): the variants run on a worker
  * thread while the calling thread watches for Ctrl-C.
  */
@@ -55,12 +56,117 @@ class InputError : public std::runtime_error {
 /** pardel.ModelWarning (a UserWarning), set when the module is initialized. */
 PyObject* g_model_warning = nullptr;
 
-/** A bundled name, or a .lag path compiled on first use (the CLI's resolver). The generator's
- *  warnings about a .lag model (model_warnings: kept with its cache entry, so also when an earlier
- *  process compiled it) are issued as a pardel.ModelWarning, once per model and process. Every
- *  caller holds the GIL (models are resolved before a solve or sweep releases it). */
+/** How often, at most, a solve, a sweep or a model compile looks at Python's signals. */
+constexpr std::chrono::milliseconds kSignalCheckPeriod(50);
+
+/** The Python exception (KeyboardInterrupt) that stopped the wait for a model compile, kept until
+ *  the entry point that called the resolver raises it (the scene reader turns whatever its
+ *  resolver throws into a SceneError); guarded by the GIL. Never freed (freeing a Python object
+ *  after the interpreter is gone would crash at exit). */
+std::unique_ptr<py::error_already_set>& interrupted_compile() {
+  static auto* pending = new std::unique_ptr<py::error_already_set>;
+  return *pending;
+}
+
+/** Compiles left to finish in the background after Ctrl-C; joined at exit (atexit). Never freed:
+ *  a std::thread still joinable when destroyed would end the process. */
+std::vector<std::thread>& background_compiles() {
+  static auto* threads = new std::vector<std::thread>;
+  return *threads;
+}
+
+void join_background_compiles() {
+  std::vector<std::thread> threads;
+  threads.swap(background_compiles());
+  py::gil_scoped_release release;
+  for (std::thread& t : threads) t.join();
+}
+
+/** Raised where the wait for a compile was interrupted; the entry point raises the Python
+ *  exception kept in interrupted_compile() instead. */
+struct CompileInterrupted : std::runtime_error {
+  CompileInterrupted() : std::runtime_error("interrupted while compiling a model") {}
+};
+
+/** Runs `body` (an entry point that may resolve models) and raises a KeyboardInterrupt that
+ *  stopped a compile inside it as itself, whatever the scene reader made of it. */
+template <class Body>
+auto raising_interrupts(Body&& body) -> decltype(body()) {
+  try {
+    return body();
+  } catch (...) {
+    if (interrupted_compile()) {
+      std::unique_ptr<py::error_already_set> pending = std::move(interrupted_compile());
+      throw std::move(*pending);
+    }
+    throw;
+  }
+}
+
+/** pardel::resolve_model with the GIL released: a .lag file is compiled (seconds) on a worker
+ *  thread while this one checks Python's signals every 50 ms, so other Python threads run during
+ *  the compile and Ctrl-C stops the wait at once (KeyboardInterrupt); the compile then finishes in
+ *  the background and its cache entry is complete for the next load. A bundled name is found at
+ *  once, with the GIL. */
+const pardel_model* resolve_releasing_gil(const std::string& spec) {
+  const bool path = spec.find('/') != std::string::npos ||
+                    (spec.size() >= 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
+  if (!path) return pardel::resolve_model(spec);
+  struct Job {
+    std::mutex mutex;
+    std::condition_variable finished;
+    bool done = false;
+    const pardel_model* model = nullptr;
+    std::exception_ptr failure;
+  };
+  auto job = std::make_shared<Job>();
+  std::thread worker([job, spec] {
+    const pardel_model* model = nullptr;
+    std::exception_ptr failure;
+    try {
+      model = pardel::resolve_model(spec);
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    {
+      const std::lock_guard<std::mutex> lock(job->mutex);
+      job->model = model;
+      job->failure = failure;
+      job->done = true;
+    }
+    job->finished.notify_all();
+  });
+  std::unique_ptr<py::error_already_set> pending;
+  {
+    py::gil_scoped_release release;
+    std::unique_lock<std::mutex> lock(job->mutex);
+    while (!job->finished.wait_for(lock, kSignalCheckPeriod, [&job] { return job->done; })) {
+      lock.unlock();
+      {
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() != 0) pending = std::make_unique<py::error_already_set>();
+      }
+      if (pending) break;
+      lock.lock();
+    }
+  }
+  if (pending) {
+    background_compiles().push_back(std::move(worker));
+    interrupted_compile() = std::move(pending);
+    throw CompileInterrupted();
+  }
+  worker.join();
+  if (job->failure) std::rethrow_exception(job->failure);
+  return job->model;
+}
+
+/** A bundled name, or a .lag path compiled on first use (the CLI's resolver) with the GIL
+ *  released. The generator's warnings about a .lag model (model_warnings: kept with its cache
+ *  entry, so also when an earlier process compiled it) are issued as a pardel.ModelWarning, once
+ *  per model and process. Every caller holds the GIL (models are resolved before a solve or sweep
+ *  releases it) and is an entry point wrapped in raising_interrupts. */
 const pardel_model* resolve_spec(const std::string& spec) {
-  const pardel_model* model = pardel::resolve_model(spec);
+  const pardel_model* model = resolve_releasing_gil(spec);
   static std::vector<const pardel_model*> reported;
   if (model && std::find(reported.begin(), reported.end(), model) == reported.end()) {
     reported.push_back(model);
@@ -344,9 +450,6 @@ Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const
   return resample(problem, from, problem.N);
 }
 
-/** How often, at most, a solve looks at Python's signals. */
-constexpr std::chrono::milliseconds kSignalCheckPeriod(50);
-
 /**
  * Solves a scene with the GIL released. Every recorded iteration calls `on_iteration` (with the
  * GIL) when given, and at most every 50 ms checks Python's signals; a pending exception
@@ -378,7 +481,10 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
     if (!on_iteration.is_none()) {
       try {
         const py::object answer = on_iteration(record.iteration, record.N, record.residual, record.action);
-        if (!answer.is_none() && !answer.cast<bool>()) {
+        // bool(answer) as Python takes it; an answer without a truth value (an array) raises its error
+        const int truth = answer.is_none() ? 1 : PyObject_IsTrue(answer.ptr());
+        if (truth < 0) throw py::error_already_set();
+        if (truth == 0) {
           stopped_by_callback = true;
           return false;
         }
@@ -702,12 +808,41 @@ PYBIND11_MODULE(_pardel, m) {
                               std::move(abi_include)});
       },
       py::arg("generator"), py::arg("python"), py::arg("render_script"), py::arg("compiler"), py::arg("abi_include"));
-  m.def("load_model", &load_model, py::arg("spec"));
-  m.def("scene_from_arguments", &scene_from_arguments, py::arg("model"), py::arg("arguments"));
-  m.def("load_scene", &load_scene, py::arg("path"), py::arg("overrides"));
+  // The bounds of the numeric options (pardel::option_bound), by name: (low, low included, high,
+  // high included, 0 also valid, rule), for the argument checks of the package.
+  py::dict bounds;
+  for (const char* name : {"tol", "rtol", "max_iterations", "damping", "newton_substeps", "threads", "refine_start_N",
+                           "refine_factor", "clock_update_every", "history_every", "refine_settle",
+                           "divergence_factor"}) {
+    const OptionBound* b = pardel::option_bound(name);
+    bounds[name] = py::make_tuple(b->low, b->low_included, b->high, b->high_included, b->zero_allowed, b->rule);
+  }
+  m.attr("option_bounds") = bounds;
+  // Compiles left running by Ctrl-C finish before the process exits.
+  py::module_::import("atexit").attr("register")(py::cpp_function(&join_background_compiles));
+  m.def(
+      "load_model", [](const std::string& spec) { return raising_interrupts([&] { return load_model(spec); }); },
+      py::arg("spec"));
+  m.def(
+      "scene_from_arguments",
+      [](const std::string& model, const py::dict& arguments) {
+        return raising_interrupts([&] { return scene_from_arguments(model, arguments); });
+      },
+      py::arg("model"), py::arg("arguments"));
+  m.def(
+      "load_scene",
+      [](const std::string& path, const std::vector<std::string>& overrides) {
+        return raising_interrupts([&] { return load_scene(path, overrides); });
+      },
+      py::arg("path"), py::arg("overrides"));
   m.def("solve_scene", &solve_scene, py::arg("scene"), py::arg("guess"), py::arg("guess_t"), py::arg("on_iteration"),
         py::arg("threads"));
-  m.def("run_sweep", &run_sweep, py::arg("path"), py::arg("overrides"), py::arg("threads"), py::arg("out"));
+  m.def(
+      "run_sweep",
+      [](const std::string& path, const std::vector<std::string>& overrides, int threads, const std::string& out) {
+        return raising_interrupts([&] { return run_sweep(path, overrides, threads, out); });
+      },
+      py::arg("path"), py::arg("overrides"), py::arg("threads"), py::arg("out"));
   m.def("check_scene", &check_scene, py::arg("scene"), py::arg("q"), py::arg("t"));
   m.def("kernels", &kernels, py::arg("model"), py::arg("discretization"), py::arg("h"), py::arg("t0"), py::arg("t1"),
         py::arg("q0"), py::arg("q1"), py::arg("params"));

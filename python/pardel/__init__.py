@@ -5,12 +5,14 @@ integrators from NumPy arrays, with the bundled models, .lag files or .lag text.
     r = pardel.solve("fuel_nav", q0=[0, 0], qN=[6, 5], T=30, N=200)
     r.status, r.cost, r.q          # "converged", the fuel, an (N+1) x dim array
 
-Everything here translates to the compiled core (pardel._pardel), which calls the pardel runtime,
-the model loader and the scene reader that `pardel solve` uses: the checks, the messages and the
-numbers are the command line's.
+Everything here checks its arguments (TypeError for a wrong type, ValueError for a bad value,
+naming the argument) and translates to the compiled core (pardel._pardel), which calls the pardel
+runtime, the model loader and the scene reader that `pardel solve` uses: the remaining checks,
+their messages and the numbers are the command line's.
 """
 import hashlib
 import json
+import numbers
 import os
 
 import numpy as np
@@ -85,6 +87,7 @@ class Model:
     """A compiled model: name, coords, order, dim, params (name -> default), discretizations."""
 
     def __init__(self, spec):
+        _check_model("pardel.model", "spec", spec)
         self.spec = _model_spec(spec)
         self._handle = _pardel.load_model(self.spec)
         info = self._handle.info()
@@ -131,7 +134,9 @@ class Scene:
 
 def load_scene(path, overrides=()):
     """Reads a scene file; `overrides` are "key.path=value" strings, as `pardel solve --set` takes."""
-    return Scene(_pardel.load_scene(os.fspath(path), list(overrides)))
+    _check_path("pardel.load_scene", "path", path)
+    overrides = _check_overrides("pardel.load_scene", "overrides", overrides)
+    return Scene(_pardel.load_scene(os.fspath(path), overrides))
 
 
 class Result:
@@ -176,21 +181,217 @@ class Result:
 
     def coordinate(self, name):
         """The values of one coordinate (by name) at the nodes."""
+        if name not in self.coords:
+            raise PardelError("pardel.Result.coordinate: unknown coordinate %s (the model's: %s)" % (
+                _shown(name), ", ".join(self.coords)))
         return self.q[:, self.coords.index(name)]
 
     def __repr__(self):
-        return "pardel.Result(%s: %d iterations, residual %.3g, %s = %.6g, %s)" % (
-            self.status, self.iterations, self.residual, self.cost_name,
-            self.cost if self.cost is not None else float("nan"), self.point.get("kind"))
+        # summary.json writes a non-finite residual, action or cost as null (None here).
+        return "pardel.Result(%s: %s iterations, residual %s, %s = %s, %s)" % (
+            self.status, self.iterations, _number_text(self.residual, "%.3g"), self.cost_name,
+            _number_text(self.cost, "%.6g"), (self.point or {}).get("kind"))
+
+    __str__ = __repr__
 
 
-def _guess_arrays(guess):
+def _number_text(value, form):
+    """A number of a summary for repr: `form` for a number, "nan" for None (null: not finite)."""
+    if value is None:
+        return "nan"
+    try:
+        return form % value
+    except TypeError:
+        return repr(value)
+
+
+# ---------------------------------------------------------------------------------------------
+# Argument checks: every public function checks its arguments here before anything reaches the
+# scene text or the compiled core, with Python's exceptions (TypeError for a wrong type, a
+# ValueError, PardelError, for a bad value) and messages that name the argument as the caller
+# wrote it: "pardel.solve: N must be an int between 2 and 100000000, got 1e+30".
+
+_INT_MAX = 2**31 - 1   # int members of pardel::Options (and Problem::N)
+_LONG_MAX = 2**63 - 1  # long members (max_iterations, history_every)
+# The scene reader's bound of grid.N (runtime/app/src/scene.cpp; test_argument_types.py checks
+# that the two agree).
+_MAX_N = 100000000
+# The integer options of pardel::Options and the largest value their C++ type holds; the ranges
+# themselves are the runtime's (pardel::option_bound, _pardel.option_bounds).
+_INT_OPTIONS = {"max_iterations": _LONG_MAX, "newton_substeps": _INT_MAX, "threads": _INT_MAX,
+                "refine_start_N": _INT_MAX, "clock_update_every": _INT_MAX, "history_every": _LONG_MAX}
+_NUMBER_OPTIONS = ("tol", "rtol", "damping", "refine_factor", "refine_settle", "divergence_factor")
+_STRING_OPTIONS = ("discretization", "clock", "method", "linear_solver", "newton_shift")
+
+
+def _shown(value):
+    """A value as a message shows it: short, huge integers as 1e+30."""
+    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_)) and abs(int(value)) >= 10**15:
+        try:
+            return "%.3g" % float(value)
+        except OverflowError:
+            return "an int of %d digits" % len(str(abs(int(value))))
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _kind(value):
+    """The type and value of a wrong argument, for a message: "str 'abc'", "None"."""
+    if value is None:
+        return "None"
+    return "%s %s" % (type(value).__name__, _shown(value))
+
+
+def _is_bool(value):
+    return isinstance(value, (bool, np.bool_))
+
+
+def _is_real(value):
+    """int, float or a NumPy real scalar (not a bool, not complex, not a string)."""
+    return isinstance(value, numbers.Real) and not _is_bool(value)
+
+
+def _check_int(where, name, value, low, high, zero_allowed=False):
+    """An int (or NumPy integer; not a bool) in [low, high] (or 0 where zero_allowed), as a Python int."""
+    if not isinstance(value, numbers.Integral) or _is_bool(value):
+        raise TypeError("%s: %s must be an int, got %s" % (where, name, _kind(value)))
+    value = int(value)
+    if not (low <= value <= high or (zero_allowed and value == 0)):
+        raise PardelError("%s: %s must be an int %sbetween %d and %d, got %s" % (
+            where, name, "0 (off) or " if zero_allowed else "", low, high, _shown(value)))
+    return value
+
+
+def _check_number(where, name, value, finite=True):
+    """A real number (int, float or NumPy real scalar; not bool, str or complex) as a float; NaN
+    refused, and inf too where `finite`."""
+    if not _is_real(value):
+        if isinstance(value, (complex, np.complexfloating)):
+            raise TypeError("%s: %s must be real, got %s" % (where, name, _kind(value)))
+        raise TypeError("%s: %s must be a number, got %s" % (where, name, _kind(value)))
+    try:
+        number = float(value)
+    except OverflowError:
+        raise PardelError("%s: %s is too large for a double, got %s" % (where, name, _shown(value))) from None
+    if finite and (number != number or number in (float("inf"), float("-inf"))):
+        raise PardelError("%s: %s must be a finite number, got %s" % (where, name, _shown(value)))
+    if number != number:
+        raise PardelError("%s: %s must be a number, not NaN" % (where, name))
+    return number
+
+
+def _check_option(where, name, value):
+    """A numeric option of pardel::Options checked against the runtime's bound (option_bound)."""
+    low, low_included, high, high_included, zero_allowed, rule = _pardel.option_bounds[name]
+    if name in _INT_OPTIONS:
+        first = int(low) if low_included else int(low) + 1
+        last = _INT_OPTIONS[name] if high == float("inf") else (int(high) if high_included else int(high) - 1)
+        return _check_int(where, name, value, first, last, zero_allowed)
+    number = _check_number(where, name, value, finite=False)
+    above = number >= low if low_included else number > low
+    below = number <= high if high_included else number < high
+    if not ((above and below) or (zero_allowed and number == 0)):
+        raise PardelError("%s: %s %s, got %s" % (where, name, rule, _shown(value)))
+    return number
+
+
+def _check_string(where, name, value):
+    if not isinstance(value, str):
+        raise TypeError("%s: %s must be a str, got %s" % (where, name, _kind(value)))
+    return value
+
+
+def _check_array(where, name, value, ndim, what):
+    """A real array of `ndim` dimensions with finite elements, as float64: a complex dtype or
+    element is a TypeError (never cast away), so are strings and bools; NaN and inf a ValueError.
+    `what` says what was expected ("a sequence of numbers")."""
+    if value is None or isinstance(value, (str, bytes, bytearray, dict, set, numbers.Number, np.generic)):
+        raise TypeError("%s: %s must be %s, got %s" % (where, name, what, _kind(value)))
+    try:
+        array = np.asarray(value)
+    except (ValueError, TypeError) as error:
+        raise PardelError("%s: %s must be %s (rows of equal length): %s" % (where, name, what, error)) from None
+    if array.dtype.kind == "O":
+        for element in array.flat:
+            if isinstance(element, (complex, np.complexfloating)):
+                raise TypeError("%s: %s must be real, got a complex element %s" % (where, name, _shown(element)))
+            if not _is_real(element):
+                raise TypeError("%s: %s must be %s, got an element %s" % (where, name, what, _kind(element)))
+        try:
+            array = array.astype(float)
+        except (OverflowError, ValueError, TypeError):
+            raise PardelError("%s: %s holds a number too large for a double" % (where, name)) from None
+    elif array.dtype.kind == "c":
+        raise TypeError("%s: %s must be real, got %s" % (where, name, array.dtype))
+    elif array.dtype.kind not in "iuf":
+        raise TypeError("%s: %s must be %s, got elements of dtype %s" % (where, name, what, array.dtype))
+    array = np.array(array, dtype=float)
+    if array.ndim != ndim:
+        raise PardelError("%s: %s must be %s, got an array of shape %s" % (where, name, what, array.shape))
+    if not np.all(np.isfinite(array)):
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(array))[0])
+        raise PardelError("%s: %s must be finite, got %s at index %s" % (
+            where, name, array[bad], bad[0] if len(bad) == 1 else bad))
+    return array
+
+
+def _check_vector(where, name, value):
+    return _check_array(where, name, value, 1, "a sequence of numbers").tolist()
+
+
+def _check_model(where, name, spec):
+    """A model argument: a bundled name, a .lag path, .lag text (str or os.PathLike) or a Model."""
+    if not isinstance(spec, (str, os.PathLike, Model)):
+        raise TypeError("%s: %s must be a bundled model's name, a .lag path, .lag text or a pardel.Model, got %s"
+                        % (where, name, _kind(spec)))
+
+
+def _check_path(where, name, value):
+    if not isinstance(value, (str, bytes, os.PathLike)):
+        raise TypeError("%s: %s must be a path (str or os.PathLike), got %s" % (where, name, _kind(value)))
+
+
+def _check_overrides(where, name, overrides):
+    """key=value strings, as --set takes them: a list or tuple of str (a bare str is refused)."""
+    if isinstance(overrides, (str, bytes)) or not isinstance(overrides, (list, tuple)):
+        raise TypeError("%s: %s must be a list of 'key=value' strings, got %s" % (where, name, _kind(overrides)))
+    for i, item in enumerate(overrides):
+        if not isinstance(item, str):
+            raise TypeError("%s: %s[%d] must be a 'key=value' str, got %s" % (where, name, i, _kind(item)))
+    return list(overrides)
+
+
+def _check_params(where, name, params):
+    """params: a dict name -> number, or a sequence of numbers in declaration order."""
+    if isinstance(params, dict):
+        checked = {}
+        for key, value in params.items():
+            if not isinstance(key, str):
+                raise TypeError("%s: %s: the names must be str, got %s" % (where, name, _kind(key)))
+            checked[key] = _check_number(where, "%s[%r]" % (name, key), value)
+        return checked
+    what = "a dict of numbers by name or a sequence of numbers"
+    return _check_array(where, name, params, 1, what).tolist()
+
+
+def _check_callback(where, name, value):
+    if value is not None and not callable(value):
+        raise TypeError("%s: %s must be callable or None, got %s" % (where, name, _kind(value)))
+
+
+def _check_scene(where, name, scene):
+    if not isinstance(scene, Scene):
+        raise TypeError("%s: %s must be a pardel.Scene (from pardel.load_scene), got %s" % (where, name, _kind(scene)))
+
+
+def _guess_arrays(guess, where="pardel.solve_scene", name="guess"):
     """(q, t) of an initial guess given as an array or a previous Result (t None: uniform)."""
     if guess is None:
         return None, None
     if isinstance(guess, Result):
         return guess.q, guess.t
-    return np.asarray(guess, dtype=float), None
+    what = "an (N+1) x dim array of numbers or a pardel.Result"
+    return _check_array(where, name, guess, 2, what), None
 
 
 def solve_scene(scene, guess=None, threads=None, on_iteration=None):
@@ -201,7 +402,12 @@ def solve_scene(scene, guess=None, threads=None, on_iteration=None):
     recorded iteration; returning False stops the solve (status "interrupted"). Ctrl-C stops it
     too and raises KeyboardInterrupt.
     """
-    q, t = _guess_arrays(guess)
+    where = "pardel.solve_scene"
+    _check_scene(where, "scene", scene)
+    q, t = _guess_arrays(guess, where)
+    if threads is not None:
+        threads = _check_option(where, "threads", threads)
+    _check_callback(where, "on_iteration", on_iteration)
     raw = _pardel.solve_scene(scene._core, q, t, on_iteration, threads)
     return Result(raw, scene.info["model"].info()["coords"])
 
@@ -216,15 +422,67 @@ def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=N
     vertices), clock, method, tol, rtol, max_iterations, damping, newton_substeps, newton_shift,
     linear_solver, threads, refine_start_N, refine_factor, clock_update_every; and history_every,
     refine_settle, divergence_factor of pardel::Options. guess and on_iteration: as in solve_scene.
-    Unknown options and bad values raise PardelError (a ValueError) naming them.
+    A wrong type raises TypeError, a missing argument too; unknown options and bad values raise
+    PardelError (a ValueError); each names the argument.
     """
-    arguments = dict(options)
-    for name, value in (("q0", q0), ("qN", qN), ("T", T), ("N", N)):
-        if value is not None:
-            arguments[name] = value
+    arguments = _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options)
     spec = _model_spec(model)
     scene = Scene(_pardel.scene_from_arguments(spec, arguments))
     return solve_scene(scene, guess=guess, on_iteration=on_iteration)
+
+
+# What each required argument of pardel.solve is, for the message when it is missing.
+_REQUIRED = (("q0", "the boundary point at t0"), ("qN", "the boundary point at t0 + T"),
+             ("T", "the final time minus t0"), ("N", "the number of intervals"))
+
+
+def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options):
+    """pardel.solve's arguments checked (types, NaN, the runtime's option bounds) and turned into
+    plain values for the scene: floats, ints, strs and lists of them. Unknown option names are
+    left to the core, which suggests the nearest valid name."""
+    where = "pardel.solve"
+    _check_model(where, "model", model)
+    given = {"q0": q0, "qN": qN, "T": T, "N": N}
+    missing = [(name, what) for name, what in _REQUIRED if given[name] is None]
+    if missing:
+        raise TypeError("%s: missing argument%s %s" % (where, "s" if len(missing) > 1 else "",
+                        ", ".join("%s (%s)" % m for m in missing)))
+    arguments = {"q0": _check_vector(where, "q0", q0), "qN": _check_vector(where, "qN", qN),
+                 "T": _check_number(where, "T", T), "N": _check_int(where, "N", N, 2, _MAX_N)}
+    if arguments["T"] <= 0:
+        raise PardelError("%s: T must be > 0, got %s" % (where, _shown(T)))
+    _guess_arrays(guess, where)
+    _check_callback(where, "on_iteration", on_iteration)
+    for name, value in options.items():
+        if value is None:
+            continue
+        if name in _STRING_OPTIONS:
+            value = _check_string(where, name, value)
+        elif name in _INT_OPTIONS or name in _NUMBER_OPTIONS:
+            value = _check_option(where, name, value)
+        elif name == "t0":
+            value = _check_number(where, name, value)
+        elif name == "params":
+            value = _check_params(where, name, value)
+        elif name == "polyline":
+            value = _check_array(where, name, value, 2, "a sequence of points (sequences of numbers)").tolist()
+        elif name == "knots":
+            value = _check_knots(where, name, value)
+        arguments[name] = value
+    return arguments
+
+
+def _check_knots(where, name, knots):
+    """knots: a sequence of (t, q) pairs, t a number and q a sequence of numbers."""
+    if isinstance(knots, (str, bytes, dict)) or not isinstance(knots, (list, tuple, np.ndarray)):
+        raise TypeError("%s: %s must be a list of (t, q) pairs, got %s" % (where, name, _kind(knots)))
+    checked = []
+    for i, knot in enumerate(knots):
+        item = "%s[%d]" % (name, i)
+        if isinstance(knot, (str, bytes, dict)) or not isinstance(knot, (list, tuple, np.ndarray)) or len(knot) != 2:
+            raise TypeError("%s: %s must be a pair (t, q), got %s" % (where, item, _kind(knot)))
+        checked.append((_check_number(where, item + ".t", knot[0]), _check_vector(where, item + ".q", knot[1])))
+    return checked
 
 
 class SweepVariant:
@@ -310,9 +568,13 @@ def sweep(path, overrides=(), *, threads=None, out=None):
     Ctrl-C stops the running solve; the outputs (when out is given) hold what was done, and
     KeyboardInterrupt is raised.
     """
-    if threads is not None and (isinstance(threads, bool) or int(threads) != threads
-                                or not 1 <= threads <= _pardel.max_threads):
-        raise PardelError("threads: an integer in [1, %d] was expected, got %r" % (_pardel.max_threads, threads))
+    where = "pardel.sweep"
+    _check_path(where, "path", path)
+    overrides = _check_overrides(where, "overrides", overrides)
+    if threads is not None:
+        threads = _check_int(where, "threads", threads, 1, _pardel.max_threads)
+    if out is not None:
+        _check_path(where, "out", out)
     out = None if out is None else os.fspath(out)
     if out == "":
         raise PardelError("out: a folder was expected, got ''")
@@ -325,20 +587,31 @@ def check(scene, q=None):
     None: the scene's initial guess), as the dictionary of `pardel check --json`; its "certificate"
     also holds free_components, intervals_violating, residual, tol, error and report (the text of
     `pardel check`), the members of pardel::Certificate that --json leaves out."""
-    arr, t = _guess_arrays(q)
+    _check_scene("pardel.check", "scene", scene)
+    arr, t = _guess_arrays(q, "pardel.check", "q")
     return json.loads(_pardel.check_scene(scene._core, arr, t))
 
 
 def kernels(model, discretization, h, t0, t1, q0, q1, params=None):
     """The discrete Lagrangian and its derivatives on one interval (what `pardel kernels` prints):
     a dict Ld, D1, D2, D11, D12, D22. params: dict by name (defaults for the rest) or a list."""
+    where = "pardel.kernels"
+    _check_model(where, "model", model)
+    _check_string(where, "discretization", discretization)
+    h, t0, t1 = (_check_number(where, name, value) for name, value in (("h", h), ("t0", t0), ("t1", t1)))
+    q0, q1 = _check_vector(where, "q0", q0), _check_vector(where, "q1", q1)
+    if params is not None:
+        params = _check_params(where, "params", params)
     m = model if isinstance(model, Model) else Model(model)
+    if discretization not in m.discretizations:
+        raise PardelError("%s: unknown discretization '%s' for model %s (it has: %s)" % (
+            where, discretization, m.name, ", ".join(m.discretizations)))
     if params is None or isinstance(params, dict):
         values = dict(m.params)
         for name, value in (params or {}).items():
             if name not in values:
-                raise PardelError("unknown param '%s' of model %s (it has: %s)" % (name, m.name, ", ".join(values)))
+                raise PardelError("%s: unknown param '%s' of model %s (it has: %s)" % (
+                    where, name, m.name, ", ".join(values)))
             values[name] = value
         params = list(values.values())
-    return _pardel.kernels(m._handle, discretization, float(h), float(t0), float(t1),
-                           [float(v) for v in q0], [float(v) for v in q1], [float(v) for v in params])
+    return _pardel.kernels(m._handle, discretization, h, t0, t1, q0, q1, [float(v) for v in params])

@@ -1,6 +1,7 @@
 """Shared fixtures of the Python module's tests: a model no bundled example resembles (a planar
 anisotropic spring, written here as .lag text) and its exact discrete solutions."""
 import math
+import uuid
 
 import numpy as np
 import pytest
@@ -42,3 +43,20 @@ def exact_discrete(omega, T, N, end, discretization):
 @pytest.fixture(scope="session")
 def exact():
     return exact_discrete
+
+
+def chain_lag():
+    """.lag text of a ten-coordinate chain with trigonometric couplings, never seen before (a fresh
+    comment): its compile (pardel-gen, render, C++ compiler) takes about a second, long enough to
+    watch other threads and Ctrl-C meanwhile."""
+    names = ["x%d" % i for i in range(10)]
+    coupling = " + ".join("cos(%s - %s)*sin(%s*%s)" % (names[i], names[i + 1], names[i], names[(i + 3) % 10])
+                          for i in range(9))
+    return ("# fresh %s\nmodel python_chain\norder 1\ncoords %s\nparam k = 1.5\n"
+            "L = 1/2*(%s) - k*(%s)\ndiscretizations trapezoid midpoint\n"
+            % (uuid.uuid4().hex, " ".join(names), " + ".join(n + "'^2" for n in names), coupling))
+
+
+@pytest.fixture
+def fresh_chain_lag():
+    return chain_lag

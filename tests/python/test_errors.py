@@ -1,5 +1,7 @@
-"""Errors raised as Python exceptions with the command line's messages: unknown options named
-with a suggestion, bad values naming the scene key, scene files with FILE:LINE:COL."""
+"""Errors raised as Python exceptions: unknown options named with a suggestion, option values
+outside the runtime's bounds naming the argument, values the scene reader refuses naming the scene
+key, scene files with FILE:LINE:COL (test_argument_types.py: wrong types and values of every
+argument)."""
 import pytest
 
 import pardel
@@ -13,7 +15,7 @@ def test_unknown_option_is_named(spring_lag):
 
 
 def test_bad_values_name_the_key(spring_lag):
-    with pytest.raises(pardel.PardelError, match=r"solver\.rtol must be in \(0, 1\), got 2"):
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: rtol must be in \(0, 1\), got 2\.0$"):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, rtol=2.0)
     with pytest.raises(pardel.PardelError, match=r"boundary\.qN has 3 values; expected 2"):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2, 3], T=1, N=10)
@@ -26,12 +28,13 @@ def test_bad_values_name_the_key(spring_lag):
 
 
 def test_bad_values_break_the_bounds_of_the_runtime_options(spring_lag):
-    with pytest.raises(pardel.PardelError, match=r"solver\.newton_substeps must be between 1 and 1000, got 1001"):
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: newton_substeps must be an int between 1 and 1000, "
+                                                 r"got 1001$"):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, newton_substeps=1001)
-    with pytest.raises(pardel.PardelError, match=r"threads: an integer in \[1, 4096\] was expected, got 4097"):
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.sweep: threads must be an int between 1 and 4096, got 4097$"):
         pardel.sweep("no_such_sweep.toml", threads=4097)
-    # An option outside the scene schema: Options::is_valid's message, with the same bound.
-    with pytest.raises(pardel.PardelError, match=r"option divergence_factor = 1 is invalid: must be > 1"):
+    # An option outside the scene schema: the same bound (pardel::option_bound) and rule.
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: divergence_factor must be > 1, got 1\.0$"):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, divergence_factor=1.0)
 
 
