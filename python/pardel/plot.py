@@ -5,6 +5,15 @@ a new figure from matplotlib.pyplot, which works under the Agg backend) and retu
 import numpy as np
 
 
+def _check_result(where, result):
+    """A pardel.Result, else TypeError naming the argument (as the package's own checks)."""
+    from . import Result
+
+    if not isinstance(result, Result):
+        shown = "None" if result is None else "%s %.60r" % (type(result).__name__, result)
+        raise TypeError("%s: result must be a pardel.Result, got %s" % (where, shown))
+
+
 def _axes(ax):
     if ax is not None:
         return ax
@@ -16,8 +25,9 @@ def _axes(ax):
 
 def path(result, ax=None, label=None):
     """The path (first coordinate against the second) with its end points marked."""
+    _check_result("pardel.plot.path", result)
     if len(result.coords) < 2:
-        raise ValueError("path: the model has one coordinate; use pardel.plot.coordinates")
+        raise ValueError("pardel.plot.path: result: the model has one coordinate; use pardel.plot.coordinates")
     ax = _axes(ax)
     x, y = result.q[:, 0], result.q[:, 1]
     ax.plot(x, y, "-", lw=1.5, label=label or "%s (%s)" % (result.model, result.status))
@@ -35,6 +45,7 @@ def path(result, ax=None, label=None):
 
 def coordinates(result, ax=None):
     """Each coordinate against the node times."""
+    _check_result("pardel.plot.coordinates", result)
     ax = _axes(ax)
     for i, name in enumerate(result.coords):
         ax.plot(result.t, result.q[:, i], "-", lw=1.2, label=name)
@@ -46,6 +57,7 @@ def coordinates(result, ax=None):
 
 def convergence(result, ax=None):
     """The DEL residual (infinity norm) of each recorded iteration, on a log scale."""
+    _check_result("pardel.plot.convergence", result)
     ax = _axes(ax)
     h = result.history
     residual = np.asarray(h["residual"], dtype=float)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import pardel
+import pardel.plot
 
 HOSTILE = {
     "str": "abc",
@@ -68,8 +69,11 @@ KERNELS = {"model": without("str"), "discretization": ALL, "h": without("float",
            "t0": without("float", "huge_int"), "t1": without("float", "huge_int"), "q0": ALL, "q1": ALL,
            "params": without("None")}
 
+PLOT = {"result": ALL}
+
 FUNCTIONS = {"solve": SOLVE, "model": MODEL, "load_scene": LOAD_SCENE, "sweep": SWEEP, "solve_scene": SOLVE_SCENE,
-             "check": CHECK, "kernels": KERNELS}
+             "check": CHECK, "kernels": KERNELS, "plot.path": PLOT, "plot.coordinates": PLOT,
+             "plot.convergence": PLOT}
 CASES = [(function, argument, kind) for function, table in FUNCTIONS.items()
          for argument, kinds in table.items() for kind in kinds]
 
@@ -103,6 +107,7 @@ def files(tmp_path_factory, spring_lag):
 def valid(files, spring_lag):
     """Valid arguments of each function (by keyword): each case replaces one of them."""
     scene = pardel.load_scene(files / "spring.toml")
+    result = pardel.solve_scene(scene)
     return {
         "solve": dict(model=spring_lag, q0=[0, 0], qN=[1, 2], T=1.0, N=10),
         "model": dict(spec=spring_lag),
@@ -112,6 +117,9 @@ def valid(files, spring_lag):
         "check": dict(scene=scene, q=None),
         "kernels": dict(model=spring_lag, discretization="trapezoid", h=0.1, t0=0.0, t1=0.1, q0=[0, 0],
                         q1=[0.1, 0.2], params=None),
+        "plot.path": dict(result=result),
+        "plot.coordinates": dict(result=result),
+        "plot.convergence": dict(result=result),
     }
 
 
@@ -121,6 +129,8 @@ def call(function, arguments):
         return pardel.model(arguments["spec"])
     if function == "solve":
         return pardel.solve(arguments.pop("model"), **arguments)
+    if function.startswith("plot."):
+        return getattr(pardel.plot, function[len("plot."):])(**arguments)
     return getattr(pardel, function)(**arguments)
 
 
