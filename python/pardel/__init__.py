@@ -10,10 +10,14 @@ naming the argument) and translates to the compiled core (pardel._pardel), which
 runtime, the model loader and the scene reader that `pardel solve` uses: the remaining checks,
 their messages and the numbers are the command line's.
 """
+import atexit
 import hashlib
 import json
 import numbers
 import os
+import shutil
+import stat
+import tempfile
 
 import numpy as np
 
@@ -45,25 +49,76 @@ __all__ = [
 
 def lag_cache_dir():
     """The folder of compiled models (the model loader's): $PARDEL_CACHE_DIR, else
-    $XDG_CACHE_HOME/pardel, else ~/.cache/pardel."""
+    $XDG_CACHE_HOME/pardel, else $HOME/.cache/pardel; with none of them set, a private folder of
+    this process (tempfile.mkdtemp, removed at exit), so nothing is reused between processes."""
+    global _process_cache
     if os.environ.get("PARDEL_CACHE_DIR"):
         return os.environ["PARDEL_CACHE_DIR"]
     if os.environ.get("XDG_CACHE_HOME"):
         return os.path.join(os.environ["XDG_CACHE_HOME"], "pardel")
-    return os.path.join(os.path.expanduser("~"), ".cache", "pardel")
+    if os.environ.get("HOME"):
+        return os.path.join(os.environ["HOME"], ".cache", "pardel")
+    if _process_cache is None:
+        _process_cache = tempfile.mkdtemp(prefix="pardel-cache-")
+        atexit.register(shutil.rmtree, _process_cache, True)
+    return _process_cache
+
+
+_process_cache = None
+
+
+def _private_folder(path):
+    """Creates the cache folder `path` (mode 0700) if missing and checks that it is this user's
+    alone: not a symbolic link, owned by this user, writable by no one else (as the model loader
+    checks the cache). Raises ModelError naming the path and the reason otherwise."""
+    path = path.rstrip("/") or "/"
+    parent = os.path.dirname(path)
+    if parent:
+        os.makedirs(parent, exist_ok=True)
+    try:
+        os.mkdir(path, 0o700)
+    except FileExistsError:
+        pass
+    st = os.lstat(path)
+    why = None
+    if stat.S_ISLNK(st.st_mode):
+        why = "a symbolic link"
+    elif not stat.S_ISDIR(st.st_mode):
+        why = "not a folder"
+    elif st.st_uid != os.geteuid():
+        why = "owned by user %d, not by this user (%d)" % (st.st_uid, os.geteuid())
+    elif st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        why = "writable by %s (mode %04o)" % (
+            "its group and by others" if st.st_mode & stat.S_IWGRP and st.st_mode & stat.S_IWOTH
+            else "its group" if st.st_mode & stat.S_IWGRP else "others", stat.S_IMODE(st.st_mode))
+    if why:
+        raise ModelError("refusing the model cache folder %s: it is %s; a model cache must be a folder "
+                         "of this user's that no one else can write (chmod 700 it, or set "
+                         "PARDEL_CACHE_DIR to another folder)" % (path, why))
+    return path
 
 
 def _lag_text_file(text):
-    """Writes .lag text to <cache>/lag-text/<hash>.lag (once per text) and returns the path."""
-    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
-    folder = os.path.join(lag_cache_dir(), "lag-text")
+    """Writes .lag text to <cache>/lag-text/<hash>.lag and returns the path. The file is written
+    afresh on every call (privately, mode 0600, flushed, then renamed over the old one), so a file
+    edited since an earlier call is replaced, never compiled."""
+    data = text.encode("utf-8")
+    digest = hashlib.sha256(data).hexdigest()[:16]
+    folder = _private_folder(os.path.join(_private_folder(lag_cache_dir()), "lag-text"))
     path = os.path.join(folder, digest + ".lag")
-    if not os.path.exists(path):
-        os.makedirs(folder, exist_ok=True)
-        tmp = "%s.tmp.%d" % (path, os.getpid())
-        with open(tmp, "w", encoding="utf-8") as f:
-            f.write(text)
+    fd, tmp = tempfile.mkstemp(prefix=digest + ".lag.tmp.", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
     return path
 
 

@@ -24,8 +24,17 @@ class ModelLoadError : public std::runtime_error {
 /**
  * A bundled model's name, or a path to a .lag file (anything ending in ".lag" or containing '/').
  * The returned model stays valid for the life of the process. Compiled .lag files are cached
- * under $PARDEL_CACHE_DIR, else $XDG_CACHE_HOME/pardel, else ~/.cache/pardel, keyed by a hash of
- * the file's content and the generator's version; concurrent callers are safe.
+ * under $PARDEL_CACHE_DIR, else $XDG_CACHE_HOME/pardel, else $HOME/.cache/pardel, else (none set)
+ * a private folder of the process made by mkdtemp and removed at exit, so that nothing is reused;
+ * an entry is keyed by a SHA-256 digest of the file's content, the generator and the compiler;
+ * concurrent callers and processes (on one host or several sharing the cache) are safe.
+ * The cache folder is created with mode 0700 and refused (ModelLoadError naming the path and the
+ * reason) when it is a symbolic link, another user's or writable by group or others. An entry is
+ * loaded only when its folder and files are this user's alone, no links, and its model.so,
+ * model_name.txt and warnings.txt match the SHA-256 digests recorded in its sha256sums.txt when it
+ * was built; model.so is loaded through the descriptor that was verified. A bad entry is removed
+ * and compiled again, and model_warnings(model) begins with a line saying why ("warning: the
+ * cached model DIR was not loaded and is compiled again: REASON").
  */
 const pardel_model* resolve_model(const std::string& name_or_path);
 
