@@ -19,9 +19,10 @@ TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates"
 
 
 def c_string(text):
-    """A C string literal holding `text` (non-printable bytes escaped as octal)."""
+    """A C string literal holding `text` (non-printable bytes escaped as octal). Lone surrogates
+    U+DC80..U+DCFF (the IR's bytes of a file name that is not UTF-8) become those bytes again."""
     out = ['"']
-    for byte in text.encode("utf-8"):
+    for byte in text.encode("utf-8", "surrogateescape"):
         ch = chr(byte)
         if ch in '"\\':
             out.append("\\" + ch)

@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -507,7 +508,9 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
 
   py::dict result;
   const std::string model_source = app::scene_model_source(scene);
-  result["summary"] = app::summary_json(scene, summary, trajectory, Certificate{}, model_source).dump();
+  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes, as in summary.json.
+  result["summary"] = app::summary_json(scene, summary, trajectory, Certificate{}, model_source)
+                          .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
   result["stopped_by_callback"] = stopped_by_callback;
   result["t"] = vector(trajectory.t);
   result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
@@ -556,7 +559,7 @@ std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
   nlohmann::ordered_json c = app::certificate_json(certificate, static_cast<std::size_t>(-1));
   c["report"] = certificate.report();
   j["certificate"] = std::move(c);
-  return j.dump();
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -665,7 +668,8 @@ py::dict run_sweep(const std::string& path, const std::vector<std::string>& over
     groups.append(d);
   }
   py::dict result;
-  result["summary"] = app::sweep_json(sweep, results, solutions, info).dump();
+  result["summary"] =
+      app::sweep_json(sweep, results, solutions, info).dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
   result["axes"] = [&sweep] {
     std::vector<std::string> keys;
     for (const auto& axis : sweep.axes) keys.push_back(axis.key);
@@ -702,11 +706,28 @@ py::dict kernels(const ModelHandle& handle, const std::string& discretization, d
   return out;
 }
 
+/** A file path as os.fsdecode gives it: bytes that are not UTF-8 become lone surrogates, so that
+ *  os.fsencode gives the path's bytes back. */
+py::str path_str(const std::string& path) {
+  PyObject* text = PyUnicode_DecodeFSDefaultAndSize(path.data(), static_cast<Py_ssize_t>(path.size()));
+  if (!text) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(text);
+}
+
+/** Raises `type` with `message`, whose bytes that are not UTF-8 (of a path) are shown as \xNN
+ *  rather than making the message itself fail to decode. */
+void raise_message(const py::object& type, const char* message) {
+  PyObject* text = PyUnicode_DecodeUTF8(message, static_cast<Py_ssize_t>(std::strlen(message)), "backslashreplace");
+  if (!text) return;  // the decoding error is the one set
+  PyErr_SetObject(type.ptr(), text);
+  Py_DECREF(text);
+}
+
 py::dict model_info(const ModelHandle& handle) {
   const pardel_model& m = *handle.model;
   py::dict out;
   out["name"] = m.name;
-  out["source"] = m.source ? m.source : "";
+  out["source"] = path_str(m.source ? m.source : "");
   out["order"] = m.order;
   out["ncoords"] = m.ncoords;
   out["dim"] = m.dim;
@@ -724,7 +745,7 @@ py::dict model_info(const ModelHandle& handle) {
 
 py::dict scene_info(const Scene& s) {
   py::dict out;
-  out["path"] = s.path;
+  out["path"] = path_str(s.path);
   out["model"] = ModelHandle{s.model};
   out["model_spec"] = s.model_spec;
   out["discretization"] = s.discretization;
@@ -770,11 +791,11 @@ PYBIND11_MODULE(_pardel, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const SceneError& e) {
-      scene_error(e.what());
+      raise_message(scene_error, e.what());
     } catch (const ModelLoadError& e) {
-      model_error(e.what());
+      raise_message(model_error, e.what());
     } catch (const InputError& e) {
-      input_error(e.what());
+      raise_message(input_error, e.what());
     }
   });
 

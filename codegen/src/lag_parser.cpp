@@ -19,6 +19,8 @@
 #include <sstream>
 #include <string_view>
 
+#include "pardel/regular_file.hpp"
+
 namespace pardel_codegen {
 namespace {
 
@@ -882,16 +884,15 @@ LagModel parse_lag(const std::string& text, const std::string& filename) {
 }
 
 LagModel parse_lag_file(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw LagError(path + ":1:1: error: is a directory, not a .lag file", 1, 1, "is a directory, not a .lag file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw LagError(path + ":1:1: error: cannot read the file", 1, 1, "cannot read the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  std::string s = text.str();
-  if (s.size() > (1u << 20)) throw LagError(path + ":1:1: error: file is larger than 1 MiB", 1, 1, "file is larger than 1 MiB");
-  return parse_lag(s, path);
+  // A regular file of at most 1 MiB, checked before reading (a FIFO, a device, a folder or a
+  // sparse file of gigabytes is refused by name); the diagnostic is located at 1:1.
+  std::string text;
+  try {
+    text = pardel::read_regular_file(path, pardel::FileLimits::lag, ".lag file");
+  } catch (const pardel::FileError& error) {
+    throw LagError(path + ":1:1: error: " + error.reason(), 1, 1, error.reason());
+  }
+  return parse_lag(text, path);
 }
 
 }  // namespace pardel_codegen

@@ -144,7 +144,7 @@ class Model:
     def __init__(self, spec):
         _check_model("pardel.model", "spec", spec)
         self.spec = _model_spec(spec)
-        self._handle = _pardel.load_model(self.spec)
+        self._handle = _pardel.load_model(os.fsencode(self.spec))  # a path's bytes, also when not UTF-8
         info = self._handle.info()
         self.name = info["name"]
         self.source = info["source"]
@@ -191,7 +191,7 @@ def load_scene(path, overrides=()):
     """Reads a scene file; `overrides` are "key.path=value" strings, as `pardel solve --set` takes."""
     _check_path("pardel.load_scene", "path", path)
     overrides = _check_overrides("pardel.load_scene", "overrides", overrides)
-    return Scene(_pardel.load_scene(os.fspath(path), overrides))
+    return Scene(_pardel.load_scene(os.fsencode(path), overrides))  # bytes: a path need not be UTF-8
 
 
 class Result:
@@ -482,7 +482,7 @@ def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=N
     """
     arguments = _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options)
     spec = _model_spec(model)
-    scene = Scene(_pardel.scene_from_arguments(spec, arguments))
+    scene = Scene(_pardel.scene_from_arguments(os.fsencode(spec), arguments))
     return solve_scene(scene, guess=guess, on_iteration=on_iteration)
 
 
@@ -633,7 +633,8 @@ def sweep(path, overrides=(), *, threads=None, out=None):
     out = None if out is None else os.fspath(out)
     if out == "":
         raise PardelError("out: a folder was expected, got ''")
-    raw = _pardel.run_sweep(os.fspath(path), list(overrides), 0 if threads is None else int(threads), out or "")
+    raw = _pardel.run_sweep(os.fsencode(path), list(overrides), 0 if threads is None else int(threads),
+                            os.fsencode(out or ""))  # bytes: paths need not be UTF-8
     return SweepResult(raw, out)
 
 

@@ -198,7 +198,9 @@ TEST(LagParser, ReportsAMissingFile) {
     pardel_codegen::parse_lag_file("/nonexistent/dir/none.lag");
     FAIL();
   } catch (const LagError& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/none.lag:1:1: error: cannot read"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/none.lag:1:1: error: cannot open .lag file: No such file or "
+                                         "directory"),
+              std::string::npos);
   }
 }
 

@@ -534,15 +534,15 @@ TEST_F(HostileCheckpoint, NestedTwoHundredThousandLevels) {
 TEST_F(HostileCheckpoint, CheckpointIsAFolder) {
   const fs::path out = dir_ / "folder";
   fs::create_directories(out / "checkpoint.json");
-  expect_refused(out, "not a regular file (a directory)");
+  expect_refused(out, "is a directory, not a checkpoint");
 }
 
 TEST_F(HostileCheckpoint, CheckpointIsAFifo) {
-  // Opening a FIFO without a writer blocks forever: refused without opening it.
+  // Opening a FIFO without a writer blocks forever: opened without waiting and refused.
   const fs::path out = dir_ / "fifo";
   fs::create_directories(out);
   ASSERT_EQ(::mkfifo((out / "checkpoint.json").c_str(), 0644), 0) << std::strerror(errno);
-  expect_refused(out, "not a regular file (a special file)");
+  expect_refused(out, "is a FIFO, not a regular file");
 }
 
 TEST_F(HostileCheckpoint, ForeignModelWithAValidChecksum) {

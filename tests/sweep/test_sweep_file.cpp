@@ -291,7 +291,7 @@ TEST(SweepFileErrors, MissingFile) {
     load_sweep("/nonexistent/sweep.toml", {}, resolve);
     FAIL() << "no error";
   } catch (const SceneError& error) {
-    EXPECT_STREQ(error.what(), "/nonexistent/sweep.toml: error: cannot open sweep file");
+    EXPECT_STREQ(error.what(), "/nonexistent/sweep.toml: error: cannot open sweep file: No such file or directory");
   }
 }
 

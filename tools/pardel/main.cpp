@@ -32,6 +32,7 @@
 #include "pardel/memory.hpp"
 #include "pardel/mpi_session.hpp"
 #include "pardel/pardel.hpp"
+#include "pardel/regular_file.hpp"
 #include "pardel_cli/config.hpp"
 #include "plot_runner.hpp"
 #include "progress.hpp"
@@ -263,10 +264,11 @@ struct SolveArgs {
 
 /** FNV-1a hash of a file's bytes (how a checkpoint recognizes its scene). */
 std::string file_hash(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return fnv1a_hex(text.str());
+  try {
+    return fnv1a_hex(pardel::read_regular_file(path, pardel::FileLimits::scene, "scene file"));
+  } catch (const pardel::FileError& error) {
+    throw SceneError(error.what());
+  }
 }
 
 /** What a solve was doing, for the message of an out-of-memory failure. */
@@ -438,7 +440,8 @@ int run_check(const CheckArgs& args) {
     j["residual"] = residual;
     j["action"] = action;
     j["certificate"] = certificate_json(certificate, static_cast<std::size_t>(-1));
-    std::cout << j.dump(2) << "\n";
+    // A --trajectory path that is not UTF-8 is printed with U+FFFD for its invalid bytes.
+    std::cout << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
   } else {
     std::cout << fmt::format("trajectory: {} (N = {})\nresidual: {}\naction: {}\n",
                              args.trajectory.empty() ? "initial guess" : args.trajectory, trajectory.N,

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "pardel/app/trajectory_io.hpp"
+#include "pardel/regular_file.hpp"
 
 namespace pardel::app {
 namespace {
@@ -157,7 +158,8 @@ json body_json(const Checkpoint& c) {
 std::string checkpoint_json(const Checkpoint& checkpoint) {
   // The checksum covers the compact text of the body; nlohmann's objects keep their keys sorted,
   // so parsing and dumping the body again gives the same text.
-  const std::string body = body_json(checkpoint).dump();
+  // A path that is not UTF-8 (a scene's) is written with U+FFFD for its invalid bytes, never thrown.
+  const std::string body = body_json(checkpoint).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   return fmt::format("{{\"format\": \"{}\", \"version\": {}, \"checksum\": \"{}\",\n\"body\": {}}}\n", kFormat,
                      Checkpoint::kVersion, fnv1a_hex(body), body);
 }
@@ -316,17 +318,13 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
 Checkpoint read_checkpoint(const std::string& dir) {
   const std::string path = (std::filesystem::path(dir) / checkpoint_file_name()).string();
   // Only a regular file: a directory would read as empty, a FIFO would block forever.
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
-    throw CheckpointError(fmt::format("{}: error: not a regular file (a {}); a checkpoint is a file written by "
-                                      "pardel solve",
-                                      path, std::filesystem::is_directory(status) ? "directory" : "special file"));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw CheckpointError(fmt::format("{}: error: cannot open checkpoint: {}", path, std::strerror(errno)));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_checkpoint(text.str(), path);
+  std::string text;
+  try {
+    text = pardel::read_regular_file(path, pardel::FileLimits::checkpoint, "checkpoint");
+  } catch (const pardel::FileError& error) {
+    throw CheckpointError(error.what());
+  }
+  return parse_checkpoint(text, path);
 }
 
 void write_checkpoint(const std::string& dir, const Checkpoint& checkpoint) {

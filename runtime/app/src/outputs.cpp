@@ -289,7 +289,9 @@ SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, con
     if (outputs.have_trajectory)
       staged.emplace_back(write_temporary(trajectory_path, trajectory_csv(*scene.model, trajectory)), trajectory_path);
     staged.emplace_back(write_temporary(convergence_path, convergence_csv(summary)), convergence_path);
-    staged.emplace_back(write_temporary(summary_path, summary_doc.dump(2) + "\n"), summary_path);
+    // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes: valid JSON, the solve kept.
+    const auto replace = nlohmann::ordered_json::error_handler_t::replace;
+    staged.emplace_back(write_temporary(summary_path, summary_doc.dump(2, ' ', false, replace) + "\n"), summary_path);
   } catch (...) {
     discard(0);
     throw;

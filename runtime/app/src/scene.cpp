@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "pardel/app/trajectory_io.hpp"
+#include "pardel/regular_file.hpp"
 #include "toml_read.hpp"
 
 namespace pardel::app {
@@ -623,9 +624,15 @@ void read_guess(const SceneReader& r, const toml::table& root, Scene& scene) {
       const auto csv = r.string(guess, "path", "guess.path");
       if (!csv) r.fail(guess->source(), "guess", "missing key 'guess.path' (a trajectory.csv file)");
       scene.guess.csv_path = resolve_relative(r.file(), *csv);
-      std::error_code ec;
-      if (!std::filesystem::exists(scene.guess.csv_path, ec)) {
-        r.fail(*path, "guess.path", fmt::format("guess.path: file '{}' not found", scene.guess.csv_path));
+      // Checked here, so that a missing file, a folder or a FIFO is named at guess.path.
+      try {
+        ::close(pardel::open_regular_file(scene.guess.csv_path, pardel::FileLimits::trajectory, "trajectory file"));
+      } catch (const pardel::FileError& error) {
+        std::error_code ec;
+        const bool missing = !std::filesystem::exists(std::filesystem::symlink_status(scene.guess.csv_path, ec));
+        r.fail(*path, "guess.path",
+               missing ? fmt::format("guess.path: file '{}' not found", scene.guess.csv_path)
+                       : fmt::format("guess.path: '{}' {}", scene.guess.csv_path, error.reason()));
       }
     }
   }
@@ -681,14 +688,13 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides, const ModelResolver& resolve,
                  const std::vector<std::string>& model_names) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw SceneError(fmt::format("{}: error: is a directory, not a scene file", path));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(fmt::format("{}: error: cannot open scene file", path));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_scene(text.str(), path, overrides, resolve, model_names);
+  std::string text;
+  try {
+    text = pardel::read_regular_file(path, pardel::FileLimits::scene, "scene file");
+  } catch (const pardel::FileError& error) {
+    throw SceneError(error.what());
+  }
+  return parse_scene(text, path, overrides, resolve, model_names);
 }
 
 Trajectory make_initial_guess(const Scene& scene) {

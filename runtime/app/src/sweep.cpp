@@ -17,6 +17,7 @@
 
 #include "pardel/app/outputs.hpp"
 #include "pardel/app/trajectory_io.hpp"
+#include "pardel/regular_file.hpp"
 #include "toml_read.hpp"
 
 namespace pardel::app {
@@ -174,11 +175,13 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
   const std::string scene_text = r.string(*scene_node, "scene");
   if (scene_text.empty()) r.fail(*scene_node, "scene must not be empty");
   sweep.scene_path = resolve_relative(source_name, scene_text);
-  {
+  try {  // a missing file, a folder or a FIFO named at the key
+    ::close(pardel::open_regular_file(sweep.scene_path, pardel::FileLimits::scene, "scene file"));
+  } catch (const pardel::FileError& error) {
     std::error_code ec;
-    if (!fs::is_regular_file(sweep.scene_path, ec)) {
+    if (!fs::exists(fs::symlink_status(sweep.scene_path, ec)))
       r.fail(*scene_node, fmt::format("scene file '{}' not found", sweep.scene_path));
-    }
+    r.fail(*scene_node, fmt::format("scene '{}' {}", sweep.scene_path, error.reason()));
   }
 
   if (const toml::node* set = root.get("set")) {
@@ -394,11 +397,13 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
 
 Sweep load_sweep(const std::string& path, const std::vector<std::string>& command_line_sets,
                  const ModelResolver& resolve, const std::vector<std::string>& model_names) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(fmt::format("{}: error: cannot open sweep file", path));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_sweep(text.str(), path, command_line_sets, resolve, model_names);
+  std::string text;
+  try {
+    text = pardel::read_regular_file(path, pardel::FileLimits::sweep, "sweep file");
+  } catch (const pardel::FileError& error) {
+    throw SceneError(error.what());
+  }
+  return parse_sweep(text, path, command_line_sets, resolve, model_names);
 }
 
 Variant make_variant(const Sweep& sweep, int id) {
@@ -641,7 +646,10 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
                       trajectory_csv(*sweep.configurations[s.configuration].model, r->trajectory));
   }
 
-  write_file_atomic((dir / "sweep.json").string(), sweep_json(sweep, results, solutions, info).dump(2) + "\n");
+  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes (valid JSON, never thrown).
+  const auto replace = nlohmann::ordered_json::error_handler_t::replace;
+  write_file_atomic((dir / "sweep.json").string(),
+                    sweep_json(sweep, results, solutions, info).dump(2, ' ', false, replace) + "\n");
 }
 
 nlohmann::ordered_json sweep_json(const Sweep& sweep, const std::vector<VariantResult>& results,

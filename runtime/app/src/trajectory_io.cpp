@@ -5,15 +5,18 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <map>
+#include <memory>
 #include <stdexcept>
+
+#include "pardel/regular_file.hpp"
 
 namespace pardel::app {
 
@@ -98,38 +101,107 @@ bool parse_number(const std::string& text, double* value) {
   return end == text.c_str() + text.size() && errno != ERANGE;
 }
 
+/** The lines of an opened file, read in chunks of 64 KiB; a line is at most kMaxLine bytes and the
+ *  file at most FileLimits::trajectory (checked again while reading, should it grow). */
+class LineReader {
+ public:
+  static constexpr std::size_t kMaxLine = std::size_t{1} << 20;
+
+  LineReader(int fd, std::string path) : fd_(fd), path_(std::move(path)) {}
+  ~LineReader() { ::close(fd_); }
+  LineReader(const LineReader&) = delete;
+  LineReader& operator=(const LineReader&) = delete;
+
+  /** The next line (without its '\n') in `line`; false at the end of the file. */
+  bool next(std::string* line, long number) {
+    line->clear();
+    for (;;) {
+      if (at_ == end_) {
+        if (done_) return !line->empty();
+        end_ = pardel::read_some(fd_, buffer_, sizeof buffer_, path_, "trajectory file");
+        at_ = 0;
+        total_ += end_;
+        if (total_ > pardel::FileLimits::trajectory)
+          throw std::runtime_error(fmt::format("{}: error: grew past the limit of {} bytes for a trajectory file "
+                                               "while read", path_, pardel::FileLimits::trajectory));
+        if (end_ == 0) {
+          done_ = true;
+          return !line->empty();
+        }
+      }
+      const char* from = buffer_ + at_;
+      const char* newline = static_cast<const char*>(std::memchr(from, '\n', end_ - at_));
+      const std::size_t n = newline ? static_cast<std::size_t>(newline - from) : end_ - at_;
+      if (line->size() + n > kMaxLine)
+        throw std::runtime_error(fmt::format("{}:{}:1: error: line {} is longer than 1 MiB; a trajectory file has "
+                                             "one node per line",
+                                             path_, number, number));
+      line->append(from, n);
+      at_ += n + (newline ? 1 : 0);
+      if (newline) return true;
+    }
+  }
+
+ private:
+  int fd_;
+  std::string path_;
+  char buffer_[1 << 16];
+  std::size_t at_ = 0, end_ = 0, total_ = 0;
+  bool done_ = false;
+};
+
 }  // namespace
 
 Trajectory read_trajectory_csv(const std::string& path, const pardel_model& model) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: error: cannot open trajectory file", path));
+  // A regular file of at most FileLimits::trajectory bytes, read line by line (never whole).
+  std::unique_ptr<LineReader> in;
+  try {
+    in = std::make_unique<LineReader>(
+        pardel::open_regular_file(path, pardel::FileLimits::trajectory, "trajectory file"), path);
+  } catch (const pardel::FileError& error) {
+    throw std::runtime_error(error.what());
+  }
   auto fail = [&](long line, int col, const std::string& what) {
     return std::runtime_error(fmt::format("{}:{}:{}: error: {}", path, line, col, what));
   };
   std::string line;
-  if (!std::getline(in, line)) throw fail(1, 1, "empty file; expected a header row k,t,...");
+  if (!in->next(&line, 1)) throw fail(1, 1, "empty file; expected a header row k,t,...");
   std::vector<int> header_cols;
   const auto header = split_csv_line(line, &header_cols);
-  auto find_column = [&](const std::string& name) -> int {
-    for (std::size_t c = 0; c < header.size(); ++c) {
-      if (header[c] == name) return static_cast<int>(c);
-    }
-    return -1;
+  // The node index and the time are the first columns named k and t; every other column is found
+  // by its name, which must be unique: a coordinate named k or t (trajectory_csv writes k,t,k,...)
+  // is the second column of that name, and any other repeated name is refused.
+  const std::vector<std::string> state_names = state_column_names(model);
+  auto is_state = [&](const std::string& name) {
+    return std::find(state_names.begin(), state_names.end(), name) != state_names.end();
   };
-  const int col_k = find_column("k");
-  const int col_t = find_column("t");
+  int col_k = -1, col_t = -1;
+  std::map<std::string, int> named;
+  for (std::size_t c = 0; c < header.size(); ++c) {
+    const std::string& name = header[c];
+    if (name == "k" && col_k < 0) {
+      col_k = static_cast<int>(c);
+    } else if (name == "t" && col_t < 0) {
+      col_t = static_cast<int>(c);
+    } else if (!name.empty()) {
+      if (named.count(name) || ((name == "k" || name == "t") && !is_state(name))) {
+        throw fail(1, header_cols[c], fmt::format("duplicate column '{}'", name));
+      }
+      named[name] = static_cast<int>(c);
+    }
+  }
   if (col_k < 0) throw fail(1, 1, "missing column 'k'");
   if (col_t < 0) throw fail(1, 1, "missing column 't'");
   std::vector<int> state_cols;
-  for (const auto& name : state_column_names(model)) {
-    const int c = find_column(name);
-    if (c < 0) throw fail(1, 1, fmt::format("missing column '{}' of model {}", name, model.name));
-    state_cols.push_back(c);
+  for (const auto& name : state_names) {
+    const auto it = named.find(name);
+    if (it == named.end()) throw fail(1, 1, fmt::format("missing column '{}' of model {}", name, model.name));
+    state_cols.push_back(it->second);
   }
   Trajectory trajectory;
   trajectory.dim = model.dim;
   long line_number = 1;
-  while (std::getline(in, line)) {
+  while (in->next(&line, line_number + 1)) {
     ++line_number;
     if (line.empty() || line == "\r") continue;
     std::vector<int> cols;

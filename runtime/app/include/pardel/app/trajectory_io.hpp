@@ -35,8 +35,13 @@ std::string trajectory_csv(const pardel_model& model, const Trajectory& trajecto
 
 /**
  * Reads a trajectory.csv written by trajectory_csv (columns found by name; extra columns ignored).
- * Throws std::runtime_error "PATH:LINE:COL: error: ..." on a missing column, a non-numeric cell,
- * a wrong row count or k out of sequence.
+ * The node index and the time are the first columns named k and t; a coordinate named k or t is
+ * the second column of that name, and any other name given twice is refused ("duplicate column").
+ * The file must be a regular file of at most pardel::FileLimits::trajectory bytes (512 MiB, checked
+ * before reading; pardel/regular_file.hpp) with lines of at most 1 MiB; it is read line by line.
+ * Throws std::runtime_error "PATH:LINE:COL: error: ..." on a missing or duplicate column, a
+ * non-numeric cell, a wrong row count or k out of sequence, "PATH: error: ..." when the file
+ * cannot be read (a folder, a FIFO, a device, too large).
  */
 Trajectory read_trajectory_csv(const std::string& path, const pardel_model& model);
 
