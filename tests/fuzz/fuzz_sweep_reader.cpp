@@ -84,14 +84,12 @@ void check_sweep(const pardel::app::Sweep& sweep) {
     for (const auto& point : polyline)
       if (point.size() != static_cast<std::size_t>(ncoords)) violated("a listed point of the wrong size", "");
   }
-  if (sweep.random_unit.size() != static_cast<std::size_t>(sweep.random.count))
-    violated("random numbers for another count of guesses", "");
-  for (const auto& numbers : sweep.random_unit) {
-    if (numbers.size() != static_cast<std::size_t>(sweep.random.interior_points) * ncoords)
-      violated("random numbers of the wrong size", "");
-    for (double u : numbers)
-      if (!(u >= 0 && u < 1)) violated("a random number outside [0, 1)", std::to_string(u));
-  }
+  // interior_points * ncoords numbers per random guess, in one array
+  if (sweep.random_unit.size() !=
+      static_cast<std::size_t>(sweep.random.count) * sweep.random.interior_points * ncoords)
+    violated("random numbers for another count or size of guesses", "");
+  for (double u : sweep.random_unit)
+    if (!(u >= 0 && u < 1)) violated("a random number outside [0, 1)", std::to_string(u));
   const long long expected = static_cast<long long>(sweep.configurations.size()) * sweep.guesses_per_configuration();
   if (sweep.variant_count() != expected) violated("variant count is not configurations x guesses", "");
   check_variant(sweep, 0);

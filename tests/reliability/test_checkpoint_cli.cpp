@@ -104,6 +104,7 @@ class CheckpointCli : public ::testing::Test {
     c.threads = 1;
     c.model = "fuel_nav";
     c.dim = 2;
+    c.model_digest = pardel::app::model_digest(*pardel::find_model("fuel_nav"));
     c.state = summary.state;
     const fs::path out = dir_ / name;
     fs::create_directories(out);
@@ -168,6 +169,8 @@ TEST_F(CheckpointCli, SigtermWritesACheckpointAndResumeReachesTheSameTrajectory)
   EXPECT_LT(c.state.iteration, 10000);
   EXPECT_EQ(c.state.N, 1000);
   EXPECT_EQ(c.threads, 1);
+  // The model it was written by: fuel_nav as compiled into this pardel.
+  EXPECT_EQ(c.model_digest, pardel::app::model_digest(*pardel::find_model("fuel_nav")));
 
   const Outcome resumed = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet"}, dir_ / "resumed.log");
   EXPECT_EQ(resumed.status, 3) << resumed.output;
@@ -269,6 +272,77 @@ TEST_F(CheckpointCli, ChangedSceneIsRefused) {
   pardel::app::write_checkpoint(out.string(), c);
   write_text(copy, read_text(scene_) + "# edited\n");
   expect_refused(out, "the scene file " + copy.string() + " changed since the checkpoint was written");
+}
+
+TEST_F(CheckpointCli, BundledModelOfAnotherBuildIsRefused) {
+  // The checkpoint of a fuel_nav whose kernels differ from this pardel's (its digest).
+  const fs::path out = make_checkpoint("other_build", 3);
+  Checkpoint c = pardel::app::read_checkpoint(out.string());
+  c.model_digest = "0123456789abcdef";
+  pardel::app::write_checkpoint(out.string(), c);
+  const std::string before = read_text(out / "checkpoint.json");
+  expect_refused(out, (out / "checkpoint.json").string() +
+                          ": error: the model fuel_nav changed since the checkpoint was written (its kernels "
+                          "compiled into this pardel differ; digest 0123456789abcdef then");
+  EXPECT_EQ(read_text(out / "checkpoint.json"), before) << "the refused checkpoint was overwritten";
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+}
+
+TEST_F(CheckpointCli, MalformedModelDigestIsRefused) {
+  const fs::path out = make_checkpoint("malformed_digest", 3);
+  Checkpoint c = pardel::app::read_checkpoint(out.string());
+  c.model_digest = "not a digest";
+  pardel::app::write_checkpoint(out.string(), c);
+  expect_refused(out, "checkpoint.json: error: key model.digest = \"not a digest\" is not 16 hex digits");
+}
+
+TEST_F(CheckpointCli, CheckpointWithoutAModelDigestIsResumedWithAWarning) {
+  // Written before checkpoints recorded the model: resumed as before, with a warning that says so.
+  ASSERT_EQ(reference_.status, 3) << reference_.output;
+  const fs::path out = make_checkpoint("no_digest", 25);
+  Checkpoint c = pardel::app::read_checkpoint(out.string());
+  c.model_digest.clear();
+  pardel::app::write_checkpoint(out.string(), c);
+  EXPECT_EQ(read_text(out / "checkpoint.json").find("digest"), std::string::npos);
+  const Outcome resumed = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet", "--threads", "1"},
+                                     out / "resume.log");
+  EXPECT_EQ(resumed.status, 3) << resumed.output;
+  EXPECT_NE(resumed.output.find("checkpoint.json: warning: written by an earlier pardel without the model's digest"),
+            std::string::npos)
+      << resumed.output;
+  EXPECT_EQ(read_text(out / "trajectory.csv"), read_text(dir_ / "reference" / "trajectory.csv"));
+}
+
+TEST_F(CheckpointCli, EditedLagFileIsRefused) {
+  // A scene naming a .lag file (a copy of fuel_nav's, compiled by the model loader): the model's
+  // wind is edited between the interruption and --resume; the scene file itself is unchanged.
+  const fs::path lag = dir_ / "fuel_copy.lag";
+  fs::copy_file(std::string(PARDEL_SOURCE_DIR) + "/lagrangians/fuel_nav.lag", lag,
+                fs::copy_options::overwrite_existing);
+  const fs::path scene = dir_ / "lag_scene.toml";
+  std::string text = read_text(scene_);
+  text.replace(text.find("\"fuel_nav\""), 10, "\"fuel_copy.lag\"");
+  write_text(scene, text);
+  const fs::path out = make_checkpoint("edited_lag", 3);
+  Checkpoint c = pardel::app::read_checkpoint(out.string());
+  c.scene_path = scene.string();
+  c.scene_hash = pardel::app::fnv1a_hex(read_text(scene));
+  c.model_digest = pardel::app::model_digest(*pardel::find_model("fuel_nav"), lag.string());
+  pardel::app::write_checkpoint(out.string(), c);
+  std::string model = read_text(lag);
+  const std::size_t at = model.find("x - 3");
+  ASSERT_NE(at, std::string::npos);
+  model.replace(at, 5, "x - 2.9");
+  write_text(lag, model);
+  const Outcome o = run_pardel({"solve", "--resume", out.string(), "--no-plot", "--quiet"}, out / "resume.log");
+  if (o.output.find("cannot load .lag files") != std::string::npos) GTEST_SKIP() << "no model loader in this build";
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find((out / "checkpoint.json").string() +
+                          ": error: the model fuel_nav changed since the checkpoint was written (its file " +
+                          lag.string() + " was edited"),
+            std::string::npos)
+      << o.output;
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
 }
 
 TEST_F(CheckpointCli, StateOfAnotherGridIsRefused) {

@@ -208,13 +208,27 @@ int run_kernels(const KernelArgs& args) {
                                  model->name, suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion),
                                  all));
   }
+  // The kernels are evaluated at the numbers as given: a step that is not positive, or a point
+  // that is not finite, has no discrete Lagrangian to report.
   const double h = parse_number_option(args.h, "--h");
-  const double t0 = parse_number_option(args.t0, "--t0");
-  const double t1 = parse_number_option(args.t1, "--t1");
+  if (!(std::isfinite(h) && h > 0)) throw UsageError(fmt::format("--h: the step must be a finite number > 0, got '{}'", args.h));
+  const auto finite = [](double value, const std::string& text, const std::string& option) {
+    if (!std::isfinite(value)) throw UsageError(fmt::format("{}: '{}' is not a finite number", option, text));
+    return value;
+  };
+  const double t0 = finite(parse_number_option(args.t0, "--t0"), args.t0, "--t0");
+  const double t1 = finite(parse_number_option(args.t1, "--t1"), args.t1, "--t1");
   std::string layout;
   for (const auto& name : state_column_names(*model)) layout += (layout.empty() ? "" : ",") + name;
   const auto q0 = parse_vector_option(args.q0, "--q0", model->dim, "order*ncoords values: " + layout);
   const auto q1 = parse_vector_option(args.q1, "--q1", model->dim, "order*ncoords values: " + layout);
+  for (const auto* point : {&q0, &q1}) {
+    const std::string option = point == &q0 ? "--q0" : "--q1";
+    for (std::size_t i = 0; i < point->size(); ++i)
+      if (!std::isfinite((*point)[i]))
+        throw UsageError(fmt::format("{}: value {} ({}) is not a finite number", option, i + 1,
+                                     state_column_names(*model)[i]));
+  }
   std::vector<double> p(model->param_defaults, model->param_defaults + model->nparams);
   std::vector<std::string> names(model->param_names, model->param_names + model->nparams);
   for (const auto& assignment : args.params) {
@@ -228,7 +242,8 @@ int run_kernels(const KernelArgs& args) {
                                    suggestion.empty() ? (names.empty() ? " (it has none)" : "")
                                                       : fmt::format("; did you mean '{}'?", suggestion)));
     }
-    p[it - names.begin()] = parse_number_option(assignment.substr(eq + 1), "--param " + name);
+    p[it - names.begin()] = finite(parse_number_option(assignment.substr(eq + 1), "--param " + name),
+                                   assignment.substr(eq + 1), "--param " + name);
   }
   const int m = model->dim;
   double Ld = 0;
@@ -297,6 +312,8 @@ int run_solve_unguarded(const SolveArgs& args) {
   std::vector<std::string> overrides = resume ? resumed.overrides : args.sets;
   if (warm) overrides.insert(overrides.end(), args.sets.begin(), args.sets.end());
   Scene scene = load_scene_or_throw(scene_path, overrides);
+  // Taken before the solve: what a checkpoint of this solve records of its model.
+  const std::string digest = model_digest(*scene.model, scene.model_path);
   if (resume) {
     const std::string hash = file_hash(scene_path);
     if (hash != resumed.scene_hash)
@@ -308,6 +325,21 @@ int run_solve_unguarded(const SolveArgs& args) {
                                         "{} (dim {})",
                                         checkpoint_path, resumed.model, resumed.dim, scene.model->name,
                                         scene.model->dim));
+    // The scene may name the same model whose .lag (or, compiled in, whose kernels) changed.
+    if (resumed.model_digest.empty()) {
+      if (pardel::mpi::world_rank() == 0)
+        std::fprintf(stderr, "%s: warning: written by an earlier pardel without the model's digest; a change of "
+                             "model %s since then cannot be detected\n",
+                     checkpoint_path.c_str(), scene.model->name);
+    } else if (digest != resumed.model_digest) {
+      throw CheckpointError(fmt::format(
+          "{}: error: the model {} changed since the checkpoint was written ({}; digest {} then, {} now); the "
+          "checkpoint cannot be resumed",
+          checkpoint_path, scene.model->name,
+          scene.model_path.empty() ? "its kernels compiled into this pardel differ"
+                                   : "its file " + scene_model_source(scene) + " was edited",
+          resumed.model_digest, digest));
+    }
   }
   const int threads = args.threads >= 0 ? args.threads : resume ? resumed.threads : -1;
   if (threads >= 0) scene.options.threads = threads;
@@ -376,6 +408,7 @@ int run_solve_unguarded(const SolveArgs& args) {
     checkpoint.threads = threads;
     checkpoint.model = model.name;
     checkpoint.dim = model.dim;
+    checkpoint.model_digest = digest;
     checkpoint.state = summary.state;
     write_checkpoint(out_dir, checkpoint);
   } else {
@@ -471,6 +504,20 @@ std::string checked_threads_text(const std::string& text) {
   return text;
 }
 
+/**
+ * The text of a --set (of `solve`, `check` and `sweep`): an override is one line of TOML, so text
+ * after a line break would be dropped unseen; refused with a SceneError (exit code 2) quoting
+ * the override with its line break written as \n. A CLI11 transform: returns the text unchanged.
+ */
+std::string checked_set_text(const std::string& text) {
+  if (text.find_first_of("\n\r") == std::string::npos) return text;
+  std::string shown;
+  for (const char c : text) shown += c == '\n' ? std::string("\\n") : c == '\r' ? std::string("\\r") : std::string(1, c);
+  throw SceneError(fmt::format("--set {}: error: the override holds a line break; give each KEY=VALUE its own --set, "
+                               "on one line",
+                               shown));
+}
+
 }  // namespace
 
 /**
@@ -503,7 +550,7 @@ int main(int argc, char** argv) {
   auto* kernels = app.add_subcommand("kernels", "Evaluate a discrete Lagrangian and its derivatives (JSON)");
   kernels->add_option("--model", k.model, "A bundled model's name or a path to a .lag file")->required();
   kernels->add_option("--disc", k.disc, "Discretization, e.g. trapezoid or trapezoid(alpha=1)")->required();
-  kernels->add_option("--h", k.h, "Step h")->required();
+  kernels->add_option("--h", k.h, "Step h (a finite number > 0)")->required();
   kernels->add_option("--t0", k.t0, "Time of the first node")->required();
   kernels->add_option("--t1", k.t1, "Time of the second node")->required();
   kernels->add_option("--q0", k.q0, "First node: order*ncoords values a,b,... [coords, coords', ...]")->required();
@@ -542,6 +589,9 @@ int main(int argc, char** argv) {
   const SweepCommand sweep_cmd(app);
   for (CLI::App* command : {solve_cmd, app.get_subcommand("sweep")}) {
     command->get_option("--threads")->transform(checked_threads_text);
+  }
+  for (CLI::App* command : {solve_cmd, check, app.get_subcommand("sweep")}) {
+    command->get_option("--set")->transform(checked_set_text);
   }
 
   // Under mpirun with more than one rank, an error seen by some ranks only would leave the others

@@ -55,7 +55,8 @@ def number_text(value, spec="%.3g"):
 def read_lag(path):
     """The coords, param defaults and let texts of a .lag file (lets kept in order)."""
     coords, params, lets = [], {}, {}
-    with open(path, encoding="utf-8") as f:
+    # pardel-gen reads bytes: a comment in Latin-1 (or any bytes that are not UTF-8) is no error.
+    with open(path, encoding="utf-8", errors="replace") as f:
         for raw in f:
             line = raw.split("#", 1)[0].strip()
             if not line:

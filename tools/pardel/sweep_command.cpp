@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <thread>
 
 #include "pardel/app/sweep.hpp"
@@ -78,6 +79,8 @@ SweepCommand::SweepCommand(CLI::App& app) {
   command_->add_option("--threads", args_.threads, "Threads per variant (0: all cores); overrides solver.threads");
   command_->add_flag("--quiet", args_.quiet, "Nothing on stdout");
   command_->add_flag("--no-plot", args_.no_plot, "Do not draw sweep.png");
+  command_->add_flag("--no-memory-check", args_.no_memory_check,
+                     "Solve a variant even when its memory estimate exceeds what the machine has");
 }
 
 int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::string>& model_names) const {
@@ -91,6 +94,7 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
     if (rank == 0) std::fprintf(stderr, "%s\n", error.what());
     return 2;
   }
+  sweep.memory_check = !args_.no_memory_check;
   const int threads = threads_per_variant(args_, sweep, size);
   const auto start = std::chrono::steady_clock::now();
   const bool show_progress = !args_.quiet && rank == 0 && ::isatty(STDERR_FILENO);
@@ -104,7 +108,7 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
         std::fprintf(stderr, "\rsweep: %d of %d variants%s", done, mine, size > 1 ? " on rank 0" : "");
         if (done == mine) std::fprintf(stderr, "\n");
       },
-      &g_sweep_interrupted);
+      &g_sweep_interrupted, /*keep_trajectories=*/false);
   std::signal(SIGINT, previous_int);
   std::signal(SIGTERM, previous_term);
   int code = 0;
@@ -125,11 +129,26 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
                         "sweep.png");
       }
       if (!args_.quiet) print_sweep_report(sweep, results, solutions, info, out_dir);
-      const bool interrupted = std::any_of(results.begin(), results.end(), [](const VariantResult& r) {
-        return r.status == to_string(Termination::interrupted);
-      });
+      // Variants that could not be solved (refused by the memory estimate, an exception): each
+      // reason once on stderr, with how many variants it stopped and the first of them.
+      std::map<std::string, std::pair<int, int>> errors;  // message -> (count, first variant)
+      for (const VariantResult& r : results) {
+        if (r.status != "error") continue;
+        const auto it = errors.try_emplace(r.message, 0, r.id).first;
+        ++it->second.first;
+      }
+      for (const auto& [message, seen] : errors) {
+        std::fprintf(stderr, "pardel sweep: %d variant%s not solved (first: variant %d): %s\n", seen.first,
+                     seen.first == 1 ? "" : "s", seen.second, message.c_str());
+      }
+      const bool interrupted =
+          results.size() < static_cast<std::size_t>(sweep.variant_count()) ||
+          std::any_of(results.begin(), results.end(),
+                      [](const VariantResult& r) { return r.status == to_string(Termination::interrupted); });
       if (interrupted) {
-        std::fprintf(stderr, "pardel sweep: interrupted; %s holds the variants done\n", out_dir.c_str());
+        const std::size_t total = static_cast<std::size_t>(sweep.variant_count());
+        std::fprintf(stderr, "pardel sweep: interrupted; %s holds the variants done (%zu of %zu; %zu not started)\n",
+                     out_dir.c_str(), results.size(), total, total - std::min(results.size(), total));
         code = kSweepExitInterrupted;
       } else if (solutions.empty()) {
         std::fprintf(stderr, "pardel sweep: no variant converged (see %s/variants.csv)\n", out_dir.c_str());

@@ -25,6 +25,7 @@ struct SweepArgs {
   int threads = -1;  ///< -1: the scene's solver.threads (shared among the ranks of a node under MPI)
   bool quiet = false;
   bool no_plot = false;
+  bool no_memory_check = false;  ///< solve variants whose memory estimate exceeds the machine's memory
 };
 
 /** Exit status of `pardel sweep` when no variant converged. */

@@ -304,6 +304,8 @@ SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, con
   }
   // Without a trajectory, an older trajectory.csv would not belong to the new summary.
   if (!outputs.have_trajectory) ::unlink(trajectory_path.c_str());
+  // Nor would the pictures of an earlier solve: the plot step draws this one's, or none if it fails.
+  for (const char* png : {"trajectory.png", "convergence.png"}) ::unlink((fs::path(out_dir) / png).c_str());
   for (std::size_t i = 0; i < staged.size(); ++i) {
     try {
       rename_into_place(staged[i].first, staged[i].second);

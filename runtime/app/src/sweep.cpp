@@ -5,18 +5,25 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <new>
 #include <random>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "pardel/app/outputs.hpp"
 #include "pardel/app/trajectory_io.hpp"
+#include "pardel/memory.hpp"
 #include "pardel/regular_file.hpp"
 #include "toml_read.hpp"
 
@@ -192,6 +199,10 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
       if (item.find('=') == std::string::npos) {
         r.fail(*array->get(i), fmt::format("set[{}] = \"{}\" is not KEY=VALUE (e.g. solver.method=newton)", i, item));
       }
+      // An override is one line of TOML: text after a line break would be dropped unseen.
+      if (item.find_first_of("\n\r") != std::string::npos) {
+        r.fail(*array->get(i), fmt::format("set[{}] holds a line break; an override is KEY=VALUE on one line", i));
+      }
       sweep.sets.push_back(item);
     }
   }
@@ -358,10 +369,8 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
     // std::mt19937_64's sequence is fixed by the C++ standard, so the guesses are the same everywhere.
     std::mt19937_64 generator(spec.seed);
     const std::size_t per_guess = static_cast<std::size_t>(spec.interior_points) * ncoords;
-    sweep.random_unit.assign(spec.count, std::vector<double>(per_guess));
-    for (auto& numbers : sweep.random_unit) {
-      for (double& u : numbers) u = static_cast<double>(generator() >> 11) * 0x1.0p-53;
-    }
+    sweep.random_unit.resize(static_cast<std::size_t>(spec.count) * per_guess);
+    for (double& u : sweep.random_unit) u = static_cast<double>(generator() >> 11) * 0x1.0p-53;
   }
   if (static_cast<long long>(sweep.configurations.size()) * sweep.guesses_per_configuration() > kMaxVariants) {
     throw SceneError(fmt::format("{}: error: the sweep has more than {} variants", source_name, kMaxVariants));
@@ -427,7 +436,7 @@ Variant make_variant(const Sweep& sweep, int id) {
   const Problem& problem = sweep.configurations[v.configuration].problem;
   const int nc = problem.model->ncoords;
   const RandomGuessSpec& spec = sweep.random;
-  const std::vector<double>& u = sweep.random_unit[r];
+  const double* u = sweep.random_unit.data() + static_cast<std::size_t>(r) * spec.interior_points * nc;
   std::vector<double> q0(problem.q0.begin(), problem.q0.begin() + nc);
   std::vector<double> qN(problem.qN.begin(), problem.qN.begin() + nc);
   v.points.push_back(q0);
@@ -462,6 +471,17 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
       scene.guess.points = variant.points;
     }
     if (threads > 0) scene.options.threads = threads;
+    // Refused before anything of size N is allocated, as `pardel solve` refuses the scene.
+    if (sweep.memory_check) {
+      const MemoryEstimate memory = estimate_solve_memory(scene.problem, scene.options);
+      const std::string refusal = memory_refusal(scene.problem, scene.options, memory, machine_memory());
+      if (!refusal.empty()) {
+        result.status = "error";
+        result.message = "refused before solving: " + refusal + " (--no-memory-check skips this check)";
+        result.cost = std::nan("");
+        return result;
+      }
+    }
     scene.options.on_iteration = nullptr;
     if (stop) scene.options.on_iteration = [stop](const IterationRecord&) { return !stop->load(); };
     Trajectory trajectory = make_initial_guess(scene);
@@ -486,6 +506,16 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
       result.status = "error";
       result.message = "converged without a trajectory on the grid";
     }
+  } catch (const std::bad_alloc&) {
+    result = VariantResult{};
+    result.id = variant.id;
+    result.configuration = variant.configuration;
+    result.status = "error";
+    result.cost = std::nan("");
+    const Problem& problem = sweep.configurations.at(variant.configuration).problem;
+    result.message = fmt::format("out of memory (std::bad_alloc) while solving with grid.N = {} (model dim {}); "
+                                 "lower grid.N or free memory",
+                                 problem.N, problem.model->dim);
   } catch (const std::exception& error) {
     result.status = "error";
     result.message = error.what();
@@ -522,9 +552,17 @@ std::vector<Solution> group_solutions(const std::vector<VariantResult>& results,
   std::vector<Solution> groups;
   std::vector<std::size_t> representative;  // index into results
   std::vector<int> group_of(results.size(), -1);
+  std::map<int, std::size_t> group_of_representative;  // variant id -> group
   for (std::size_t i = 0; i < results.size(); ++i) {
     const VariantResult& r = results[i];
     if (!r.converged()) continue;
+    // Matched while the sweep ran (its trajectory released): the same comparisons, made then.
+    const auto known = r.same_as >= 0 ? group_of_representative.find(r.same_as) : group_of_representative.end();
+    if (known != group_of_representative.end()) {
+      group_of[i] = static_cast<int>(known->second);
+      groups[known->second].variants.push_back(r.id);
+      continue;
+    }
     for (std::size_t g = 0; g < groups.size(); ++g) {
       if (same_solution(results[representative[g]], r, options)) {
         group_of[i] = static_cast<int>(g);
@@ -541,6 +579,7 @@ std::vector<Solution> group_solutions(const std::vector<VariantResult>& results,
     s.action = r.action;
     s.residual = r.residual;
     group_of[i] = static_cast<int>(groups.size());
+    group_of_representative[r.id] = groups.size();
     groups.push_back(std::move(s));
     representative.push_back(i);
   }
@@ -594,10 +633,47 @@ std::string points_text(const std::vector<std::vector<double>>& points) {
 
 const VariantResult* find_result(const std::vector<VariantResult>& results, int id) {
   if (id >= 0 && id < static_cast<int>(results.size()) && results[id].id == id) return &results[id];
+  // In variant order, with the variants not started (after an interruption) left out.
+  const auto it = std::lower_bound(results.begin(), results.end(), id,
+                                   [](const VariantResult& r, int value) { return r.id < value; });
+  if (it != results.end() && it->id == id) return &*it;
   for (const auto& r : results) {
     if (r.id == id) return &r;
   }
   return nullptr;
+}
+
+/** Writes the text that `append(out)` produces, chunk by chunk, to a temporary file beside `path`
+ *  and renames it into place (memory stays bounded however many rows there are). */
+void write_streamed_atomic(const std::string& path, const std::function<bool(std::string& out)>& append) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw std::runtime_error(fmt::format("{}: cannot write: {}", tmp, std::strerror(errno)));
+  std::string chunk;
+  bool ok = true;
+  for (bool more = true; more && ok;) {
+    chunk.clear();
+    while ((more = append(chunk)) && chunk.size() < (1u << 20)) {
+    }
+    ok = std::fwrite(chunk.data(), 1, chunk.size(), f) == chunk.size();
+  }
+  ok = ok && std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
+  const int err = errno;
+  if (std::fclose(f) != 0 || !ok) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error(fmt::format("{}: cannot write: {}", tmp, std::strerror(err)));
+  }
+  rename_into_place(tmp, path);
+}
+
+/** solution_<digits>.csv, the trajectory files of a sweep. */
+bool is_solution_file(const std::string& name) {
+  constexpr std::string_view prefix = "solution_", suffix = ".csv";
+  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+    return false;
+  const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  return digits.find_first_not_of("0123456789") == std::string::npos;
 }
 
 }  // namespace
@@ -618,25 +694,33 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
                          const SweepRunInfo& info, const std::string& out_dir) {
   create_output_folder(out_dir);
   const fs::path dir(out_dir);
+  const std::string index_path = (dir / "sweep.json").string();
+  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes (valid JSON, never thrown).
+  const std::string index =
+      sweep_json(sweep, results, solutions, info).dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) +
+      "\n";
 
-  write_file_atomic((dir / "solutions.csv").string(), solutions_csv(results, solutions));
-
-  // variants.csv
-  std::string variants = "variant,configuration";
-  for (const auto& axis : sweep.axes) variants += "," + csv_cell(axis.key);
-  variants += ",guess,guess_points,status,iterations,residual,action,cost,certificate,solution,seconds\n";
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const VariantResult& r = results[i];
-    const Variant v = make_variant(sweep, r.id);
-    variants += fmt::format("{},{}", r.id, r.configuration);
-    for (const auto& value : sweep.configuration_values[r.configuration]) variants += "," + csv_cell(value);
-    variants += fmt::format(",{},{},{},{},{},{},{},{},{},{}\n", v.guess_label, points_text(v.points), r.status,
-                            r.iterations, format_double(r.residual), format_double(r.action), format_double(r.cost),
-                            r.converged() ? csv_cell(certificate_verdict(r)) : "",
-                            i < solution_of.size() && solution_of[i] > 0 ? std::to_string(solution_of[i]) : "",
-                            format_double(r.seconds));
+  // An earlier sweep's files go first, its index (sweep.json) before the rest: an interrupted or
+  // smaller sweep must not leave solution_<id>.csv files (or a picture) that look like its own.
+  // Whenever sweep.json exists, the files beside it are the ones it lists.
+  for (const char* name : {"sweep.json", "solutions.csv", "variants.csv", "sweep.png"}) {
+    remove_stale_temporaries((dir / name).string());
+    if (::unlink((dir / name).c_str()) != 0 && errno != ENOENT)
+      throw std::runtime_error(fmt::format("{}: cannot remove the earlier sweep's file: {}", (dir / name).string(),
+                                           std::strerror(errno)));
   }
-  write_file_atomic((dir / "variants.csv").string(), variants);
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const auto tmp = name.find(".tmp.");
+    if (!is_solution_file(tmp == std::string::npos ? name : name.substr(0, tmp))) continue;
+    if (tmp != std::string::npos) {
+      remove_stale_temporaries((dir / name.substr(0, tmp)).string());
+    } else if (::unlink(it->path().c_str()) != 0 && errno != ENOENT) {
+      throw std::runtime_error(fmt::format("{}: cannot remove the earlier sweep's file: {}", it->path().string(),
+                                           std::strerror(errno)));
+    }
+  }
 
   // one trajectory per solution
   for (const auto& s : solutions) {
@@ -646,10 +730,34 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
                       trajectory_csv(*sweep.configurations[s.configuration].model, r->trajectory));
   }
 
-  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes (valid JSON, never thrown).
-  const auto replace = nlohmann::ordered_json::error_handler_t::replace;
-  write_file_atomic((dir / "sweep.json").string(),
-                    sweep_json(sweep, results, solutions, info).dump(2, ' ', false, replace) + "\n");
+  write_file_atomic((dir / "solutions.csv").string(), solutions_csv(results, solutions));
+
+  // variants.csv, one row per variant started, written as it is formatted
+  std::string header = "variant,configuration";
+  for (const auto& axis : sweep.axes) header += "," + csv_cell(axis.key);
+  header += ",guess,guess_points,status,iterations,residual,action,cost,certificate,solution,error,seconds\n";
+  std::size_t next = 0;
+  bool header_done = false;
+  write_streamed_atomic((dir / "variants.csv").string(), [&](std::string& out) {
+    if (!header_done) {
+      out += header;
+      header_done = true;
+      return !results.empty();
+    }
+    const std::size_t i = next++;
+    const VariantResult& r = results[i];
+    const Variant v = make_variant(sweep, r.id);
+    out += fmt::format("{},{}", r.id, r.configuration);
+    for (const auto& value : sweep.configuration_values[r.configuration]) out += "," + csv_cell(value);
+    out += fmt::format(",{},{},{},{},{},{},{},{},{},{},{}\n", v.guess_label, points_text(v.points), r.status,
+                       r.iterations, format_double(r.residual), format_double(r.action), format_double(r.cost),
+                       r.converged() ? csv_cell(certificate_verdict(r)) : "",
+                       i < solution_of.size() && solution_of[i] > 0 ? std::to_string(solution_of[i]) : "",
+                       r.status == "error" ? csv_cell(r.message) : "", format_double(r.seconds));
+    return next < results.size();
+  });
+
+  write_file_atomic(index_path, index);
 }
 
 nlohmann::ordered_json sweep_json(const Sweep& sweep, const std::vector<VariantResult>& results,
@@ -664,7 +772,10 @@ nlohmann::ordered_json sweep_json(const Sweep& sweep, const std::vector<VariantR
   j["discretization"] = first.discretization;
   j["cost"] = {{"name", cost_kind.name}, {"definition", cost_kind.definition}};
   j["set"] = sweep.sets;
-  j["variants"] = results.size();
+  j["variants"] = sweep.variant_count();
+  // After an interruption, the variants never started (not listed in variants.csv).
+  j["not_started"] = static_cast<std::size_t>(sweep.variant_count()) - std::min(results.size(),
+                                                                                 static_cast<std::size_t>(sweep.variant_count()));
   j["guesses_per_configuration"] = sweep.guesses_per_configuration();
   nlohmann::ordered_json configurations = nlohmann::ordered_json::array();
   for (std::size_t c = 0; c < sweep.configurations.size(); ++c) {
@@ -723,9 +834,13 @@ void print_sweep_report(const Sweep& sweep, const std::vector<VariantResult>& re
   }
   std::string failed;
   for (const auto& [status, count] : failures) failed += fmt::format("{}{} {}", failed.empty() ? "" : ", ", count, status);
+  const std::size_t total = static_cast<std::size_t>(sweep.variant_count());
+  if (results.size() < total) {
+    failed += fmt::format("{}{} not started", failed.empty() ? "" : ", ", total - results.size());
+  }
   const PhysicalCost kind = physical_cost(sweep.configurations.front(), Summary{}, Trajectory{});
   std::cout << fmt::format("sweep {}: {} variant{} on {} rank{}, {} converged{}, {} distinct solution{}, {:.3g} s\n",
-                           sweep.path, results.size(), results.size() == 1 ? "" : "s", info.ranks,
+                           sweep.path, total, total == 1 ? "" : "s", info.ranks,
                            info.ranks == 1 ? "" : "s", converged, failed.empty() ? "" : " (" + failed + ")",
                            solutions.size(), solutions.size() == 1 ? "" : "s", info.wall_seconds);
   if (solutions.empty()) return;
@@ -735,10 +850,8 @@ void print_sweep_report(const Sweep& sweep, const std::vector<VariantResult>& re
                            kind.name == "action" ? "cost (action)" : kind.name, "action", "residual",
                            "variants", "certificate");
   for (const auto& s : solutions) {
-    std::string verdict = "unknown";
-    for (const auto& r : results) {
-      if (r.id == s.first_variant) verdict = certificate_verdict(r);
-    }
+    const VariantResult* representative = find_result(results, s.first_variant);
+    const std::string verdict = representative ? certificate_verdict(*representative) : "unknown";
     std::cout << fmt::format("{:>8}{}{:>5}  {:>18}  {:>18}  {:>9.2e}  {:>8}  {}\n", s.id,
                              several ? fmt::format("{:>7}", s.configuration) : "", s.rank, short_number(s.cost),
                              short_number(s.action), s.residual, s.variants.size(), verdict);

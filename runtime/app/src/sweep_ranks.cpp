@@ -2,6 +2,7 @@
 // packed as bytes, are gathered on rank 0 in variant order (see sweep.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <climits>
 #include <cstdint>
 #include <cstring>
@@ -124,14 +125,30 @@ VariantResult unpack(Unpacker& u) {
 
 std::vector<VariantResult> run_variants_over_ranks(const Sweep& sweep, int threads, int rank, int size,
                                                    const std::function<void(int, int)>& on_done,
-                                                   const std::atomic<bool>* stop) {
+                                                   const std::atomic<bool>* stop, bool keep_trajectories) {
   const int total = sweep.variant_count();
-  int mine = 0;
-  for (int id = rank; id < total; id += size) ++mine;
+  const int mine = rank < total ? (total - rank + size - 1) / size : 0;
+  // Results grow as variants finish (nothing is reserved for 10^7 variants up front), and once
+  // `stop` is set no further variant is started or listed.
   std::vector<VariantResult> local;
-  local.reserve(static_cast<std::size_t>(mine));
+  // One rank solves in variant order, so the representatives found here are group_solutions'.
+  const bool prune = !keep_trajectories && size <= 1;
+  std::vector<std::size_t> representatives;  // indices into local
   for (int id = rank; id < total; id += size) {
+    if (stop && stop->load()) break;
     local.push_back(solve_variant(sweep, make_variant(sweep, id), threads, stop));
+    VariantResult& result = local.back();
+    if (prune && result.converged()) {
+      for (const std::size_t r : representatives) {
+        if (same_solution(local[r], result, sweep.grouping)) {
+          result.same_as = local[r].id;
+          std::vector<double>().swap(result.trajectory.t);
+          std::vector<double>().swap(result.trajectory.q);
+          break;
+        }
+      }
+      if (result.same_as < 0) representatives.push_back(local.size() - 1);
+    }
     if (on_done) on_done(static_cast<int>(local.size()), mine);
   }
   if (size <= 1) return local;
@@ -158,19 +175,19 @@ std::vector<VariantResult> run_variants_over_ranks(const Sweep& sweep, int threa
   MPI_Gatherv(packer.bytes().data(), bytes, MPI_BYTE, gathered.data(), counts.data(), displacements.data(), MPI_BYTE,
               0, MPI_COMM_WORLD);
   if (rank != 0) return {};
-  std::vector<VariantResult> all(static_cast<std::size_t>(total));
-  std::vector<bool> seen(static_cast<std::size_t>(total), false);
+  // Each rank's results are in increasing id order; an interrupted rank sends fewer.
+  std::vector<VariantResult> all;
   for (int r = 0; r < size; ++r) {
     Unpacker u(gathered.data() + displacements[r], static_cast<std::size_t>(counts[r]));
     while (!u.done()) {
       VariantResult result = unpack(u);
-      if (result.id < 0 || result.id >= total || seen[result.id]) throw std::logic_error("sweep: bad variant id");
-      seen[result.id] = true;
-      all[result.id] = std::move(result);
+      if (result.id < 0 || result.id >= total || result.id % size != r) throw std::logic_error("sweep: bad variant id");
+      all.push_back(std::move(result));
     }
   }
-  for (int id = 0; id < total; ++id) {
-    if (!seen[id]) throw std::logic_error(fmt::format("sweep: no result for variant {}", id));
+  std::sort(all.begin(), all.end(), [](const VariantResult& a, const VariantResult& b) { return a.id < b.id; });
+  for (std::size_t i = 1; i < all.size(); ++i) {
+    if (all[i].id == all[i - 1].id) throw std::logic_error(fmt::format("sweep: two results for variant {}", all[i].id));
   }
   return all;
 #else

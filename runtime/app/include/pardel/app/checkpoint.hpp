@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "pardel/kernel_abi.h"
 #include "pardel/pardel.hpp"
 
 namespace pardel::app {
@@ -37,8 +38,19 @@ struct Checkpoint {
   int threads = -1;                   ///< --threads as given (-1: not given)
   std::string model;                  ///< the model's name
   int dim = 0;                        ///< the model's dim
+  /** model_digest() of the model that wrote it; "" in checkpoints written before it was kept. */
+  std::string model_digest;
   SolverState state;
 };
+
+/**
+ * What identifies a model's kernels, as 16 hex digits (FNV-1a 64), so that `--resume` notices a
+ * model that changed since the checkpoint: for a model compiled from a .lag file (`lag_path` not
+ * empty), the file's bytes; for a model compiled into pardel, its description (name, order,
+ * coords, params and defaults, discretizations, clock, cost, kernel ABI) and the values of each
+ * discretization's kernel at a fixed point, to 12 significant digits.
+ */
+std::string model_digest(const pardel_model& model, const std::string& lag_path = "");
 
 /** The name of the checkpoint file inside an output folder. */
 inline const char* checkpoint_file_name() { return "checkpoint.json"; }

@@ -62,10 +62,15 @@ struct Sweep {
   std::vector<std::vector<std::string>> configuration_values;  ///< the axis values of each configuration
   std::vector<std::vector<std::vector<double>>> listed_guesses;  ///< polylines (ncoords values per vertex)
   RandomGuessSpec random;
-  std::vector<std::vector<double>> random_unit;  ///< per random guess: interior_points*ncoords numbers in [0, 1)
+  /** interior_points*ncoords numbers in [0, 1) per random guess, guess after guess (one array:
+   *  no allocation per guess, however many there are) */
+  std::vector<double> random_unit;
   GroupingOptions grouping;
   std::string output_dir;  ///< [output].dir resolved against the working folder, or ""
   bool plot = true;        ///< [output].plot
+  /** Refuse a variant whose memory estimate (pardel/memory.hpp) exceeds what the machine has,
+   *  before anything of its size is allocated (status "error", the reason in its message). */
+  bool memory_check = true;
 
   /** Guesses per configuration: listed + random, or 1 (the scene's own guess) when none is given. */
   int guesses_per_configuration() const;
@@ -114,11 +119,17 @@ struct VariantResult {
   long inertia_zero = 0;
   bool certificate_valid = false;  ///< the certificate was computed (no error)
   Trajectory trajectory;
+  /** When >= 0: the id of the earlier converged variant (a solution's representative) that this
+   *  one was found to reach while the sweep ran; its trajectory was then released (see
+   *  run_variants_over_ranks), and group_solutions puts it in that representative's solution. */
+  int same_as = -1;
   bool converged() const { return status == "converged"; }
 };
 
 /** Solves one variant with `threads` OpenMP threads (0: the scene's solver.threads); never throws
  *  for a numerical failure (the status says it), and reports an exception as status "error".
+ *  A variant whose memory estimate exceeds what the machine has (Sweep::memory_check) is not
+ *  started: status "error", the message names grid.N, the estimate and the machine's memory.
  *  When `stop` (may be null) becomes true the solve is interrupted (status "interrupted"); a
  *  variant that finds it already true is not started. */
 VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int threads,
@@ -162,8 +173,12 @@ struct SweepRunInfo {
 
 /**
  * Writes solutions.csv, variants.csv, sweep.json and solution_<id>.csv (the trajectory of each
- * solution's representative) into `out_dir`, each atomically. `results` holds every variant in
- * variant order.
+ * solution's representative) into `out_dir`, each atomically. `results` holds the variants that
+ * were started, in variant order (after an interruption the others are counted in sweep.json as
+ * "not_started"). The files of an earlier sweep in `out_dir` are removed first, sweep.json (the
+ * index) before the others and written last, so that whenever sweep.json exists every
+ * solution_<id>.csv, solutions.csv and variants.csv beside it belong to it; sweep.png is removed
+ * too (the plot step draws the new one).
  */
 void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& results,
                          const std::vector<Solution>& solutions, const std::vector<int>& solution_of,
@@ -178,13 +193,20 @@ nlohmann::ordered_json sweep_json(const Sweep& sweep, const std::vector<VariantR
 std::string solutions_csv(const std::vector<VariantResult>& results, const std::vector<Solution>& solutions);
 
 /**
- * Solves the variants of `sweep` assigned to this rank (id % size == rank) and gathers all
+ * Solves the variants of `sweep` assigned to this rank (id % size == rank) and gathers the
  * results on rank 0 in variant order (other ranks get an empty vector). `threads` and `stop` as
- * in solve_variant. `on_done` (may be empty) is called on each rank after each of its variants.
+ * in solve_variant; once `stop` is true no further variant is started, and the variants not
+ * started have no result (rank 0 gets fewer than sweep.variant_count()). `on_done` (may be empty)
+ * is called on each rank after each of its variants. Nothing is allocated per variant up front.
+ * With `keep_trajectories` false (one rank only), a converged variant that reaches the solution
+ * of an earlier one (the comparisons of group_solutions, in the same order) keeps no trajectory
+ * and records that variant in `same_as`, so that memory grows with the distinct solutions, not
+ * with the converged variants.
  */
 std::vector<VariantResult> run_variants_over_ranks(const Sweep& sweep, int threads, int rank, int size,
                                                    const std::function<void(int done, int mine)>& on_done = {},
-                                                   const std::atomic<bool>* stop = nullptr);
+                                                   const std::atomic<bool>* stop = nullptr,
+                                                   bool keep_trajectories = true);
 
 /** The report `pardel sweep` prints on stdout: the counts, one line per solution (cost, action,
  *  residual, variants, certificate), the best solution and the output folder. */

@@ -1,0 +1,310 @@
+// Hostile cases at the edges of the command line, each run against the built `pardel` under a time
+// limit: sweeps into the folder of an earlier sweep (complete and interrupted), variants too large
+// for the memory the process may use, a sweep of 10^7 variants stopped by SIGTERM (time to stop,
+// resident memory), `--set` values holding a line break (solve, check, sweep, a sweep file's
+// `set`), `pardel kernels` with a step or a point that is not a finite positive number, the
+// pictures of an earlier solve beside new outputs (a failed or skipped plot step), and plot.py on
+// a model file that is not UTF-8.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pardel_process.hpp"
+
+namespace {
+
+using namespace reliability;
+using json = nlohmann::json;
+
+const std::string kScenes = std::string(PARDEL_SOURCE_DIR) + "/scenes";
+const std::string kSweep50 = kScenes + "/sweeps/zermelo_50.toml";
+
+class HostileCliEdges : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = scratch_folder("pardel_hostile_cli_edges"); }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Outcome pardel(const std::vector<std::string>& args, int limit_s = 120, const std::vector<std::string>& env = {}) {
+    return run_pardel(args, dir_ / "log", env, limit_s);
+  }
+  /** pardel under `ulimit -v KB` (RLIMIT_AS), through /bin/sh. */
+  Outcome pardel_limited(long kb, const std::string& args, int limit_s = 120) {
+    return finish_pardel(start_program("/bin/sh", {"-c", "ulimit -v " + std::to_string(kb) + " && exec '" +
+                                                             std::string(PARDEL_CLI_PATH) + "' " + args},
+                                       dir_ / "log"),
+                         dir_ / "log", limit_s);
+  }
+  /** The solution_<id>.csv files in `out`. */
+  static std::set<std::string> solution_files(const fs::path& out) {
+    std::set<std::string> found;
+    const std::regex name("solution_[0-9]+\\.csv");
+    for (const auto& entry : fs::directory_iterator(out)) {
+      const std::string file = entry.path().filename().string();
+      if (std::regex_match(file, name)) found.insert(file);
+    }
+    return found;
+  }
+  /** The trajectory files sweep.json lists. */
+  static std::set<std::string> listed_solution_files(const fs::path& out) {
+    std::set<std::string> listed;
+    const json index = json::parse(read_text(out / "sweep.json"));
+    for (const auto& s : index["solutions"])
+      listed.insert(s["trajectory"].get<std::string>());
+    return listed;
+  }
+  static std::size_t line_count(const std::string& text) {
+    return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+  }
+  /** A sweep file over zermelo_1.toml with `body` after the scene line. */
+  fs::path sweep_file(const std::string& name, const std::string& body) {
+    const fs::path path = dir_ / name;
+    write_text(path, "scene = \"" + kScenes + "/zermelo_1.toml\"\n" + body);
+    return path;
+  }
+  fs::path dir_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Sweeps
+
+TEST_F(HostileCliEdges, SmallerSweepIntoAnEarlierSweepsFolderLeavesNoneOfItsFiles) {
+  const fs::path out = dir_ / "out";
+  Outcome o = pardel({"sweep", kSweep50, "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.output;
+  ASSERT_GE(solution_files(out).size(), 3u);
+  write_text(out / "sweep.png", "the earlier sweep's picture");
+  const fs::path one = sweep_file("one.toml", "[[guesses]]\npoints = [[0,0],[1,3.5],[4,5.5],[6,2]]\n");
+  o = pardel({"sweep", one.string(), "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.output;
+  EXPECT_EQ(solution_files(out), (std::set<std::string>{"solution_1.csv"}));
+  EXPECT_EQ(listed_solution_files(out), (std::set<std::string>{"solution_1.csv"}));
+  EXPECT_FALSE(fs::exists(out / "sweep.png")) << "the earlier sweep's picture is left beside the new outputs";
+  EXPECT_EQ(line_count(read_text(out / "variants.csv")), 2u);
+  EXPECT_TRUE(temporary_files(out).empty());
+}
+
+TEST_F(HostileCliEdges, InterruptedSweepIntoAnEarlierSweepsFolderListsOnlyItsOwnSolutions) {
+  const fs::path out = dir_ / "out";
+  Outcome o = pardel({"sweep", kSweep50, "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.output;
+  ASSERT_GE(solution_files(out).size(), 3u);
+  // Jacobi-Newton needs some 30 000 sweeps per variant here: SIGTERM comes long before the end.
+  const fs::path slow = sweep_file("slow.toml", "set = [\"solver.method=jacobi-newton\", \"solver.threads=1\"]\n"
+                                                "[random_guesses]\ncount = 10\nspread = 1\n");
+  const pid_t pid = start_pardel({"sweep", slow.string(), "--out", out.string(), "--no-plot", "--quiet"}, dir_ / "log");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  ::kill(pid, SIGTERM);
+  o = finish_pardel(pid, dir_ / "log", 60);
+  ASSERT_FALSE(o.timed_out) << o.output;
+  ASSERT_EQ(o.status, 6) << o.output;
+  // Every solution file in the folder is one the new sweep.json lists.
+  EXPECT_EQ(solution_files(out), listed_solution_files(out));
+  const json summary = json::parse(read_text(out / "sweep.json"));
+  EXPECT_EQ(summary["variants"], 10);
+  const std::size_t rows = line_count(read_text(out / "variants.csv")) - 1;
+  EXPECT_EQ(rows + summary["not_started"].get<std::size_t>(), 10u) << read_text(out / "variants.csv");
+  EXPECT_NE(o.output.find("not started"), std::string::npos) << o.output;
+}
+
+TEST_F(HostileCliEdges, VariantTooLargeForMemoryIsRefusedWithItsReason) {
+  // (ulimit -v: were the check missing, the allocation would fail instead of taking the machine.)
+  const fs::path sweep = sweep_file("large.toml", "set = [\"solver.method=newton\", \"solver.threads=1\"]\n"
+                                                  "[[vary]]\nkey = \"grid.N\"\nvalues = [40, 100000000]\n");
+  const fs::path out = dir_ / "out";
+  const Outcome o = pardel_limited(4000000, "sweep '" + sweep.string() + "' --out '" + out.string() + "' --no-plot");
+  ASSERT_FALSE(o.timed_out) << o.output;
+  EXPECT_EQ(o.status, 0) << o.output;  // the N = 40 variant converged
+  EXPECT_NE(o.output.find("pardel sweep: 1 variant not solved (first: variant 1): refused before solving: grid.N = "
+                          "100000000 needs an estimated"),
+            std::string::npos)
+      << o.output;
+  const std::string variants = read_text(out / "variants.csv");
+  EXPECT_NE(variants.find(",error,"), std::string::npos) << variants;
+  EXPECT_NE(variants.find("refused before solving: grid.N = 100000000"), std::string::npos) << variants;
+  EXPECT_EQ(json::parse(read_text(out / "sweep.json"))["failures"]["error"], 1);
+}
+
+TEST_F(HostileCliEdges, EveryVariantTooLargeEndsWithNoSolutionAndTheReason) {
+  const fs::path sweep = sweep_file("all_large.toml", "set = [\"solver.method=newton\", \"grid.N=100000000\"]\n"
+                                                      "[random_guesses]\ncount = 3\nspread = 1\n");
+  const fs::path out = dir_ / "out";
+  const Outcome o = pardel_limited(4000000, "sweep '" + sweep.string() + "' --out '" + out.string() + "' --no-plot");
+  ASSERT_FALSE(o.timed_out) << o.output;
+  EXPECT_EQ(o.status, 8) << o.output;
+  EXPECT_NE(o.output.find("pardel sweep: 3 variants not solved (first: variant 0): refused before solving"),
+            std::string::npos)
+      << o.output;
+  EXPECT_NE(o.output.find("--no-memory-check skips this check"), std::string::npos) << o.output;
+}
+
+TEST_F(HostileCliEdges, TenMillionVariantsStopSoonAfterSigtermInBoundedMemory) {
+  // 10^6 random guesses (the most) x 10 configurations = 10^7 variants (the most).
+  const fs::path sweep =
+      sweep_file("huge.toml", "set = [\"solver.method=newton\", \"grid.N=20\", \"solver.threads=1\"]\n"
+                              "[random_guesses]\ncount = 1000000\ninterior_points = 1\nspread = 1\n"
+                              "[[vary]]\nkey = \"params.s\"\nfrom = 1.0\nto = 1.9\ncount = 10\n");
+  const fs::path out = dir_ / "out";
+  const pid_t pid = start_pardel({"sweep", sweep.string(), "--out", out.string(), "--no-plot", "--quiet"}, dir_ / "log");
+  std::this_thread::sleep_for(std::chrono::seconds(4));
+  long rss_kb = -1;
+  {
+    std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+    for (std::string line; std::getline(status, line);)
+      if (line.rfind("VmRSS:", 0) == 0) rss_kb = std::stol(line.substr(6));
+  }
+  const auto signalled = std::chrono::steady_clock::now();
+  ::kill(pid, SIGTERM);
+  const Outcome o = finish_pardel(pid, dir_ / "log", 60);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  ASSERT_FALSE(o.timed_out) << o.output;
+  ASSERT_EQ(o.status, 6) << o.output;
+  EXPECT_LT(seconds, 2.0) << "a sweep of 10^7 variants took " << seconds << " s to stop after SIGTERM";
+  EXPECT_GT(rss_kb, 0);
+  EXPECT_LT(rss_kb, 400 * 1024) << "resident memory of the running sweep: " << rss_kb << " kB";
+  const json summary = json::parse(read_text(out / "sweep.json"));
+  EXPECT_EQ(summary["variants"], 10000000);
+  const std::size_t rows = line_count(read_text(out / "variants.csv")) - 1;
+  EXPECT_GT(rows, 0u);
+  EXPECT_EQ(rows + summary["not_started"].get<std::size_t>(), 10000000u);
+}
+
+TEST_F(HostileCliEdges, SweepFileSetWithALineBreakIsRefused) {
+  const fs::path sweep = sweep_file("newline.toml", "set = [\"grid.N=40\\nsolver.tol=1\"]\n");
+  const Outcome o = pardel({"sweep", sweep.string(), "--no-plot", "--quiet", "--out", (dir_ / "out").string()});
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find(sweep.string() + ":2:8: error: set[0] holds a line break"), std::string::npos) << o.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// --set with a line break: the text after it would be dropped unseen
+
+TEST_F(HostileCliEdges, SolveSetWithALineBreakIsRefused) {
+  const Outcome o = pardel({"solve", kScenes + "/zermelo_1.toml", "--set", "grid.N=40\nsolver.tol=1", "--out",
+                            (dir_ / "out").string(), "--no-plot", "--quiet"});
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("--set grid.N=40\\nsolver.tol=1: error: the override holds a line break"),
+            std::string::npos)
+      << o.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(HostileCliEdges, CheckSetWithACarriageReturnIsRefused) {
+  const Outcome o = pardel({"check", kScenes + "/zermelo_1.toml", "--set", "grid.N=40\r"});
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("--set grid.N=40\\r: error: the override holds a line break"), std::string::npos)
+      << o.output;
+}
+
+TEST_F(HostileCliEdges, SweepSetWithALineBreakIsRefused) {
+  const Outcome o = pardel({"sweep", kSweep50, "--set", "solver.tol=1e-8\ngrid.N=3", "--out",
+                            (dir_ / "out").string(), "--no-plot", "--quiet"});
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("--set solver.tol=1e-8\\ngrid.N=3: error: the override holds a line break"),
+            std::string::npos)
+      << o.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// pardel kernels: the step and the points must be finite, the step positive
+
+struct KernelCase {
+  const char* option;
+  const char* value;
+  const char* message;
+};
+
+class KernelArguments : public HostileCliEdges, public ::testing::WithParamInterface<KernelCase> {};
+
+TEST_P(KernelArguments, AreRefusedNamingTheArgument) {
+  std::vector<std::string> args = {"kernels", "--model", "harmonic", "--disc", "trapezoid", "--h", "0.1",
+                                   "--t0", "0", "--t1", "0.1", "--q0", "0", "--q1", "0.1"};
+  bool replaced = false;
+  for (std::size_t i = 0; i + 1 < args.size(); ++i) {
+    if (args[i] == GetParam().option) {
+      args[i + 1] = GetParam().value;
+      replaced = true;
+    }
+  }
+  if (!replaced) args.insert(args.end(), {GetParam().option, GetParam().value});
+  const Outcome o = pardel(args, 30);
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find(std::string("pardel: error: ") + GetParam().message), std::string::npos) << o.output;
+  EXPECT_EQ(o.output.find("\"Ld\""), std::string::npos) << o.output;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    HostileCliEdges, KernelArguments,
+    ::testing::Values(KernelCase{"--h", "0", "--h: the step must be a finite number > 0, got '0'"},
+                      KernelCase{"--h", "-0.1", "--h: the step must be a finite number > 0, got '-0.1'"},
+                      KernelCase{"--h", "nan", "--h: the step must be a finite number > 0, got 'nan'"},
+                      KernelCase{"--h", "inf", "--h: the step must be a finite number > 0, got 'inf'"},
+                      KernelCase{"--t0", "nan", "--t0: 'nan' is not a finite number"},
+                      KernelCase{"--t1", "-inf", "--t1: '-inf' is not a finite number"},
+                      KernelCase{"--q0", "nan", "--q0: value 1 (x) is not a finite number"},
+                      KernelCase{"--q1", "1e999", "--q1: '1e999' is not a number"},
+                      KernelCase{"--param", "omega=nan", "--param omega: 'nan' is not a finite number"}),
+    [](const ::testing::TestParamInfo<KernelCase>& info) { return "Case" + std::to_string(info.index); });
+
+// ---------------------------------------------------------------------------------------------
+// Pictures: never those of another solve beside the outputs
+
+TEST_F(HostileCliEdges, SolveWithoutPlotsRemovesTheEarlierSolvesPictures) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  write_text(out / "trajectory.png", "an earlier solve's picture");
+  write_text(out / "convergence.png", "an earlier solve's picture");
+  const Outcome o = pardel({"solve", kScenes + "/zermelo_1.toml", "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.output;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  EXPECT_FALSE(fs::exists(out / "trajectory.png"));
+  EXPECT_FALSE(fs::exists(out / "convergence.png"));
+}
+
+TEST_F(HostileCliEdges, FailedPlotStepLeavesNoPicturesOfTheEarlierSolve) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  write_text(out / "trajectory.png", "an earlier solve's picture");
+  write_text(out / "convergence.png", "an earlier solve's picture");
+  // A matplotlib that cannot be imported: the plot step fails.
+  fs::create_directories(dir_ / "broken" / "matplotlib");
+  write_text(dir_ / "broken" / "matplotlib" / "__init__.py", "raise ImportError('broken for the test')\n");
+  const Outcome o = pardel({"solve", kScenes + "/zermelo_1.toml", "--out", out.string(), "--quiet"}, 120,
+                           {"PYTHONPATH=" + (dir_ / "broken").string()});
+  ASSERT_EQ(o.status, 0) << o.output;
+  EXPECT_NE(o.output.find("warning: plots not written"), std::string::npos) << o.output;
+  EXPECT_FALSE(fs::exists(out / "trajectory.png"));
+  EXPECT_FALSE(fs::exists(out / "convergence.png"));
+}
+
+TEST_F(HostileCliEdges, PlotOfAModelFileInLatin1DrawsWithoutATraceback) {
+  const fs::path out = dir_ / "out";
+  const Outcome o = pardel({"solve", kScenes + "/zermelo_1.toml", "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.output;
+  // The same model file with a comment in Latin-1 (0xE9, 'é', is not UTF-8 on its own).
+  const fs::path lag = dir_ / "zermelo_latin1.lag";
+  write_text(lag, "# vent fort, d\xe9rive\n" + read_text(std::string(PARDEL_SOURCE_DIR) + "/lagrangians/zermelo.lag"));
+  json summary = json::parse(read_text(out / "summary.json"));
+  summary["model_source"] = lag.string();
+  write_text(out / "summary.json", summary.dump(2));
+  const Outcome plot = finish_pardel(start_program(PARDEL_PYTHON_PATH, {PARDEL_PLOT_SCRIPT_PATH, out.string()},
+                                                   dir_ / "plot.log"),
+                                     dir_ / "plot.log", 120);
+  ASSERT_FALSE(plot.timed_out);
+  EXPECT_EQ(plot.status, 0) << plot.output;
+  EXPECT_EQ(plot.output.find("Traceback"), std::string::npos) << plot.output;
+  EXPECT_TRUE(fs::exists(out / "trajectory.png"));
+  EXPECT_TRUE(fs::exists(out / "convergence.png"));
+}
+
+}  // namespace
