@@ -484,7 +484,7 @@ const pardel_model* load_entry(const fs::path& dir, Entry& entry, std::string* w
   if (::access(path.c_str(), F_OK) != 0) path = (dir / "model.so").string();  // no /proc: the checked path
   void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!handle) {
-    *why = std::string("cannot load the compiled model: ") + dlerror();
+    *why = "cannot load the compiled model " + (dir / "model.so").string() + ": " + dlerror();
     return nullptr;
   }
   entry.so_fd = -1;  // kept open (see above)
