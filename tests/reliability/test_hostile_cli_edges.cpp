@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <cctype>
 #include <chrono>
 #include <fstream>
 #include <regex>
@@ -114,6 +115,57 @@ TEST_F(HostileCliEdges, InterruptedSweepIntoAnEarlierSweepsFolderListsOnlyItsOwn
   EXPECT_EQ(rows + summary["not_started"].get<std::size_t>(), 10u) << read_text(out / "variants.csv");
   EXPECT_NE(o.output.find("not started"), std::string::npos) << o.output;
 }
+
+/** Where a sweep into an earlier sweep's folder is killed: at the rename of one of its files. */
+struct SweepKillPoint {
+  const char* file;
+  const char* when;  ///< "before" or "after" the rename
+};
+
+class SweepKilledWhileWriting : public HostileCliEdges, public ::testing::WithParamInterface<SweepKillPoint> {};
+
+TEST_P(SweepKilledWhileWriting, NeverLeavesAnIndexWithFilesOfAnotherSweep) {
+  const fs::path out = dir_ / "out";
+  Outcome o = pardel({"sweep", kSweep50, "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.output;
+  ASSERT_GE(solution_files(out).size(), 3u);
+  // Three guesses of another seed: other solutions, fewer of them.
+  const fs::path other = sweep_file("other.toml", "set = [\"solver.method=newton\"]\n[random_guesses]\ncount = 3\n"
+                                                  "seed = 7\nbox = { min = [-1, -2], max = [8, 7] }\n");
+  o = run_pardel({"sweep", other.string(), "--out", out.string(), "--no-plot", "--quiet"}, dir_ / "log",
+                 {std::string("LD_PRELOAD=") + PARDEL_FAULT_INJECT_PATH, std::string("PARDEL_FAULT_RENAME=") + GetParam().file,
+                  std::string("PARDEL_FAULT_WHEN=") + GetParam().when, "PARDEL_FAULT_SIGNAL=9"},
+                 120);
+  ASSERT_FALSE(o.timed_out) << o.output;
+  EXPECT_EQ(o.status, 128 + SIGKILL) << o.output;
+  // Whenever sweep.json exists, the files beside it are the ones it lists (and of its sweep).
+  if (fs::exists(out / "sweep.json")) {
+    const json index = json::parse(read_text(out / "sweep.json"));
+    EXPECT_EQ(index["sweep"], other.string());
+    EXPECT_EQ(solution_files(out), listed_solution_files(out));
+    EXPECT_EQ(line_count(read_text(out / "solutions.csv")), index["solutions_count"].get<std::size_t>() + 1);
+    EXPECT_EQ(line_count(read_text(out / "variants.csv")), 4u);
+  } else {
+    EXPECT_TRUE(solution_files(out).size() <= 3u) << "the earlier sweep's solution files are left";
+  }
+  // The next sweep into the folder completes and removes what the killed one left behind.
+  o = pardel({"sweep", other.string(), "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(o.status, 0) << o.output;
+  EXPECT_EQ(solution_files(out), listed_solution_files(out));
+  EXPECT_TRUE(temporary_files(out).empty()) << temporary_files(out).front();
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EachRename, SweepKilledWhileWriting,
+    ::testing::Values(SweepKillPoint{"solution_1.csv", "before"}, SweepKillPoint{"solutions.csv", "before"},
+                      SweepKillPoint{"variants.csv", "before"}, SweepKillPoint{"sweep.json", "before"},
+                      SweepKillPoint{"sweep.json", "after"}),
+    [](const ::testing::TestParamInfo<SweepKillPoint>& info) {
+      std::string name = std::string(info.param.when) + "_" + info.param.file;
+      for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return name;
+    });
 
 TEST_F(HostileCliEdges, VariantTooLargeForMemoryIsRefusedWithItsReason) {
   // (ulimit -v: were the check missing, the allocation would fail instead of taking the machine.)
