@@ -7,7 +7,7 @@
 // before the check). Then names: a coordinate named k (trajectory.csv's header is k,t,k,...) read
 // by pardel check and as a CSV guess with the right values, duplicate columns refused at
 // FILE:1:COL; and paths that are not UTF-8: a scene, an output folder, a sweep, a trajectory and a
-// .lag file, whose solves complete with valid JSON.
+// .lag file, whose solves complete with valid JSON; an interrupted solve of such a scene resumes.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
@@ -481,6 +481,31 @@ TEST_F(NonUtf8Paths, SolveKeepsItsSummary) {
   // The invalid byte is written as U+FFFD; the rest of the path as it is.
   EXPECT_EQ(summary["scene"].get<std::string>(), (dir_ / "sc\xef\xbf\xbdne.toml").string());
   EXPECT_TRUE(fs::exists(out / "trajectory.csv"));
+}
+
+TEST_F(NonUtf8Paths, InterruptedSolveResumes) {
+  // The checkpoint keeps the scene's path byte by byte (scene.path_bytes), so --resume finds it.
+  const fs::path scene = dir_ / (kLatin1 + "_long.toml");
+  write_text(scene, kScene + "[solver]\nmethod = \"jacobi\"\nmax_iterations = 100000000\n");
+  const fs::path out = dir_ / ("resume_" + kLatin1);
+  const pid_t pid = start_pardel({"solve", scene.string(), "--out", out.string(), "--no-plot", "--quiet", "--set",
+                                  "grid.N=2000"},
+                                 dir_ / "interrupted.log");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  ::kill(pid, SIGTERM);
+  const Outcome stopped = finish_pardel(pid, dir_ / "interrupted.log");
+  ASSERT_EQ(stopped.status, 6) << stopped.output;
+  const nlohmann::json checkpoint = parse_json_file(out / "checkpoint.json");
+  ASSERT_TRUE(checkpoint.is_object()) << "checkpoint.json is missing or not valid JSON";
+  const auto bytes = checkpoint["body"]["scene"]["path_bytes"].get<std::vector<unsigned char>>();
+  EXPECT_EQ(std::string(bytes.begin(), bytes.end()), scene.string());
+  // A warm start with Newton, which converges at once.
+  const Outcome resumed = pardel(
+      {"solve", "--resume", out.string(), "--set", "solver.method=newton", "--no-plot", "--quiet"}, "resumed.log");
+  EXPECT_EQ(resumed.status, 0) << resumed.output;
+  const nlohmann::json summary = parse_json_file(out / "summary.json");
+  ASSERT_TRUE(summary.is_object());
+  EXPECT_EQ(summary["status"], "converged");
 }
 
 TEST_F(NonUtf8Paths, CheckJsonNamesTheTrajectory) {

@@ -154,6 +154,16 @@ std::string model_digest(const pardel_model& model, const std::string& lag_path)
 
 namespace {
 
+/** Whether `text` is valid UTF-8 (what a JSON string may hold). */
+bool is_utf8(const std::string& text) {
+  try {
+    (void)json(text).dump();
+    return true;
+  } catch (const json::type_error&) {
+    return false;
+  }
+}
+
 json body_json(const Checkpoint& c) {
   const SolverState& s = c.state;
   json history = json::array();
@@ -186,8 +196,13 @@ json body_json(const Checkpoint& c) {
                           {"t", numbers(s.previous_level.t)},
                           {"q", numbers(s.previous_level.q)}}},
   };
+  json scene = {{"path", c.scene_path}, {"hash", c.scene_hash}, {"overrides", c.overrides}, {"threads", c.threads}};
+  // A path that is not UTF-8 cannot be a JSON string: "path" shows it with U+FFFD for its invalid
+  // bytes (checkpoint_json), "path_bytes" holds its bytes, from which parse_checkpoint reads it.
+  if (!is_utf8(c.scene_path))
+    scene["path_bytes"] = std::vector<unsigned char>(c.scene_path.begin(), c.scene_path.end());
   return {
-      {"scene", {{"path", c.scene_path}, {"hash", c.scene_hash}, {"overrides", c.overrides}, {"threads", c.threads}}},
+      {"scene", scene},
       {"model", c.model_digest.empty() ? json{{"name", c.model}, {"dim", c.dim}}
                                        : json{{"name", c.model}, {"dim", c.dim}, {"digest", c.model_digest}}},
       {"state", state},
@@ -265,6 +280,17 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
   Checkpoint c;
   const json& scene = rd.at(body, "scene", "body");
   c.scene_path = rd.text(scene, "path", "scene");
+  if (scene.is_object() && scene.contains("path_bytes")) {  // a path that is not UTF-8, byte by byte
+    const json& bytes = scene["path_bytes"];
+    if (!bytes.is_array()) rd.fail("key scene.path_bytes must be an array of bytes (integers 0 to 255)");
+    std::string path;
+    for (const json& b : bytes) {
+      if (!b.is_number_integer() || b.get<long long>() < 0 || b.get<long long>() > 255)
+        rd.fail("key scene.path_bytes must be an array of bytes (integers 0 to 255)");
+      path += static_cast<char>(b.get<long long>());
+    }
+    c.scene_path = path;
+  }
   c.scene_hash = rd.text(scene, "hash", "scene");
   const json& overrides = rd.at(scene, "overrides", "scene");
   if (!overrides.is_array()) rd.fail("key scene.overrides must be an array of strings");
