@@ -112,9 +112,9 @@ Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, 
 
 void note_stopped_level(const Problem& problem, Trajectory& trajectory, Summary& summary) {
   const int reached = trajectory.N;
-  if (summary.termination == Termination::converged || reached == problem.N || reached < 1 || trajectory.q.empty())
-    return;
-  trajectory = resample(problem, trajectory, problem.N);
+  if (summary.termination == Termination::converged || reached == problem.N || reached < 1) return;
+  // Over MPI ranks only rank 0 holds the gathered trajectory; every rank says the same.
+  if (!trajectory.q.empty()) trajectory = resample(problem, trajectory, problem.N);
   summary.N = problem.N;
   summary.message += " (stopped at the refinement level N = " + std::to_string(reached) +
                      "; the trajectory returned is that level's iterate interpolated to the requested N = " +

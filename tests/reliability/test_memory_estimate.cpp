@@ -4,6 +4,8 @@
 // refused with exit status 2 and a message naming grid.N, before anything is allocated or
 // written; a std::bad_alloc that happens anyway becomes a message, not a crash.
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -102,7 +104,10 @@ class MemoryEstimate : public ::testing::Test {
     EXPECT_EQ(base.status, to_convergence ? 0 : 3) << base.output;
     EXPECT_EQ(big.status, to_convergence ? 0 : 3) << big.output;
     const pardel::app::Scene at = scene(sets);
-    const double estimate = pardel::estimate_solve_memory(at.problem, at.options, certificate).peak;
+    // A solve stopped by max_iterations is not assessed (only a converged point is): its peak is
+    // the estimate's other parts.
+    const pardel::MemoryEstimate e = pardel::estimate_solve_memory(at.problem, at.options, certificate);
+    const double estimate = to_convergence ? e.peak : std::max({e.solve, e.certificate, e.output});
     const double ratio = (big.peak_bytes - base.peak_bytes) / estimate;
     std::printf("method %s%s, N = %d: estimate %.1f MB, measured %.1f MB above a small solve (%.1f MB): ratio %.3f\n",
                 method.c_str(), certificate ? " with the certificate" : "", N, estimate / 1e6, (big.peak_bytes - base.peak_bytes) / 1e6, base.peak_bytes / 1e6,
@@ -116,10 +121,16 @@ class MemoryEstimate : public ::testing::Test {
 
 // The estimate must neither miss memory (ratio above 1.25) nor refuse solves that fit by a wide
 // margin (ratio below 0.75).
-TEST_F(MemoryEstimate, AgreesWithMeasuredPeakForJacobiNewton) {
-  use_ = convex_;
+TEST_F(MemoryEstimate, AgreesWithMeasuredPeakOfAConvergedSolve) {
+  // Only a converged solve is assessed: Newton solves the convex action in a few iterations (to
+  // the default relative tolerance: 1e-10 absolute is below the round-off level at these N), and
+  // the peak is then the assessment's.
+  use_ = dir_ / "convex_relative.toml";
+  std::ofstream(use_) << "model = \"free_particle\"\ndiscretization = \"trapezoid\"\n[grid]\nt0 = 0\nT = 1\n"
+                         "N = 200\n[boundary]\nq0 = [0, 0]\nqN = [6, 5]\n[guess]\nkind = \"polyline\"\n"
+                         "points = [[0, 0], [5, -3], [6, 5]]\n";
   for (int N : {50000, 150000}) {
-    const double ratio = measured_over_estimated("jacobi-newton", N);
+    const double ratio = measured_over_estimated("newton", N, false, true);
     EXPECT_GT(ratio, 0.75) << "N = " << N;
     EXPECT_LT(ratio, 1.25) << "N = " << N;
   }
