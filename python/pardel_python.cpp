@@ -496,12 +496,24 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
     }
     return true;
   };
+  // The point assessment of a converged solve records no iteration: it polls Python's signals
+  // through keep_going, so that Ctrl-C stops it too.
+  scene.options.keep_going = [&]() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_check < kSignalCheckPeriod) return true;
+    last_check = now;
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() == 0) return true;
+    pending = std::make_unique<py::error_already_set>();
+    return false;
+  };
   Summary summary;
   {
     py::gil_scoped_release release;
     summary = pardel::solve(scene.problem, scene.options, trajectory);
   }
   scene.options.on_iteration = nullptr;
+  scene.options.keep_going = nullptr;
   if (pending) throw std::move(*pending);
   if (summary.termination == Termination::invalid_input)
     throw InputError(fmt::format("{}: error: {}", scene.path, summary.message));

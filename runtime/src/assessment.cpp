@@ -340,11 +340,21 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
   op.first_node = 1;
   op.N = ctx.N;
   op.free = ctx.is_free.data() + dz;
-  op.solve = [&H](const double* b, double* x) { H.solve_ldlt(b, x); };
+  // An interruption after convergence stops the assessment at its next block solve.
+  struct Interrupted {};
+  op.solve = [&H, &ctx](const double* b, double* x) {
+    if (ctx.keep_going && !ctx.keep_going()) throw Interrupted{};
+    H.solve_ldlt(b, x);
+  };
   op.reduce = [](double*, int) {};
   if (work)
     for (int k = 0; k < 4; ++k) op.work[k] = work[k];
-  describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out);
+  try {
+    describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out);
+  } catch (const Interrupted&) {
+    out = PointAssessment{};
+    out.note = "not assessed: interrupted during the assessment of the converged point";
+  }
 }
 
 template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&,

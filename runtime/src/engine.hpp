@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <type_traits>
 #include <string>
@@ -92,6 +93,8 @@ struct Context {
   std::vector<double> comp_residual, comp_scale, comp_hq;
   double action = 0;
   bool action_known = false;     ///< whether `action` belongs to q
+  /** Options::keep_going of the solve, polled by the point assessment (empty: never stopped). */
+  std::function<bool()> keep_going;
 
   bool parallel(int n) const { return threads > 1 && n >= kParallelMin; }
   double h(int k) const { return hk[static_cast<std::size_t>(k)]; }

@@ -197,6 +197,7 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
   // What the returned point is (a converged one only): from Newton's factorization at a minimum
   // where it stopped, else from a new one, the method's storage released first so as not to add
   // to the peak memory.
+  driver.context().keep_going = options.keep_going;
   if (!detail::point_assessed(summary.termination)) {
     summary.point = detail::not_assessed(summary.termination);
   } else if (!method->assess(driver.context(), summary.point)) {

@@ -5,7 +5,7 @@
  * solved at equal scales; a coordinate at rest), the inertia is judged in the Jacobi-scaled Hessian
  * (a badly scaled minimum is no degenerate point; a singular matrix still has its zero), node times
  * that do not increase under a clock are never converged, and a solve that did not converge is not
- * assessed and returns the requested grid.
+ * assessed (nor one interrupted during its assessment) and returns the requested grid.
  */
 #include <gtest/gtest.h>
 
@@ -228,6 +228,30 @@ TEST(ComponentScaleEnding, AnInterruptedSolveClaimsNothingAboutItsIterate) {
   ASSERT_EQ(s.termination, Termination::interrupted) << s.message;
   EXPECT_EQ(s.point.kind, pardel::PointKind::unknown);
   EXPECT_NE(s.point.note.find("not assessed"), std::string::npos) << s.point.note;
+}
+
+TEST(ComponentScaleEnding, AnInterruptionAfterConvergenceStopsTheAssessment) {
+  // keep_going is polled by the assessment's block solves: false stops it, and the converged
+  // solve's point is reported not assessed; left empty or true, the point is the minimum.
+  const pardel::Problem p = pendulums(1, 400);
+  for (bool stop : {true, false}) {
+    pardel::Options o = with_method(pardel::Method::newton);
+    long polled = 0;
+    o.keep_going = [&polled, stop] {
+      ++polled;
+      return !stop;
+    };
+    pardel::Trajectory tr = pardel::linear_guess(p);
+    const pardel::Summary s = pardel::solve(p, o, tr);
+    ASSERT_EQ(s.termination, Termination::converged) << s.message;
+    EXPECT_GE(polled, 1);
+    if (stop) {
+      EXPECT_EQ(s.point.kind, pardel::PointKind::unknown);
+      EXPECT_NE(s.point.note.find("interrupted during the assessment"), std::string::npos) << s.point.note;
+    } else {
+      EXPECT_EQ(s.point.kind, pardel::PointKind::minimum) << s.point.note;
+    }
+  }
 }
 
 TEST(ComponentScaleEnding, AStopAtACoarseLevelReturnsTheRequestedGrid) {

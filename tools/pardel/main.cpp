@@ -371,6 +371,7 @@ int run_solve_unguarded(const SolveArgs& args) {
     if (root) progress.update(record);
     return !g_interrupted.load();
   };
+  scene.options.keep_going = [] { return !g_interrupted.load(); };
   g_interrupted.store(false);
   auto previous_int = std::signal(SIGINT, on_sigint);
   auto previous_term = std::signal(SIGTERM, on_sigint);

@@ -219,6 +219,10 @@ struct Options {
   double divergence_factor = 1e8;  ///< diverged when the residual exceeds this times the initial one
   /** Called after each recorded iteration; returning false interrupts the solve. */
   std::function<bool(const IterationRecord&)> on_iteration;
+  /** Polled between the block solves of a converged solve's point assessment (in one process),
+   *  which records no iteration: returning false stops it at once, and the point is reported not
+   *  assessed (an interruption that arrives after convergence). */
+  std::function<bool()> keep_going;
   /** Continue an interrupted solve from this state (Summary::state of that solve) instead of from
    *  the trajectory passed to solve(); problem and options must be those of the interrupted solve. */
   const SolverState* resume_from = nullptr;
