@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzing job of continuous integration: configures build-fuzz (or $1) with clang, builds the
 # libFuzzer targets of tests/fuzz/ (the .lag reader, the scene reader, the checkpoint reader, the
-# sweep-file reader and --set overrides of valid scenes, instrumented with ASan + UBSan +
+# sweep-file reader, --set overrides of valid scenes and the trajectory CSV reader, instrumented with ASan + UBSan +
 # coverage) and runs each for a fixed number of executions from the seed corpus.
 # Fails on any crash, contract violation (abort), leak, UB report or input slower than -timeout
 # (10 s; 60 s for the symbolic pipeline, where GiNaC under ASan takes up to a few seconds on a
@@ -13,7 +13,7 @@
 #              LAG_PIPELINE_RUNS (5000: reader + symbolic pipeline, ~100x slower per input),
 #              SCENE_RUNS (200000), MAX_SECONDS (per run, a guard on slow machines: 240),
 #              CHECKPOINT_RUNS (500000), SWEEP_RUNS (500000), OVERRIDES_RUNS (500000),
-#              EXTRA_MAX_SECONDS (per run of these three: 55), MAX_LEN (4096)
+#              TRAJECTORY_RUNS (200000), EXTRA_MAX_SECONDS (per run of these four: 55), MAX_LEN (4096)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build_dir="${1:-build-fuzz}"
@@ -25,6 +25,7 @@ max_seconds="${MAX_SECONDS:-240}"
 checkpoint_runs="${CHECKPOINT_RUNS:-500000}"
 sweep_runs="${SWEEP_RUNS:-500000}"
 overrides_runs="${OVERRIDES_RUNS:-500000}"
+trajectory_runs="${TRAJECTORY_RUNS:-200000}"
 extra_max_seconds="${EXTRA_MAX_SECONDS:-55}"
 max_len="${MAX_LEN:-4096}"
 
@@ -48,7 +49,7 @@ CC=clang CXX=clang++ cmake -S . -B "$build_dir" -G Ninja \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DPARDEL_BUILD_BENCHMARKS=OFF
 cmake --build "$build_dir" -j "$jobs" --target fuzz_lag_parser fuzz_scene_parser fuzz_checkpoint_reader \
-  fuzz_sweep_reader fuzz_scene_overrides
+  fuzz_sweep_reader fuzz_scene_overrides fuzz_trajectory_reader
 
 # Seed folders as configured by tests/fuzz/CMakeLists.txt (the corpora and the catalogues).
 seeds() {
@@ -82,6 +83,8 @@ run_fuzzer fuzz_checkpoint_reader "$checkpoint_runs" tests/fuzz/checkpoint.dict 
   "$extra_max_seconds"
 run_fuzzer fuzz_sweep_reader "$sweep_runs" tests/fuzz/sweep.dict PARDEL_FUZZ_SWEEP_SEEDS "$extra_max_seconds"
 run_fuzzer fuzz_scene_overrides "$overrides_runs" tests/fuzz/overrides.dict PARDEL_FUZZ_OVERRIDES_SEEDS \
+  "$extra_max_seconds"
+run_fuzzer fuzz_trajectory_reader "$trajectory_runs" tests/fuzz/trajectory.dict PARDEL_FUZZ_TRAJECTORY_SEEDS \
   "$extra_max_seconds"
 # The summary comes last so that the tail of a long log names what failed, with each failing
 # input in base64 (replay it with: base64 -d > input; BUILD_DIR/NAME input).
