@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <type_traits>
 #include <string>
@@ -248,7 +249,7 @@ inline std::string component_name(const Context& ctx, int i) {
 /** Component i's round-off level: 16 eps of its terms plus 2 eps of its row of |H| |q|. */
 inline double component_floor(const Context& ctx, int i) {
   const std::size_t ii = static_cast<std::size_t>(i);
-  const double eps = 2.220446049250313e-16;
+  const double eps = std::numeric_limits<double>::epsilon();
   return 16 * eps * ctx.comp_scale[ii] + 2 * eps * ctx.comp_hq[ii];
 }
 
@@ -261,7 +262,7 @@ inline double component_floor(const Context& ctx, int i) {
  */
 inline double component_target(const Options& options, const Context& ctx, int i, double start_scale) {
   if (options.tol > 0) return options.tol;
-  const double eps = 2.220446049250313e-16;
+  const double eps = std::numeric_limits<double>::epsilon();
   return std::max({options.rtol * ctx.comp_scale[static_cast<std::size_t>(i)], 10 * component_floor(ctx, i),
                    160 * eps * start_scale});
 }

@@ -267,12 +267,15 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
   return false;
 }
 
+double Iteration::component_target(int i) const {
+  const std::size_t ii = static_cast<std::size_t>(i);
+  return detail::component_target(options_, ctx_, i, ii < start_scale_.size() ? start_scale_[ii] : 0.0);
+}
+
 int Iteration::unresolved_component() const {
   const int d = static_cast<int>(ctx_.comp_residual.size());
-  for (int i = 0; i < d; ++i) {
-    const double start = static_cast<std::size_t>(i) < start_scale_.size() ? start_scale_[static_cast<std::size_t>(i)] : 0.0;
-    if (!(ctx_.comp_residual[static_cast<std::size_t>(i)] <= component_target(options_, ctx_, i, start))) return i;
-  }
+  for (int i = 0; i < d; ++i)
+    if (!(ctx_.comp_residual[static_cast<std::size_t>(i)] <= component_target(i))) return i;
   return -1;
 }
 
@@ -283,11 +286,8 @@ double Iteration::distance_to_target(double r, double target) const {
   };
   double distance = ratio(r, target);
   const int d = static_cast<int>(ctx_.comp_residual.size());
-  for (int i = 0; i < d; ++i) {
-    const std::size_t ii = static_cast<std::size_t>(i);
-    const double start = ii < start_scale_.size() ? start_scale_[ii] : 0.0;
-    distance = std::max(distance, ratio(ctx_.comp_residual[ii], component_target(options_, ctx_, i, start)));
-  }
+  for (int i = 0; i < d; ++i)
+    distance = std::max(distance, ratio(ctx_.comp_residual[static_cast<std::size_t>(i)], component_target(i)));
   return distance;
 }
 
@@ -295,11 +295,10 @@ std::string Iteration::unresolved_note() const {
   const int i = unresolved_component();
   if (i < 0) return std::string();
   const std::size_t ii = static_cast<std::size_t>(i);
-  const double start = ii < start_scale_.size() ? start_scale_[ii] : 0.0;
   return "; component " + component_name(ctx_, i) +
-         format("'s equations are resolved only to %.3g, above its own target %.3g (rtol x the size %.3g of its "
-                "terms): the solve is not converged",
-                ctx_.comp_residual[ii], component_target(options_, ctx_, i, start), ctx_.comp_scale[ii]);
+         format("'s equations are resolved only to %.3g, above its own target %.3g (its terms are of size %.3g): "
+                "the solve is not converged",
+                ctx_.comp_residual[ii], component_target(i), ctx_.comp_scale[ii]);
 }
 
 bool Iteration::non_finite_residual(int node) {

@@ -115,6 +115,8 @@ class Iteration {
   double distance_to_target(double r, double target) const;
   /** ", component NAME's equations are resolved to X > its target Y" for an unresolved component. */
   std::string unresolved_note() const;
+  /** Component i's target (detail::component_target) with its scale at the solve's start. */
+  double component_target(int i) const;
   std::string converged_message(double r, double target) const;
   bool should_record();
   bool record();
