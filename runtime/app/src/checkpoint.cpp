@@ -9,10 +9,8 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "pardel/app/trajectory_io.hpp"
 #include "pardel/regular_file.hpp"
@@ -113,12 +111,8 @@ std::string fnv1a_hex(const std::string& bytes) {
 }
 
 std::string model_digest(const pardel_model& model, const std::string& lag_path) {
-  if (!lag_path.empty()) {
-    std::ifstream in(lag_path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return fnv1a_hex("lag\n" + text.str());
-  }
+  if (!lag_path.empty())  // through the one reader of users' files (a FIFO or device is refused, not read)
+    return fnv1a_hex("lag\n" + pardel::read_regular_file(lag_path, pardel::FileLimits::lag, ".lag file"));
   std::string d = fmt::format("abi {}\nname {}\norder {} ncoords {} dim {}\ntime_dependent {} clock {}\ncost {} {}\n",
                               model.abi_version, model.name ? model.name : "", model.order, model.ncoords, model.dim,
                               model.time_dependent, model.clock != nullptr, model.cost_name ? model.cost_name : "",

@@ -46,7 +46,8 @@ struct Checkpoint {
 /**
  * What identifies a model's kernels, as 16 hex digits (FNV-1a 64), so that `--resume` notices a
  * model that changed since the checkpoint: for a model compiled from a .lag file (`lag_path` not
- * empty), the file's bytes; for a model compiled into pardel, its description (name, order,
+ * empty), the file's bytes (read as pardel/regular_file.hpp reads users' files: a file that is no
+ * longer a regular file of at most 1 MiB throws pardel::FileError); for a model compiled into pardel, its description (name, order,
  * coords, params and defaults, discretizations, clock, cost, kernel ABI) and the values of each
  * discretization's kernel at a fixed point, to 12 significant digits.
  */
