@@ -368,7 +368,14 @@ std::string Summary::brief_report() const {
                 to_string(method), to_string(termination), iterations, N, threads, threads == 1 ? "" : "s", residual,
                 action, final_time, wall_seconds * 1e3);
   std::string out = buf;
+  if (std::isfinite(error_estimate)) {
+    std::snprintf(buf, sizeof buf, ", error estimate %.3e%s", error_estimate, extrapolated ? " (extrapolated path)" : "");
+    out += buf;
+  } else {
+    out += ", error not estimated";
+  }
   if (!message.empty()) out += "\n  " + message;
+  if (!error_note.empty()) out += "\n  error estimate: " + error_note;
   return out;
 }
 

@@ -3,7 +3,9 @@
  * The solve in one process, for every method: validation, the loop over the levels of
  * coarse-to-fine refinement (levels.hpp: which grids, where each starts), resume and warm starts,
  * the result and the point assessment, around the iteration at each level (iteration.hpp:
- * node-time updates, stopping rules, history). A method only supplies evaluate/iterate.
+ * node-time updates, stopping rules, history), and the error estimate of a converged solve
+ * (error_estimate.hpp: Richardson against a coarser nested grid). A method only supplies
+ * evaluate/iterate.
  */
 #include <algorithm>
 #include <chrono>
@@ -14,6 +16,7 @@
 
 #include "assessment.hpp"
 #include "engine.hpp"
+#include "error_estimate.hpp"
 #include "iteration.hpp"
 #include "levels.hpp"
 
@@ -134,8 +137,18 @@ std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, st
   return nullptr;
 }
 
-/** One solve with the requested method (solve() may make two). */
-Summary solve_once(const Problem& problem, const Options& requested, Trajectory& trajectory) {
+/** What a solve_once does besides solving. */
+struct OnceFlags {
+  bool assess = true;      ///< assess the converged point (Summary::point)
+  bool one_level = false;  ///< solve on problem.N alone, without refinement levels or grid sequencing
+  /** When given: a converged solve's whole-system Newton grid level below problem.N (solved to the
+   *  tolerance), for the error estimate; left empty (N = 0) where there is none. */
+  Trajectory* coarser_level = nullptr;
+};
+
+/** One solve with the requested method (solve() may make two, and a third for the error estimate). */
+Summary solve_once(const Problem& problem, const Options& requested, Trajectory& trajectory,
+                   const OnceFlags& flags = {}) {
   const auto start = std::chrono::steady_clock::now();
   // The automatic method is Newton with grid sequencing (refinement_levels), and so is the
   // stationary Newton.
@@ -157,7 +170,8 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     summary.message = error;
     return summary;
   }
-  const std::vector<int> levels = detail::refinement_levels(problem, options, automatic);
+  const std::vector<int> levels =
+      flags.one_level ? std::vector<int>{problem.N} : detail::refinement_levels(problem, options, automatic);
   if (resume || warm) {
     if (!detail::check_state(problem, options, resume ? *resume : *warm, levels, &error)) {
       summary.termination = Termination::invalid_input;
@@ -194,11 +208,17 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     driver.capture(summary.state, static_cast<int>(l));
     if (starts.extrapolates()) summary.state.previous_level = starts.previous();
   }
+  // Nested iteration's levels below N were solved to the tolerance (a coarse level of the other
+  // methods' refinement only settled): the last of them can serve the error estimate.
+  if (flags.coarser_level && summary.converged() && levels.size() >= 2 && detail::whole_system_newton(options.method))
+    *flags.coarser_level = std::move(starts.previous());
   // What the returned point is (a converged one only): from Newton's factorization at a minimum
   // where it stopped, else from a new one, the method's storage released first so as not to add
   // to the peak memory.
   driver.context().keep_going = options.keep_going;
-  if (!detail::point_assessed(summary.termination)) {
+  if (!flags.assess) {
+    summary.point.note = "not assessed";
+  } else if (!detail::point_assessed(summary.termination)) {
     summary.point = detail::not_assessed(summary.termination);
   } else if (!method->assess(driver.context(), summary.point)) {
     method.reset();
@@ -253,21 +273,94 @@ Summary combined(Summary first, Summary second) {
   return second;
 }
 
-}  // namespace
-
-Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
-  // The automatic method minimizes first; where no minimum is found near the start and a saddle
-  // would do, Newton on the DEL residual tries again from the same start.
-  if (!saddles_answer(problem, requested)) return solve_once(problem, requested, trajectory);
+/** The solve without the error estimate: the automatic method minimizes first; where no minimum
+ *  is found near the start and a saddle would do, Newton on the DEL residual tries again from the
+ *  same start. *coarser_level: as OnceFlags::coarser_level, of the attempt whose result is returned. */
+Summary solve_attempts(const Problem& problem, const Options& requested, Trajectory& trajectory,
+                       Trajectory* coarser_level) {
+  OnceFlags flags;
+  flags.coarser_level = coarser_level;
+  if (!saddles_answer(problem, requested)) return solve_once(problem, requested, trajectory, flags);
   const Trajectory guess = trajectory;
-  Summary first = solve_once(problem, requested, trajectory);
+  Summary first = solve_once(problem, requested, trajectory, flags);
   if (!failed_numerically(first)) return first;
   Options options = requested;
   options.method = Method::stationary_newton;
   Trajectory second_trajectory = guess;
-  Summary second = solve_once(problem, options, second_trajectory);
+  Summary second = solve_once(problem, options, second_trajectory, flags);
   if (second.termination == Termination::converged) trajectory = std::move(second_trajectory);
   return combined(std::move(first), std::move(second));
+}
+
+/**
+ * The error estimate of a converged solve (Options::error_estimate; docs/solvers.md, "Error
+ * estimate"): Richardson against `level`, the solve's own coarser grid level, where it is nested
+ * node for node in the final grid; otherwise against a solve on every other node of the final grid,
+ * started from the solution there, with the method that converged and the same options but one
+ * grid, no assessment and no estimate of its own; Options::keep_going interrupts it.
+ */
+void estimate_error(const Problem& problem, const Options& requested, const Trajectory& level, Trajectory& trajectory,
+                    Summary& summary) {
+  if (!requested.error_estimate) return detail::not_estimated(summary, "switched off (error_estimate = false)");
+  if (!summary.converged())
+    return detail::not_estimated(summary, std::string("the solve ended ") + to_string(summary.termination));
+  if (problem.N < 4) return detail::not_estimated(summary, "N = " + std::to_string(problem.N) + " is below 4");
+  const auto start = std::chrono::steady_clock::now();
+  auto account = [&] {
+    summary.error_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.wall_seconds += summary.error_seconds;
+  };
+  int ratio = 0;
+  if (detail::nested_level(problem, trajectory, level, &ratio)) {
+    detail::richardson(problem, level, ratio, requested.extrapolate, trajectory, summary);
+    summary.error_note += "; N = " + std::to_string(level.N) + " is a grid level the solve had solved to the tolerance";
+    return account();
+  }
+  const std::string refusal = detail::coarse_grid_refusal(problem);
+  if (!refusal.empty()) return detail::not_estimated(summary, refusal);
+  Problem coarse_problem = problem;
+  coarse_problem.N = problem.N / 2;
+  Trajectory coarse = detail::every_other_node(trajectory, 2);
+  Options options = requested;
+  options.method = summary.method;  // the method that converged (auto resolved, or its second attempt)
+  options.resume_from = nullptr;
+  options.warm_start = false;
+  options.error_estimate = false;
+  options.extrapolate = false;
+  options.refine_start_N = 0;
+  // The coarse solve's iterations are not the user's history: on_iteration is not called, and
+  // keep_going is what can stop it.
+  options.on_iteration = nullptr;
+  if (requested.keep_going) {
+    const std::function<bool()> keep_going = requested.keep_going;
+    options.on_iteration = [keep_going](const IterationRecord&) { return keep_going(); };
+  }
+  OnceFlags flags;
+  flags.assess = false;
+  flags.one_level = true;
+  const Summary coarse_summary = solve_once(coarse_problem, options, coarse, flags);
+  if (!coarse_summary.converged()) {
+    const std::string grid = "N = " + std::to_string(coarse_problem.N);
+    detail::not_estimated(summary, coarse_summary.termination == Termination::interrupted
+                                       ? "interrupted during the solve on the coarse grid " + grid
+                                       : "the solve on the coarse grid " + grid + " ended " +
+                                             to_string(coarse_summary.termination) + ": " + coarse_summary.message);
+    return account();
+  }
+  detail::richardson(problem, coarse, 2, requested.extrapolate, trajectory, summary);
+  summary.error_note += "; N = " + std::to_string(coarse.N) + " solved from the solution's values there in " +
+                        std::to_string(coarse_summary.iterations) + " iteration" +
+                        (coarse_summary.iterations == 1 ? "" : "s");
+  account();
+}
+
+}  // namespace
+
+Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
+  Trajectory level;
+  Summary summary = solve_attempts(problem, requested, trajectory, &level);
+  estimate_error(problem, requested, level, trajectory, summary);
+  return summary;
 }
 
 double residual_norm(const Problem& problem, const Trajectory& trajectory) {

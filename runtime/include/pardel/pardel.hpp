@@ -9,6 +9,7 @@
 #define PARDEL_PARDEL_HPP
 
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <string_view>
@@ -231,6 +232,14 @@ struct Options {
    *  method; the iteration count and the history continue, the method's own state and the
    *  stopping rules' memory start afresh (not bit for bit), and Summary::message says so. */
   bool warm_start = false;
+  /** After a converged solve: estimate the discretization error at the nodes by Richardson's rule
+   *  from a second solve on the grid of every other node, or from a coarser nested grid level the
+   *  solve already has (Summary::error_estimate; docs/solvers.md, "Error estimate"). */
+  bool error_estimate = true;
+  /** With error_estimate, and where it was estimated: return the Richardson-extrapolated node values
+   *  (the discrete solution plus the estimated error) instead of the discrete solution; the summary's
+   *  residual, action and point still describe the discrete solution. */
+  bool extrapolate = false;
   /** Checks the options against their bounds (option_bound); on failure writes a message naming
    *  the option, its value and the rule it breaks. */
   bool is_valid(std::string* error) const;
@@ -344,6 +353,16 @@ struct Summary {
   double residual_floor = 0;  ///< round-off level of the residual at the returned iterate
   double tolerance = 0;       ///< the residual that counted as converged (Options::rtol or tol)
   PointAssessment point;      ///< what the returned trajectory is (minimum, saddle, degenerate)
+  /** Richardson's estimate of the discretization error of the coordinates at the nodes
+   *  (Options::error_estimate): max over the common nodes of the two grids and over the
+   *  coordinates of |x_N - x_coarse| / (r^p - 1), r the ratio of the grids and p the
+   *  discretization's consistency_order; NaN when not estimated (error_note says why). */
+  double error_estimate = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> error_by_coordinate;  ///< the same per coordinate (ncoords values; empty when not estimated)
+  int error_coarse_N = 0;       ///< the coarse grid it was estimated against (0: not estimated)
+  double error_seconds = 0;     ///< time the estimate took (its coarse solve), included in wall_seconds
+  bool extrapolated = false;    ///< the returned trajectory holds the extrapolated values (Options::extrapolate)
+  std::string error_note;       ///< one line: how the estimate was made, or "not estimated: " and why
   std::vector<IterationRecord> history;
   SolverState state;  ///< filled (state.valid) when the solve ended `interrupted`
   bool converged() const { return termination == Termination::converged; }

@@ -37,6 +37,7 @@
 
 #include "../assessment.hpp"
 #include "../engine.hpp"
+#include "../error_estimate.hpp"
 #include "../iteration.hpp"
 #include "../levels.hpp"
 #include "../trust_region.hpp"
@@ -1021,6 +1022,9 @@ Summary solve_over_ranks(const Problem& problem, const Options& requested, Traje
   else
     summary.point = pardel::detail::not_assessed(summary.termination);
   if (warm) pardel::detail::note_warm_start(*warm, summary);
+  pardel::detail::not_estimated(summary, options.error_estimate ? "the error estimate is made in one process only, "
+                                                                  "not over MPI ranks"
+                                                                : "switched off (error_estimate = false)");
   return summary;
 }
 

@@ -1,0 +1,160 @@
+/**
+ * @file error_estimate.cpp
+ * Richardson's estimate of the discretization error at the nodes and the extrapolated node values
+ * (error_estimate.hpp): which coarse grid a solve can be compared with, and the comparison.
+ */
+#include "error_estimate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include "invariant.hpp"
+#include "levels.hpp"
+
+namespace pardel::detail {
+namespace {
+
+std::string number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+/** The index of the knot that lies on an odd node of the grid with N intervals, or -1. */
+int knot_on_odd_node(const Problem& problem) {
+  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
+    const double s = (problem.knots[a].t - problem.t0) / problem.T * problem.N;
+    if (std::lround(s) % 2 != 0) return static_cast<int>(a);
+  }
+  return -1;
+}
+
+/** Lagrange weights at x of the nodes a, a+1, ..., a+n-1 (n <= 4). */
+void lagrange_weights(double x, int a, int n, double* w) {
+  for (int i = 0; i < n; ++i) {
+    double num = 1, den = 1;
+    for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
+      num *= x - (a + j);
+      den *= static_cast<double>(i - j);
+    }
+    w[i] = num / den;
+  }
+}
+
+}  // namespace
+
+std::string coarse_grid_refusal(const Problem& problem) {
+  if (problem.N < 4) return "N = " + std::to_string(problem.N) + " is below 4";
+  if (problem.N % 2 != 0)
+    return "N = " + std::to_string(problem.N) + " is odd, and the coarse grid of every other node needs an even N";
+  const int knot = knot_on_odd_node(problem);
+  if (knot >= 0)
+    return "knot " + std::to_string(knot) + " (t = " + number(problem.knots[static_cast<std::size_t>(knot)].t) +
+           ") is on an odd node, which the coarse grid of every other node does not have";
+  PARDEL_INVARIANT(knots_on_grid(problem, problem.N / 2), "knots on even nodes lie on the coarse grid");
+  return "";
+}
+
+Trajectory every_other_node(const Trajectory& fine, int ratio) {
+  PARDEL_INVARIANT(ratio >= 1 && fine.N % ratio == 0, "the coarse grid is every ratio-th node of the fine one");
+  Trajectory coarse;
+  coarse.N = fine.N / ratio;
+  coarse.dim = fine.dim;
+  const std::size_t d = static_cast<std::size_t>(fine.dim);
+  coarse.q.resize((static_cast<std::size_t>(coarse.N) + 1) * d);
+  if (!fine.t.empty()) coarse.t.resize(static_cast<std::size_t>(coarse.N) + 1);
+  for (int m = 0; m <= coarse.N; ++m) {
+    std::copy(fine.node(m * ratio), fine.node(m * ratio) + d, coarse.node(m));
+    if (!fine.t.empty()) coarse.t[static_cast<std::size_t>(m)] = fine.t[static_cast<std::size_t>(m) * ratio];
+  }
+  return coarse;
+}
+
+bool nested_level(const Problem& problem, const Trajectory& fine, const Trajectory& coarse, int* ratio) {
+  if (coarse.N < 2 || fine.N <= coarse.N || fine.N % coarse.N != 0 || coarse.dim != fine.dim) return false;
+  const std::size_t nodes = static_cast<std::size_t>(coarse.N) + 1;
+  if (coarse.q.size() != nodes * static_cast<std::size_t>(coarse.dim) || coarse.t.size() != nodes ||
+      fine.t.size() != static_cast<std::size_t>(fine.N) + 1)
+    return false;
+  const int r = fine.N / coarse.N;
+  if (problem.clock == ClockMode::none) {
+    // Uniform grids: the same times at the common nodes (to rounding).
+    const double eps = 1e-12 * (std::fabs(problem.t0) + problem.T);
+    for (std::size_t m = 0; m < nodes; ++m)
+      if (std::fabs(coarse.t[m] - fine.t[m * static_cast<std::size_t>(r)]) > eps) return false;
+  }
+  *ratio = r;
+  return true;
+}
+
+void not_estimated(Summary& summary, const std::string& why) {
+  summary.error_estimate = std::numeric_limits<double>::quiet_NaN();
+  summary.error_by_coordinate.clear();
+  summary.error_coarse_N = 0;
+  summary.extrapolated = false;
+  summary.error_note = "not estimated: " + why;
+}
+
+void richardson(const Problem& problem, const Trajectory& coarse, int ratio, bool extrapolate, Trajectory& fine,
+                Summary& summary) {
+  PARDEL_INVARIANT(fine.N == coarse.N * ratio && fine.dim == coarse.dim, "the coarse grid is nested in the fine one");
+  const int p = problem.discretization->consistency_order;
+  const double factor = std::pow(static_cast<double>(ratio), p) - 1;
+  const int nc = problem.model->ncoords, d = fine.dim, Nc = coarse.N;
+  const bool clocked = problem.clock != ClockMode::none && fine.t.size() == static_cast<std::size_t>(fine.N) + 1 &&
+                       coarse.t.size() == static_cast<std::size_t>(Nc) + 1;
+  // e at the common nodes, every component; the node times' under a clock.
+  std::vector<double> e((static_cast<std::size_t>(Nc) + 1) * static_cast<std::size_t>(d));
+  std::vector<double> et(clocked ? static_cast<std::size_t>(Nc) + 1 : 0, 0.0);
+  std::vector<double> by_coordinate(static_cast<std::size_t>(nc), 0.0);
+  for (int m = 0; m <= Nc; ++m) {
+    const double* f = fine.node(m * ratio);
+    const double* c = coarse.node(m);
+    double* em = e.data() + static_cast<std::size_t>(m) * d;
+    for (int i = 0; i < d; ++i) {
+      em[i] = (f[i] - c[i]) / factor;
+      if (i < nc) by_coordinate[static_cast<std::size_t>(i)] = std::max(by_coordinate[static_cast<std::size_t>(i)], std::fabs(em[i]));
+    }
+    if (clocked)
+      et[static_cast<std::size_t>(m)] =
+          (fine.t[static_cast<std::size_t>(m) * ratio] - coarse.t[static_cast<std::size_t>(m)]) / factor;
+  }
+  summary.error_estimate = *std::max_element(by_coordinate.begin(), by_coordinate.end());
+  summary.error_by_coordinate = std::move(by_coordinate);
+  summary.error_coarse_N = Nc;
+  summary.extrapolated = false;
+  const std::string every = ratio == 2 ? "other" : std::to_string(ratio) + "th";
+  summary.error_note = "max over the " + std::to_string(Nc + 1) + " common nodes and the coordinates of |x_" +
+                       std::to_string(fine.N) + " - x_" + std::to_string(Nc) + "| / (" + std::to_string(ratio) + "^" +
+                       std::to_string(p) + " - 1), the solution on N = " + std::to_string(fine.N) +
+                       " against that on every " + every + " node";
+  if (!extrapolate) return;
+  // fine + e: at a common node its own e, elsewhere the cubic (fewer nodes on tiny grids) through
+  // the four nearest common nodes, in the node index.
+  const int n = std::min(4, Nc + 1);
+  double w[4];
+  for (int k = 0; k <= fine.N; ++k) {
+    double* f = fine.node(k);
+    if (k % ratio == 0) {
+      const double* em = e.data() + static_cast<std::size_t>(k / ratio) * d;
+      for (int i = 0; i < d; ++i) f[i] += em[i];
+      if (clocked) fine.t[static_cast<std::size_t>(k)] += et[static_cast<std::size_t>(k / ratio)];
+      continue;
+    }
+    const double x = static_cast<double>(k) / ratio;
+    const int a = std::clamp(static_cast<int>(std::floor(x)) - (n - 1) / 2, 0, Nc + 1 - n);
+    lagrange_weights(x, a, n, w);
+    for (int j = 0; j < n; ++j) {
+      const double* em = e.data() + static_cast<std::size_t>(a + j) * d;
+      for (int i = 0; i < d; ++i) f[i] += w[j] * em[i];
+      if (clocked) fine.t[static_cast<std::size_t>(k)] += w[j] * et[static_cast<std::size_t>(a + j)];
+    }
+  }
+  summary.extrapolated = true;
+}
+
+}  // namespace pardel::detail
