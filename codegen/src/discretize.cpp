@@ -3,11 +3,13 @@
  * The discrete Lagrangians: substitution of interpolated stage values into the continuous L
  * and quadrature. Order 1: trapezoid and midpoint; order 2: the seed's trapezoid(alpha) family
  * and 2-stage Gauss on the cubic Hermite interpolant of (q0, v0, q1, v1); any order: s-point
- * Gauss-Legendre on the Hermite interpolant of degree 2 order - 1 of the two nodes' jets.
+ * Gauss-Legendre on the Hermite interpolant of degree 2 order - 1 of the two nodes' jets, and the
+ * Galerkin family: a polynomial with interior values under Gauss or Gauss-Lobatto quadrature.
  */
 #include "pardel_codegen/discretize.hpp"
 
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 namespace pardel_codegen {
@@ -102,6 +104,46 @@ Quadrature gauss_legendre(int s) {
   return q;
 }
 
+Quadrature gauss_lobatto(int points) {
+  using GiNaC::numeric;
+  // Interior nodes on [-1, 1]: the roots of P'_k, k = points - 1, by Newton's method from the
+  // Chebyshev-Gauss-Lobatto points; (1 - x^2) P_k'' = 2 x P_k' - k (k + 1) P_k. Weights
+  // 2 / (k (k + 1) P_k(x)^2).
+  const int k = points - 1;
+  const long saved = GiNaC::Digits;
+  GiNaC::Digits = std::max<long>(saved, 60);
+  const numeric eps = GiNaC::ex_to<numeric>(GiNaC::pow(numeric(10), -55).evalf());
+  const numeric kk1(k * (k + 1));
+  std::vector<numeric> x{-1};
+  std::vector<numeric> w{numeric(2) / kk1};
+  for (int i = k - 1; i >= 1; --i) {
+    numeric xi = GiNaC::ex_to<numeric>(ex(std::cos(M_PI * i / k)).evalf());
+    numeric p, dp;
+    for (int it = 0; it < 100; ++it) {
+      legendre(k, xi, &p, &dp);
+      const numeric ddp = (2 * xi * dp - kk1 * p) / (1 - xi * xi);
+      const numeric step = dp / ddp;
+      xi -= step;
+      if (GiNaC::abs(step) < eps) break;
+    }
+    if (k % 2 == 0 && 2 * i == k) xi = 0;
+    legendre(k, xi, &p, &dp);
+    x.push_back(xi);
+    w.push_back(2 / (kk1 * p * p));
+  }
+  x.push_back(1);
+  w.push_back(numeric(2) / kk1);
+  Quadrature q;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    q.nodes.push_back(((1 + x[i]) / 2).evalf());
+    q.weights.push_back((w[i] / 2).evalf());
+  }
+  q.nodes.front() = 0;
+  q.nodes.back() = 1;
+  GiNaC::Digits = saved;
+  return q;
+}
+
 HermiteBasis hermite_basis(int order, const GiNaC::symbol& u) {
   // at[k] = u^k / k! (1 - u)^order sum_{m < order - k} binom(order - 1 + m, m) u^m, bt[k] = (-1)^k at[k](1 - u).
   HermiteBasis b;
@@ -113,6 +155,114 @@ HermiteBasis hermite_basis(int order, const GiNaC::symbol& u) {
     b.bt.push_back((GiNaC::pow(-1, k) * a.subs(u == 1 - u)).expand());
   }
   return b;
+}
+
+namespace {
+
+/** The value at `u` of the j-th u-derivative of the polynomial with monomial coefficients `a`. */
+GiNaC::numeric polynomial_derivative(const std::vector<GiNaC::numeric>& a, int j, const GiNaC::numeric& u) {
+  GiNaC::numeric sum = 0, power = 1;
+  for (std::size_t e = static_cast<std::size_t>(j); e < a.size(); ++e) {
+    GiNaC::numeric falling = 1;
+    for (int r = 0; r < j; ++r) falling *= GiNaC::numeric(static_cast<long>(e) - r);
+    sum += a[e] * falling * power;
+    power *= u;
+  }
+  return sum;
+}
+
+/** A 60-digit number, with values below 1e-45 (round-off of exact zeros) set to 0. */
+GiNaC::numeric cleaned(const GiNaC::numeric& v) {
+  const GiNaC::numeric tiny = GiNaC::ex_to<GiNaC::numeric>(GiNaC::pow(GiNaC::numeric(10), -45).evalf());
+  return GiNaC::abs(v) < tiny ? GiNaC::numeric(0) : v;
+}
+
+}  // namespace
+
+GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s) {
+  using GiNaC::numeric;
+  const long saved = GiNaC::Digits;
+  GiNaC::Digits = std::max<long>(saved, 60);
+  const std::size_t n = model.coords.size();
+  const int g = model.order, m = spec.interior_points, degree = spec.stages + g - 1;
+  GalerkinInterval out;
+  // Interior fractions: the inner nodes of the (m + 2)-point Gauss-Lobatto rule.
+  std::vector<numeric> fractions;
+  if (m > 0) {
+    const Quadrature lob = gauss_lobatto(m + 2);
+    for (int j = 1; j <= m; ++j) fractions.push_back(GiNaC::ex_to<numeric>(lob.nodes[static_cast<std::size_t>(j)].evalf()));
+  }
+  for (const numeric& c : fractions) out.fractions.push_back(c);
+  // The basis: rows are the conditions (k-th derivative at 0, then at 1, for k < order; value at
+  // each fraction), columns the monomials u^e; the basis functions are the columns of V^-1.
+  const int size = degree + 1;
+  GiNaC::matrix V(static_cast<unsigned>(size), static_cast<unsigned>(size));
+  auto row = [&](int r, int k, const numeric& at) {
+    for (int e = 0; e < size; ++e) {
+      std::vector<numeric> mono(static_cast<std::size_t>(size), 0);
+      mono[static_cast<std::size_t>(e)] = 1;
+      V(static_cast<unsigned>(r), static_cast<unsigned>(e)) = polynomial_derivative(mono, k, at);
+    }
+  };
+  for (int k = 0; k < g; ++k) {
+    row(k, k, 0);
+    row(g + k, k, 1);
+  }
+  for (int j = 0; j < m; ++j) row(2 * g + j, 0, fractions[static_cast<std::size_t>(j)]);
+  const GiNaC::matrix inv = V.inverse();
+  auto basis = [&](int column) {
+    std::vector<numeric> a(static_cast<std::size_t>(size));
+    for (int e = 0; e < size; ++e)
+      a[static_cast<std::size_t>(e)] = GiNaC::ex_to<numeric>(inv(static_cast<unsigned>(e), static_cast<unsigned>(column)).evalf());
+    return a;
+  };
+  for (int j = 0; j < m; ++j) {
+    for (std::size_t i = 0; i < n; ++i) out.z.emplace_back("z_" + std::to_string(j) + "_" + std::to_string(i));
+  }
+  const ex h = s.h;
+  // The quadrature.
+  Quadrature quad = spec.kind == DiscretizationKind::galerkin_gauss ? gauss_legendre(spec.stages) : gauss_lobatto(spec.stages + 1);
+  ex total = 0;
+  for (std::size_t stage = 0; stage < quad.nodes.size(); ++stage) {
+    const numeric c = GiNaC::ex_to<numeric>(quad.nodes[stage].evalf());
+    std::vector<std::vector<ex>> values(static_cast<std::size_t>(g) + 1, std::vector<ex>(n, 0));
+    for (int j = 0; j <= g; ++j) {
+      for (int k = 0; k < g; ++k) {
+        const numeric ca = cleaned(polynomial_derivative(basis(k), j, c));
+        const numeric cb = cleaned(polynomial_derivative(basis(g + k), j, c));
+        const ex scale = GiNaC::pow(h, k - j);
+        for (std::size_t i = 0; i < n; ++i) {
+          values[static_cast<std::size_t>(j)][i] +=
+              scale * (ca * s.q0[static_cast<std::size_t>(k) * n + i] + cb * s.q1[static_cast<std::size_t>(k) * n + i]);
+        }
+      }
+      for (int jj = 0; jj < m; ++jj) {
+        const numeric cz = cleaned(polynomial_derivative(basis(2 * g + jj), j, c));
+        for (std::size_t i = 0; i < n; ++i)
+          values[static_cast<std::size_t>(j)][i] += GiNaC::pow(h, -j) * cz * out.z[static_cast<std::size_t>(jj) * n + i];
+      }
+    }
+    const ex weight = cleaned(GiNaC::ex_to<numeric>(quad.weights[stage].evalf()));
+    total += weight * evaluate_at(model, model.lagrangian, s.t0 + c * (s.t1 - s.t0), values);
+  }
+  out.action = h * total;
+  // Starting values: the Hermite interpolant of degree 2 order - 1 of the nodes' jets.
+  const GiNaC::symbol u("u");
+  const HermiteBasis hb = hermite_basis(g, u);
+  for (int j = 0; j < m; ++j) {
+    const numeric c = fractions[static_cast<std::size_t>(j)];
+    for (std::size_t i = 0; i < n; ++i) {
+      ex v = 0;
+      for (int k = 0; k < g; ++k) {
+        const numeric ca = cleaned(GiNaC::ex_to<numeric>(hb.at[static_cast<std::size_t>(k)].subs(u == c).evalf()));
+        const numeric cb = cleaned(GiNaC::ex_to<numeric>(hb.bt[static_cast<std::size_t>(k)].subs(u == c).evalf()));
+        v += GiNaC::pow(h, k) * (ca * s.q0[static_cast<std::size_t>(k) * n + i] + cb * s.q1[static_cast<std::size_t>(k) * n + i]);
+      }
+      out.start.push_back(v);
+    }
+  }
+  GiNaC::Digits = saved;
+  return out;
 }
 
 KernelSymbols::KernelSymbols(const LagModel& model) {
@@ -205,6 +355,11 @@ ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, co
         total += quad.weights[stage] * evaluate_at(model, L, t0 + c * (t1 - t0), values);
       }
       return h * total;
+    }
+    case DiscretizationKind::galerkin_gauss:
+    case DiscretizationKind::galerkin_lobatto: {
+      if (spec.interior_points > 0) throw std::logic_error(spec.name + " has interior values: it has no closed form");
+      return galerkin_interval(model, spec, s).action;
     }
   }
   return 0;

@@ -421,6 +421,21 @@ DiscretizationSpec hermite_gauss_spec(int order, int stages) {
   return spec;
 }
 
+/** galerkin_gauss(s=S) or galerkin_lobatto(s=S) for an order-`order` model (S >= order): the
+ *  polynomial of degree S + order - 1 through both nodes' jets and S - order interior values,
+ *  consistency order 2 S. */
+DiscretizationSpec galerkin_spec(DiscretizationKind kind, int order, int stages) {
+  DiscretizationSpec spec;
+  spec.kind = kind;
+  spec.stages = stages;
+  spec.interior_points = stages - order;
+  const std::string family = kind == DiscretizationKind::galerkin_gauss ? "galerkin_gauss" : "galerkin_lobatto";
+  spec.name = family + "(s=" + std::to_string(stages) + ")";
+  spec.ident = family + "_s_" + std::to_string(stages);
+  spec.consistency_order = 2 * stages;
+  return spec;
+}
+
 std::string rational_ident(const GiNaC::numeric& n) {
   std::string out;
   for (char c : rational_text(n)) {
@@ -434,9 +449,11 @@ std::string rational_ident(const GiNaC::numeric& n) {
 void Reader::read_discretizations(const Line& line) {
   const std::vector<Token>& toks = line.tokens;
   std::map<std::string, int> seen;
-  const std::string available = model_.order == 1   ? "trapezoid, midpoint, hermite_gauss(s=S)"
-                                : model_.order == 2 ? "trapezoid(alpha=A), gauss2, hermite_gauss(s=S)"
-                                                    : "hermite_gauss(s=S)";
+  const std::string galerkin = ", galerkin_gauss(s=S), galerkin_lobatto(s=S)";
+  const std::string available = (model_.order == 1   ? "trapezoid, midpoint, hermite_gauss(s=S)"
+                                 : model_.order == 2 ? "trapezoid(alpha=A), gauss2, hermite_gauss(s=S)"
+                                                     : "hermite_gauss(s=S)") +
+                                galerkin;
   std::size_t i = 1;
   while (toks[i].kind != Tok::end) {
     if (toks[i].kind == Tok::op && toks[i].text == ",") {
@@ -458,9 +475,12 @@ void Reader::read_discretizations(const Line& line) {
         fail(line, key, "expected a parameter name such as alpha, found " + key.shown());
       }
       const bool trapezoid = name.text == "trapezoid", hermite = name.text == "hermite_gauss";
-      if (!(trapezoid && key.text == "alpha") && !(hermite && key.text == "s")) {
+      const bool galerkin_name = name.text == "galerkin_gauss" || name.text == "galerkin_lobatto";
+      if (!(trapezoid && key.text == "alpha") && !((hermite || galerkin_name) && key.text == "s")) {
         if (trapezoid) fail(line, key, "unknown parameter '" + key.text + "' of trapezoid (expected alpha)");
         if (hermite) fail(line, key, "unknown parameter '" + key.text + "' of hermite_gauss (expected s, the number of Gauss points)");
+        if (galerkin_name)
+          fail(line, key, "unknown parameter '" + key.text + "' of " + name.text + " (expected s, half the consistency order)");
         fail(line, key, "'" + name.text + "' takes no parameters");
       }
       ++i;
@@ -484,11 +504,23 @@ void Reader::read_discretizations(const Line& line) {
         fail(line.number, value_col,
              "s (the number of Gauss points) must be an integer from 1 to " + std::to_string(kMaxGaussPoints));
       }
+      if (galerkin_name && (!GiNaC::is_a<GiNaC::numeric>(parsed) || !GiNaC::ex_to<GiNaC::numeric>(parsed).is_integer() ||
+                            GiNaC::ex_to<GiNaC::numeric>(parsed) < model_.order ||
+                            GiNaC::ex_to<GiNaC::numeric>(parsed) > kMaxGaussPoints)) {
+        fail(line.number, value_col,
+             "s of " + name.text + " must be an integer from " + std::to_string(model_.order) + " (the model's order) to " +
+                 std::to_string(kMaxGaussPoints) + "; the consistency order is 2 s");
+      }
       value = GiNaC::ex_to<GiNaC::numeric>(parsed);
       has_value = true;
     }
     DiscretizationSpec spec;
-    if (name.text == "hermite_gauss") {
+    if (name.text == "galerkin_gauss" || name.text == "galerkin_lobatto") {
+      if (!has_value) fail(line, name, name.text + " needs its parameter s, e.g. " + name.text + "(s=4) (consistency order 2 s)");
+      spec = galerkin_spec(name.text == "galerkin_gauss" ? DiscretizationKind::galerkin_gauss
+                                                         : DiscretizationKind::galerkin_lobatto,
+                           model_.order, value.to_int());
+    } else if (name.text == "hermite_gauss") {
       spec.kind = DiscretizationKind::hermite_gauss;
       spec.stages = has_value ? value.to_int() : model_.order;
       if (spec.stages < model_.order) {

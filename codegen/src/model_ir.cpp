@@ -145,6 +145,52 @@ void write_kernel(std::ostringstream& j, const KernelIR& k, const std::string& i
 
 namespace {
 
+/** The interval kernels of a Galerkin discretization with interior values: the action S over
+ *  x = [q0, z, q1], its gradient and Hessian, and z's starting values. */
+std::vector<KernelIR> interval_kernels(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                                       const CseOptions& options, int* interior_dim) {
+  const GalerkinInterval gi = galerkin_interval(model, spec, s);
+  *interior_dim = static_cast<int>(gi.z.size());
+  std::vector<KernelInput> inputs = kernel_inputs(s);
+  for (std::size_t i = 0; i < gi.z.size(); ++i) inputs.push_back({gi.z[i], "z[" + std::to_string(i) + "]", "z"});
+  std::vector<GiNaC::symbol> x(s.q0.begin(), s.q0.end());
+  x.insert(x.end(), gi.z.begin(), gi.z.end());
+  x.insert(x.end(), s.q1.begin(), s.q1.end());
+  const std::size_t E = x.size(), M = gi.z.size(), m = s.q0.size();
+  std::vector<ex> grad(E);
+  for (std::size_t i = 0; i < E; ++i) grad[i] = gi.action.diff(x[i]);
+  std::vector<ex> hess(E * E, 0);
+  for (std::size_t i = 0; i < E; ++i) {
+    for (std::size_t j = i; j < E; ++j) hess[i * E + j] = hess[j * E + i] = grad[i].diff(x[j]);
+  }
+  const std::vector<std::string> args = {"h", "t0", "t1", "q0", "q1", "p", "z"};
+  std::vector<KernelIR> out;
+  auto add = [&](const std::string& variant, const std::vector<KernelOutput>& outs) {
+    KernelIR k;
+    k.variant = variant;
+    k.function = model.name + "_" + spec.ident + "_" + variant;
+    k.code = generate_kernel_code(outs, inputs, options);
+    k.unused_inputs = unused(k.code, args);
+    out.push_back(std::move(k));
+  };
+  std::vector<KernelOutput> outs;
+  add_vector(outs, "z", gi.start);
+  add("start", outs);
+  outs.clear();
+  for (std::size_t i = 0; i < M; ++i) outs.push_back({"g[" + std::to_string(i) + "]", grad[m + i]});
+  for (std::size_t i = 0; i < M; ++i) {
+    for (std::size_t j = 0; j < M; ++j) outs.push_back({"H[" + std::to_string(i * M + j) + "]", hess[(m + i) * E + m + j]});
+  }
+  add("interior", outs);
+  outs.clear();
+  outs.push_back({"S[0]", gi.action});
+  add_vector(outs, "g", grad);
+  add("ext_grad", outs);
+  add_vector(outs, "H", hess);
+  add("ext_full", outs);
+  return out;
+}
+
 /** build_model_ir without its translation of GiNaC's arithmetic errors. */
 ModelIR build_ir(const LagModel& model, const std::string& source_name, const CseOptions& options) {
   ModelIR ir;
@@ -156,6 +202,17 @@ ModelIR build_ir(const LagModel& model, const std::string& source_name, const Cs
   for (const DiscretizationSpec& spec : model.discretizations) {
     DiscretizationIR dir;
     dir.spec = spec;
+    if (spec.interior_points > 0) {
+      dir.interval_kernels = interval_kernels(model, spec, s, options, &dir.interior_dim);
+      for (const std::string& variant : kernel_variants()) {
+        KernelIR k;
+        k.variant = variant;
+        k.function = model.name + "_" + spec.ident + "_" + variant;
+        dir.kernels.push_back(std::move(k));
+      }
+      ir.discretizations.push_back(std::move(dir));
+      continue;
+    }
     Derivatives d = differentiate(discrete_lagrangian(model, spec, s), s);
     for (const std::string& variant : kernel_variants()) {
       std::vector<KernelOutput> outs;
@@ -238,12 +295,18 @@ std::string ir_to_json(const ModelIR& ir) {
   for (std::size_t i = 0; i < ir.discretizations.size(); ++i) {
     const DiscretizationIR& d = ir.discretizations[i];
     j << (i ? ",\n" : "\n") << "    {\"name\": " << json_string(d.spec.name) << ", \"ident\": " << json_string(d.spec.ident)
-      << ", \"consistency_order\": " << d.spec.consistency_order << ",\n     \"kernels\": [\n";
+      << ", \"consistency_order\": " << d.spec.consistency_order << ", \"interior_dim\": " << d.interior_dim
+      << ",\n     \"kernels\": [\n";
     for (std::size_t k = 0; k < d.kernels.size(); ++k) {
       write_kernel(j, d.kernels[k], "      ");
       j << (k + 1 < d.kernels.size() ? ",\n" : "\n");
     }
-    j << "     ]}";
+    j << "     ],\n     \"interval_kernels\": [";
+    for (std::size_t k = 0; k < d.interval_kernels.size(); ++k) {
+      j << (k ? ",\n" : "\n");
+      write_kernel(j, d.interval_kernels[k], "      ");
+    }
+    j << "]}";
   }
   j << "],\n";
   j << "  \"clock\": ";
@@ -271,7 +334,10 @@ std::string stats_table(const ModelIR& ir) {
     s << line;
   };
   for (const DiscretizationIR& d : ir.discretizations) {
-    for (const KernelIR& k : d.kernels) row(d.spec.name, k);
+    for (const KernelIR& k : d.kernels) {
+      if (d.interior_dim == 0) row(d.spec.name, k);
+    }
+    for (const KernelIR& k : d.interval_kernels) row(d.spec.name, k);
   }
   if (ir.clock) row("-", *ir.clock);
   return s.str();
@@ -291,7 +357,10 @@ std::string stats_json(const ModelIR& ir) {
     first = false;
   };
   for (const DiscretizationIR& d : ir.discretizations) {
-    for (const KernelIR& k : d.kernels) row(d.spec.name, k);
+    for (const KernelIR& k : d.kernels) {
+      if (d.interior_dim == 0) row(d.spec.name, k);
+    }
+    for (const KernelIR& k : d.interval_kernels) row(d.spec.name, k);
   }
   if (ir.clock) row("", *ir.clock);
   j << "\n]}\n";

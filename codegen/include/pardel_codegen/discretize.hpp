@@ -36,6 +36,10 @@ struct Quadrature {
 };
 Quadrature gauss_legendre(int s);
 
+/** Gauss-Lobatto nodes and weights on [0, 1] with `points` nodes, both ends included, as numbers
+ *  of at least 50 digits. Nodes ascending; the weights sum to 1. @pre 2 <= points */
+Quadrature gauss_lobatto(int points);
+
 /**
  * The two-point Hermite basis of degree 2*order - 1 on [0, 1] in the variable `u`: at[k] and
  * bt[k] (k < order) have k-th derivative 1 at u = 0 and at u = 1 respectively, and every other
@@ -46,7 +50,26 @@ struct HermiteBasis {
 };
 HermiteBasis hermite_basis(int order, const GiNaC::symbol& u);
 
-/** The discrete Lagrangian L_d(h, t0, t1, q0, q1, p) of `spec` for `model`. */
+/**
+ * One interval of a Galerkin discretization (galerkin_gauss, galerkin_lobatto): the polynomial
+ * of degree s + order - 1 through both nodes' jets and spec.interior_points values per
+ * coordinate at the interior fractions (the inner nodes of the Gauss-Lobatto rule with
+ * interior_points + 2 points), its action under the quadrature, and where the interior values
+ * start (the Hermite interpolant of the nodes' jets). The discrete Lagrangian is the action
+ * made stationary in the interior values; the generated kernels find them by Newton's method
+ * and condense them out (pardel/condensation.hpp).
+ */
+struct GalerkinInterval {
+  std::vector<GiNaC::symbol> z;     ///< interior values, z[j * ncoords + i]: coordinate i at fraction j
+  std::vector<GiNaC::ex> fractions; ///< the interior fractions of [0, 1], ascending
+  GiNaC::ex action;                 ///< h sum_i w_i L(t_i, x(c_i), ..., x^(order)(c_i)) in h, t0, t1, q0, q1, z, p
+  std::vector<GiNaC::ex> start;     ///< z's starting values in h, q0, q1 (z's layout)
+};
+GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s);
+
+/** The discrete Lagrangian L_d(h, t0, t1, q0, q1, p) of `spec` for `model`. A Galerkin
+ *  discretization with interior values has no closed form: use galerkin_interval.
+ *  @throws std::logic_error for one. */
 GiNaC::ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
                               Gauss2Positions positions = Gauss2Positions::hermite);
 

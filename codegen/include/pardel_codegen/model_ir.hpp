@@ -32,7 +32,14 @@ struct KernelIR {
 
 struct DiscretizationIR {
   DiscretizationSpec spec;
-  std::vector<KernelIR> kernels;  ///< in kernel_variants() order
+  /** In kernel_variants() order. For a discretization with interior values (interior_dim > 0)
+   *  these are the entry points of the ABI, whose code (empty here) condenses the interval
+   *  kernels below (pardel/condensation.hpp). */
+  std::vector<KernelIR> kernels;
+  int interior_dim = 0;  ///< interior values of one interval (interior points * ncoords)
+  /** With interior values z: "start" (z's starting values), "interior" (dS/dz and d2S/dz2),
+   *  "ext_grad" (S and its gradient in [q0, z, q1]) and "ext_full" (with the Hessian). */
+  std::vector<KernelIR> interval_kernels;
 };
 
 struct ModelIR {
