@@ -222,6 +222,8 @@ const std::vector<std::pair<std::string, std::string>> kArguments = {
     {"refine_start_N", "solver.refine.start_N"},
     {"refine_factor", "solver.refine.factor"},
     {"clock_update_every", "solver.clock_update_every"},
+    {"error_estimate", "solver.error_estimate"},
+    {"extrapolate", "solver.extrapolate"},
     {"history_every", ""},
     {"refine_settle", ""},
     {"divergence_factor", ""},
@@ -378,7 +380,10 @@ Scene scene_from_arguments(const std::string& model_spec, const py::dict& argume
       std::string key = a.second;
       for (std::size_t dot; (dot = key.find('.')) != std::string::npos; key = key.substr(dot + 1))
         table = &subtable(*table, key.substr(0, dot));
-      insert(*table, key, value, name);
+      if ((name == "error_estimate" || name == "extrapolate") && py::isinstance<py::bool_>(value))
+        table->insert_or_assign(key, value.cast<bool>());  // the scene's true or false
+      else
+        insert(*table, key, value, name);
     }
   }
   std::ostringstream text;

@@ -202,7 +202,11 @@ class Result:
     message, iterations, residual, action, cost (the physical cost's value; cost_name,
     cost_definition), point (kind, inertia, lambda_min, ... as in summary.json), p0 and pN (the
     discrete boundary momenta -D1 Ld(q0, q1) and D2 Ld(q_{N-1}, q_N)), history (arrays iteration,
-    N, residual, action, seconds), summary (the whole summary.json dictionary).
+    N, residual, action, seconds), error_estimate (Richardson's estimate of the discretization error
+    of the coordinates at the nodes, NaN when not estimated), error_by_coordinate (dict by name,
+    empty when not estimated), error_note (how it was made, or "not estimated: " and why),
+    extrapolated (whether q holds the extrapolated values), summary (the whole summary.json
+    dictionary).
     """
 
     def __init__(self, raw, model_coords):
@@ -223,6 +227,11 @@ class Result:
         self.cost_name = s["cost"]["name"]
         self.cost_definition = s["cost"]["definition"]
         self.point = s["point"]
+        # summary.json writes a missing estimate as null; here it is NaN, as in the C++ Summary.
+        self.error_estimate = float("nan") if s["error_estimate"] is None else s["error_estimate"]
+        self.error_by_coordinate = dict(s["error"]["by_coordinate"])
+        self.error_note = s["error"]["note"]
+        self.extrapolated = s["error"]["extrapolated"]
         self.method = s["method"]
         self.N = s["N"]
         self.final_time = s["final_time"]
@@ -277,6 +286,7 @@ _INT_OPTIONS = {"max_iterations": _LONG_MAX, "newton_substeps": _INT_MAX, "threa
                 "refine_start_N": _INT_MAX, "clock_update_every": _INT_MAX, "history_every": _LONG_MAX}
 _NUMBER_OPTIONS = ("tol", "rtol", "damping", "refine_factor", "refine_settle", "divergence_factor")
 _STRING_OPTIONS = ("discretization", "clock", "method", "linear_solver", "newton_shift")
+_BOOL_OPTIONS = ("error_estimate", "extrapolate")
 
 
 def _shown(value):
@@ -348,6 +358,13 @@ def _check_option(where, name, value):
     if not ((above and below) or (zero_allowed and number == 0)):
         raise PardelError("%s: %s %s, got %s" % (where, name, rule, _shown(value)))
     return number
+
+
+def _check_bool(where, name, value):
+    """True or False (a bool or NumPy bool; not an int), as a Python bool."""
+    if not _is_bool(value):
+        raise TypeError("%s: %s must be True or False, got %s" % (where, name, _kind(value)))
+    return bool(value)
 
 
 def _check_string(where, name, value):
@@ -475,8 +492,9 @@ def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=N
     Keyword options (the scene keys of `pardel solve`, docs/examples.md): discretization, params
     (dict by name, or a list in declaration order), t0, knots ([(t, q), ...]), polyline (guess
     vertices), clock, method, tol, rtol, max_iterations, damping, newton_substeps, newton_shift,
-    linear_solver, threads, refine_start_N, refine_factor, clock_update_every; and history_every,
-    refine_settle, divergence_factor of pardel::Options. guess and on_iteration: as in solve_scene.
+    linear_solver, threads, refine_start_N, refine_factor, clock_update_every, error_estimate
+    (True/False), extrapolate (True/False); and history_every, refine_settle, divergence_factor of
+    pardel::Options. guess and on_iteration: as in solve_scene.
     A wrong type raises TypeError, a missing argument too; unknown options and bad values raise
     PardelError (a ValueError); each names the argument.
     """
@@ -513,6 +531,8 @@ def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options):
             continue
         if name in _STRING_OPTIONS:
             value = _check_string(where, name, value)
+        elif name in _BOOL_OPTIONS:
+            value = _check_bool(where, name, value)
         elif name in _INT_OPTIONS or name in _NUMBER_OPTIONS:
             value = _check_option(where, name, value)
         elif name == "t0":

@@ -58,6 +58,8 @@ SOLVE = {
     "history_every": without("None"),
     "knots": without("None"),
     "polyline": without("None"),
+    "error_estimate": without("None", "bool"),
+    "extrapolate": without("None", "bool"),
 }
 MODEL = {"spec": without("str")}
 LOAD_SCENE = {"path": without("str"), "overrides": without("list_of_str")}

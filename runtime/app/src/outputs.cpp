@@ -182,6 +182,15 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   j["tolerance"] = summary.tolerance;
   j["scene"] = scene.path;
   j["point"] = point_json(summary.point);
+  j["error_estimate"] = summary.error_estimate;  // NaN (not estimated) is written as null
+  nlohmann::ordered_json by_coordinate = nlohmann::ordered_json::object();
+  for (std::size_t i = 0; i < summary.error_by_coordinate.size() && i < static_cast<std::size_t>(scene.model->ncoords); ++i)
+    by_coordinate[scene.model->coords[i]] = summary.error_by_coordinate[i];
+  j["error"] = {{"by_coordinate", by_coordinate},
+                {"coarse_N", summary.error_coarse_N},
+                {"seconds", summary.error_seconds},
+                {"extrapolated", summary.extrapolated},
+                {"note", summary.error_note}};
   j["boundary_momenta"] = boundary_momenta_json(problem, trajectory);
   if (certificate.free_components > 0 || !certificate.error.empty()) j["certificate"] = certificate_json(certificate);
   return j;

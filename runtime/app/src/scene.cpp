@@ -85,6 +85,7 @@ class SceneReader : public detail::TomlReader {
   SceneReader(const std::string& file, std::map<std::string, std::string> origins)
       : TomlReader(file), origins_(std::move(origins)) {}
 
+  using TomlReader::boolean;
   using TomlReader::integer;
   using TomlReader::number;
   using TomlReader::string;
@@ -119,6 +120,10 @@ class SceneReader : public detail::TomlReader {
   std::optional<std::string> string(const toml::table* parent, const std::string& key, const std::string& dotted) const {
     const toml::node* node = find(parent, key);
     return node ? std::optional<std::string>(string(*node, dotted)) : std::nullopt;
+  }
+  std::optional<bool> boolean(const toml::table* parent, const std::string& key, const std::string& dotted) const {
+    const toml::node* node = find(parent, key);
+    return node ? std::optional<bool>(boolean(*node, dotted)) : std::nullopt;
   }
 
   /** A number (bounded_number) or an integer (bounded_integer) that must lie within the bound of
@@ -454,7 +459,7 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   r.check_keys(*solver, "solver",
                {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift",
                 "linear_solver", "threads", "refine", "clock_update_every", "history_every", "divergence_factor",
-                "clock"});
+                "clock", "error_estimate", "extrapolate"});
   if (const auto method = r.string(solver, "method", "solver.method")) {
     if (!parse_method(*method, &options.method)) {
       const std::string suggestion = nearest_name(*method, kMethodNames);
@@ -508,6 +513,14 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   if (const auto every =
           r.bounded_integer(solver, "clock_update_every", "solver.clock_update_every", "clock_update_every"))
     options.clock_update_every = static_cast<int>(std::min<long long>(*every, 1000000000));
+  if (const auto estimate = r.boolean(solver, "error_estimate", "solver.error_estimate"))
+    options.error_estimate = *estimate;
+  if (const auto extrapolate = r.boolean(solver, "extrapolate", "solver.extrapolate")) {
+    options.extrapolate = *extrapolate;
+    if (*extrapolate && !options.error_estimate)
+      r.fail(*solver->get("extrapolate"), "solver.extrapolate",
+             "solver.extrapolate = true needs the error estimate it extrapolates with; solver.error_estimate is false");
+  }
   if (const auto clock = r.string(solver, "clock", "solver.clock")) {
     if (!parse_clock_mode(*clock, &problem.clock)) {
       const std::string suggestion = nearest_name(*clock, kClockNames);

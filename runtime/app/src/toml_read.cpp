@@ -129,6 +129,13 @@ std::string TomlReader::string(const toml::node& node, const std::string& dotted
   return node.as_string()->get();
 }
 
+bool TomlReader::boolean(const toml::node& node, const std::string& dotted) const {
+  if (!node.is_boolean()) {
+    fail(node, dotted, fmt::format("{} must be true or false, got {} {}", dotted, type_name(node), show_value(node)));
+  }
+  return node.as_boolean()->get();
+}
+
 std::vector<double> TomlReader::vector(const toml::node& node, const std::string& dotted, std::size_t size,
                                        const std::string& what) const {
   const toml::array* array = node.as_array();

@@ -61,6 +61,7 @@ class TomlReader {
   double number(const toml::node& node, const std::string& dotted) const;
   long long integer(const toml::node& node, const std::string& dotted) const;
   std::string string(const toml::node& node, const std::string& dotted) const;
+  bool boolean(const toml::node& node, const std::string& dotted) const;
 
   /** An array of exactly `size` numbers; `what` explains the expected size. */
   std::vector<double> vector(const toml::node& node, const std::string& dotted, std::size_t size,
