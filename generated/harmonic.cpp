@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "pardel/condensation.hpp"
+
 // ---- trapezoid (consistency order 2)
 
 // full: 32 operations (54 before CSE)
@@ -135,6 +137,335 @@ extern "C" double harmonic_midpoint_action(double h, double t0, double t1, const
   return -(h*0.125*(p[0]*p[0]*(pd_t0001*pd_t0001) - pd_t0002*pd_t0002/(h*h)*4.0));
 }
 
+// ---- galerkin_lobatto(s=2) (consistency order 4)
+// The interval's action S over its nodes and 1 interior values z, condensed by
+// pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
+
+// start: 2 operations (2 before CSE)
+static void harmonic_galerkin_lobatto_s_2_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* z) {
+  (void)h;
+  (void)t0;
+  (void)t1;
+  (void)p;
+  (void)z;
+  z[0] = (q0[0] + q1[0])*0.5;
+}
+
+// interior: 26 operations (28 before CSE)
+static void harmonic_galerkin_lobatto_s_2_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[0]*4.0*pd_t0001;
+  const double pd_t0003 = p[0]*p[0];
+  g[0] = h*0.66666666666666663*((pd_t0002 - (q0[0] + q1[0]*3.0)*pd_t0001)*pd_t0001 - ((q1[0] + q0[0]*3.0)*pd_t0001 - pd_t0002)*pd_t0001 - z[0]*pd_t0003);
+  H[0] = -(h*(0.66666666666666663*pd_t0003 - 1.0/(h*h)*5.333333333333333));
+}
+
+// ext_grad: 59 operations (123 before CSE)
+static void harmonic_galerkin_lobatto_s_2_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = p[0]*p[0];
+  const double pd_t0002 = 1.0/h;
+  const double pd_t0003 = z[0]*4.0*pd_t0002;
+  const double pd_t0004 = (q1[0] + q0[0]*3.0)*pd_t0002 - pd_t0003;
+  const double pd_t0005 = pd_t0003 - (q0[0] + q1[0]*3.0)*pd_t0002;
+  const double pd_t0006 = q0[0] - q1[0];
+  const double pd_t0007 = 1.0/(h*h);
+  const double pd_t0008 = pd_t0005*pd_t0002;
+  const double pd_t0009 = pd_t0004*pd_t0002;
+  const double pd_t0010 = pd_t0006*pd_t0007*0.66666666666666663;
+  S[0] = -(h*((pd_t0001*(q1[0]*q1[0]) + pd_t0001*(q0[0]*q0[0]) - pd_t0004*pd_t0004 - pd_t0005*pd_t0005)*0.083333333333333329 + (pd_t0001*(z[0]*z[0]) - pd_t0006*pd_t0006*pd_t0007)*0.33333333333333331));
+  g[0] = -(h*((pd_t0008 + pd_t0001*q0[0])*0.16666666666666666 - pd_t0009*0.5 - pd_t0010));
+  g[1] = h*0.66666666666666663*(pd_t0008 - pd_t0009 - pd_t0001*z[0]);
+  g[2] = -(h*(pd_t0008*0.5 + (pd_t0010 + 0.16666666666666666*(pd_t0001*q1[0] - pd_t0009))));
+}
+
+// ext_full: 72 operations (163 before CSE)
+static void harmonic_galerkin_lobatto_s_2_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = p[0]*p[0];
+  const double pd_t0002 = 1.0/h;
+  const double pd_t0003 = z[0]*4.0*pd_t0002;
+  const double pd_t0004 = (q1[0] + q0[0]*3.0)*pd_t0002 - pd_t0003;
+  const double pd_t0005 = pd_t0003 - (q0[0] + q1[0]*3.0)*pd_t0002;
+  const double pd_t0006 = q0[0] - q1[0];
+  const double pd_t0007 = 1.0/(h*h);
+  const double pd_t0008 = pd_t0005*pd_t0002;
+  const double pd_t0009 = pd_t0004*pd_t0002;
+  const double pd_t0010 = pd_t0006*pd_t0007*0.66666666666666663;
+  const double pd_t0011 = -(h*(pd_t0001*0.16666666666666666 - pd_t0007*2.3333333333333335));
+  const double pd_t0012 = -(pd_t0002*2.6666666666666665);
+  const double pd_t0013 = 0.33333333333333331*pd_t0002;
+  S[0] = -(h*((pd_t0001*(q1[0]*q1[0]) + pd_t0001*(q0[0]*q0[0]) - pd_t0004*pd_t0004 - pd_t0005*pd_t0005)*0.083333333333333329 + (pd_t0001*(z[0]*z[0]) - pd_t0006*pd_t0006*pd_t0007)*0.33333333333333331));
+  g[0] = -(h*((pd_t0008 + pd_t0001*q0[0])*0.16666666666666666 - pd_t0009*0.5 - pd_t0010));
+  g[1] = h*0.66666666666666663*(pd_t0008 - pd_t0009 - pd_t0001*z[0]);
+  g[2] = -(h*(pd_t0008*0.5 + (pd_t0010 + 0.16666666666666666*(pd_t0001*q1[0] - pd_t0009))));
+  H[0] = pd_t0011;
+  H[1] = pd_t0012;
+  H[2] = pd_t0013;
+  H[3] = pd_t0012;
+  H[4] = -(h*(pd_t0001*0.66666666666666663 - pd_t0007*5.333333333333333));
+  H[5] = pd_t0012;
+  H[6] = pd_t0013;
+  H[7] = pd_t0012;
+  H[8] = pd_t0011;
+}
+
+static const pardel_condensation::Interval harmonic_galerkin_lobatto_s_2_interval = {
+    harmonic_galerkin_lobatto_s_2_start,
+    harmonic_galerkin_lobatto_s_2_interior,
+    harmonic_galerkin_lobatto_s_2_ext_grad,
+    harmonic_galerkin_lobatto_s_2_ext_full,
+};
+
+extern "C" void harmonic_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+  pardel_condensation::condensed<1, 1, 1>(harmonic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+}
+
+extern "C" void harmonic_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* D1, double* D2, double* D11, double* D22) {
+  pardel_condensation::condensed<1, 1, 1>(harmonic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, nullptr, D1, D2, D11, nullptr, D22);
+}
+
+extern "C" void harmonic_galerkin_lobatto_s_2_grad(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed<1, 1, 1>(harmonic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, nullptr, nullptr, nullptr);
+}
+
+extern "C" double harmonic_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  double Ld, D1[1], D2[1];
+  pardel_condensation::condensed<1, 1, 1>(harmonic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, &Ld, D1, D2, nullptr, nullptr, nullptr);
+  return Ld;
+}
+
+// ---- galerkin_gauss(s=4) (consistency order 8)
+// The interval's action S over its nodes and 3 interior values z, condensed by
+// pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
+
+// start: 8 operations (8 before CSE)
+static void harmonic_galerkin_gauss_s_4_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* z) {
+  (void)h;
+  (void)t0;
+  (void)t1;
+  (void)p;
+  (void)z;
+  z[0] = q1[0]*0.17267316464601143 + q0[0]*0.82732683535398854;
+  z[1] = (q0[0] + q1[0])*0.5;
+  z[2] = q0[0]*0.17267316464601143 + q1[0]*0.82732683535398854;
+}
+
+// interior: 186 operations (411 before CSE)
+static void harmonic_galerkin_gauss_s_4_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[1]*3.7995286238720101*pd_t0001;
+  const double pd_t0003 = (z[2]*0.38843642956475866*pd_t0001 + z[0]*3.8808713571172655*pd_t0001 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001 - pd_t0002)*pd_t0001;
+  const double pd_t0004 = z[1]*0.43835335626489408*pd_t0001;
+  const double pd_t0005 = (z[2]*0.12379358188276635*pd_t0001 + z[0]*6.6712789727391666*pd_t0001 - pd_t0004 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0001)*pd_t0001;
+  const double pd_t0006 = p[0]*p[0];
+  const double pd_t0007 = q0[0] - q1[0]*2.0302159969205866;
+  const double pd_t0008 = z[1] - z[0]*0.29908810627854904 + z[2]*0.94537429536365081;
+  const double pd_t0009 = pd_t0007 + pd_t0008*10.510241233497156;
+  const double pd_t0010 = z[1] + z[0]*0.94537429536365081 - (z[2] - q1[0]*0.31811794834858798)*0.29908810627854904;
+  const double pd_t0011 = pd_t0010 - q0[0]*0.19316549942260999;
+  const double pd_t0012 = q0[0] - z[0]*2.8649426664796085;
+  const double pd_t0013 = pd_t0012 - z[2]*21.03155681796741;
+  const double pd_t0014 = z[1] - q1[0]*2.3254899862931988;
+  const double pd_t0015 = z[0] + z[2]*0.13622114098715069;
+  const double pd_t0016 = z[1] - q0[0]*2.3254899862931988;
+  const double pd_t0017 = pd_t0015 - pd_t0016*0.27403345769479154 - q1[0]*0.047547597577070132;
+  const double pd_t0018 = (z[0]*0.12379358188276635*pd_t0001 + z[2]*6.6712789727391666*pd_t0001 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0001 - pd_t0004)*pd_t0001;
+  const double pd_t0019 = (z[0]*0.38843642956475866*pd_t0001 + z[2]*3.8808713571172655*pd_t0001 - pd_t0002 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001)*pd_t0001;
+  const double pd_t0020 = 1.0/(h*h);
+  const double pd_t0021 = -(h*(pd_t0006*0.21777777777777776 - pd_t0020*12.703703703703704));
+  const double pd_t0022 = -(h*(pd_t0006*0.06222222222222222 + pd_t0020*5.8074074074074078));
+  const double pd_t0023 = h*(pd_t0006*0.054444444444444441 + pd_t0020*1.2703703703703704);
+  g[0] = h*(pd_t0003*1.2654457260944294 + (pd_t0005*1.1603183569654674 + ((pd_t0006*(pd_t0009*0.011871218920309286) - pd_t0006*(pd_t0011*0.39437796792340762))*0.32607257743127305 + ((pd_t0006*(pd_t0013*0.0030725460226346786 + pd_t0014*0.01770815884323472) - pd_t0006*(pd_t0017*0.47437883563870942))*0.17392742256872692 + (pd_t0018*0.021531098627420201 + pd_t0019*0.12665846775638201)))));
+  g[1] = -(h*((pd_t0003 + pd_t0019)*1.2389220914098444 + (0.32607257743127305*(pd_t0006*(pd_t0007*0.039691377460704814 + pd_t0008*0.41716595200179934) + pd_t0006*(pd_t0010*0.41716595200179934 - q0[0]*0.080582069460536129)) + ((pd_t0018 + pd_t0005)*0.07624166942950393 + 0.17392742256872692*(pd_t0006*(q1[0]*0.0061809819269417338 + pd_t0016*0.035623163644459152 - pd_t0015*0.12999567258730474) + pd_t0006*(pd_t0012*0.0061809819269417338 + pd_t0014*0.035623163644459152 - z[2]*0.12999567258730474))))));
+  g[2] = h*(pd_t0019*1.2654457260944294 + (pd_t0018*1.1603183569654674 + (0.32607257743127305*(pd_t0006*(pd_t0011*0.12476937458810626) - pd_t0006*(pd_t0009*0.0375232079989265)) + (0.17392742256872692*(pd_t0006*(pd_t0013*0.022555573976028451 + pd_t0014*0.12999567258730474) - pd_t0006*(pd_t0017*0.064620426250861021)) + (pd_t0005*0.021531098627420201 + pd_t0003*0.12665846775638201)))));
+  H[0] = pd_t0021;
+  H[1] = pd_t0022;
+  H[2] = pd_t0023;
+  H[3] = pd_t0022;
+  H[4] = -(h*(pd_t0006*0.28444444444444444 - pd_t0020*9.481481481481481));
+  H[5] = pd_t0022;
+  H[6] = pd_t0023;
+  H[7] = pd_t0022;
+  H[8] = pd_t0021;
+}
+
+// ext_grad: 267 operations (772 before CSE)
+static void harmonic_galerkin_gauss_s_4_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[1]*0.43835335626489408*pd_t0001;
+  const double pd_t0003 = z[0]*0.12379358188276635*pd_t0001 + z[2]*6.6712789727391666*pd_t0001 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0001 - pd_t0002;
+  const double pd_t0004 = z[2]*0.12379358188276635*pd_t0001 + z[0]*6.6712789727391666*pd_t0001 - pd_t0002 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0001;
+  const double pd_t0005 = q0[0] - z[2]*21.03155681796741;
+  const double pd_t0006 = z[1] - q1[0]*2.3254899862931988;
+  const double pd_t0007 = z[0] - pd_t0006*2.011680828019494;
+  const double pd_t0008 = pd_t0005 - pd_t0007*2.8649426664796089;
+  const double pd_t0009 = pd_t0008*0.0327484862937516;
+  const double pd_t0010 = p[0]*p[0];
+  const double pd_t0011 = z[0] + z[2]*0.13622114098715069;
+  const double pd_t0012 = z[1] - q0[0]*2.3254899862931988;
+  const double pd_t0013 = pd_t0011 - pd_t0012*0.27403345769479159;
+  const double pd_t0014 = q1[0]*0.0327484862937516 - pd_t0013*0.68875165018946372;
+  const double pd_t0015 = z[1]*3.7995286238720101*pd_t0001;
+  const double pd_t0016 = z[0]*0.38843642956475866*pd_t0001 + z[2]*3.8808713571172655*pd_t0001 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001 - pd_t0015;
+  const double pd_t0017 = z[2]*0.38843642956475866*pd_t0001 + z[0]*3.8808713571172655*pd_t0001 - pd_t0015 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001;
+  const double pd_t0018 = z[0] - z[2]*0.31637004279188791;
+  const double pd_t0019 = z[1] + q1[0]*0.095145294744796452;
+  const double pd_t0020 = pd_t0018*0.61060199273548066 + pd_t0019*0.64588385333726939 - q0[0]*0.12476247709889343;
+  const double pd_t0021 = q0[0] - q1[0]*2.0302159969205866;
+  const double pd_t0022 = z[1]*0.64588385333726939 + (pd_t0021*0.061452809596679384 + z[2]*0.61060199273548066) - z[0]*0.19317617857053604;
+  const double pd_t0023 = pd_t0004*pd_t0001;
+  const double pd_t0024 = pd_t0018 + pd_t0019*1.0577820921345622;
+  const double pd_t0025 = q0[0] - pd_t0024*4.8941156582798904;
+  const double pd_t0026 = z[1] - z[0]*0.29908810627854904;
+  const double pd_t0027 = pd_t0026 + 0.095145294744796452*pd_t0021;
+  const double pd_t0028 = pd_t0027 + z[2]*0.9453742953636507;
+  const double pd_t0029 = pd_t0011 - pd_t0012*0.27403345769479154;
+  const double pd_t0030 = pd_t0029 - q1[0]*0.047547597577070132;
+  const double pd_t0031 = pd_t0017*pd_t0001;
+  const double pd_t0032 = pd_t0003*pd_t0001;
+  const double pd_t0033 = pd_t0016*pd_t0001;
+  const double pd_t0034 = pd_t0027 + z[2]*0.94537429536365081;
+  const double pd_t0035 = pd_t0005 - pd_t0007*2.8649426664796085;
+  S[0] = h*((pd_t0003*pd_t0003 + pd_t0004*pd_t0004 - pd_t0009*pd_t0009*pd_t0010 - pd_t0010*(pd_t0014*pd_t0014))*0.086963711284363462 + (pd_t0016*pd_t0016 + pd_t0017*pd_t0017 - pd_t0010*(pd_t0020*pd_t0020) - pd_t0010*(pd_t0022*pd_t0022))*0.16303628871563652);
+  g[0] = -(h*(pd_t0023*1.0994869450636569 + ((pd_t0010*(pd_t0025*0.015565675691851908) + pd_t0010*(pd_t0028*0.039691377460704814))*0.32607257743127305 + ((pd_t0010*(pd_t0030*0.30230363486322648) + pd_t0010*(q0[0]*0.0010724633545320364 - pd_t0007*0.0030725460226346786 - z[2]*0.022555573976028451))*0.17392742256872692 + (pd_t0031*0.1232741032024484 + (pd_t0032*0.0061208410997268927 + pd_t0033*0.029907999238518453))))));
+  g[1] = h*(pd_t0031*1.2654457260944294 + (pd_t0023*1.1603183569654674 + (0.32607257743127305*(pd_t0010*(pd_t0034*0.12476937458810626) - pd_t0010*(pd_t0024*0.37283479353253995 - q0[0]*0.076180217135199096)) + (0.17392742256872692*(pd_t0010*(0.0030725460226346786*pd_t0035) - pd_t0010*(pd_t0030*0.47437883563870942)) + (pd_t0032*0.021531098627420201 + pd_t0033*0.12665846775638201)))));
+  g[2] = -(h*((pd_t0031 + pd_t0033)*1.2389220914098444 + (0.32607257743127305*(pd_t0010*(pd_t0026*0.41716595200179934 + (pd_t0021*0.039691377460704814 + z[2]*0.39437796792340762)) + pd_t0010*(z[1]*0.41716595200179934 + (q1[0]*0.039691377460704814 + pd_t0018*0.39437796792340762) - q0[0]*0.080582069460536129)) + ((pd_t0032 + pd_t0023)*0.07624166942950393 + 0.17392742256872692*(pd_t0010*(q1[0]*0.0061809819269417338 - pd_t0013*0.12999567258730474) + pd_t0010*(q0[0]*0.0061809819269417338 + pd_t0006*0.035623163644459152 - z[0]*0.01770815884323472 - z[2]*0.12999567258730474))))));
+  g[3] = h*(pd_t0033*1.2654457260944294 + (pd_t0032*1.1603183569654674 + (0.17392742256872692*(pd_t0010*(0.022555573976028451*pd_t0035) - pd_t0010*(pd_t0030*0.064620426250861021)) + (pd_t0023*0.021531098627420201 + pd_t0031*0.12665846775638201))) - 0.32607257743127305*(pd_t0010*(pd_t0034*0.39437796792340762) + pd_t0010*(pd_t0025*0.024101138554958251)));
+  g[4] = -(h*(pd_t0032*1.0994869450636569 + (0.17392742256872692*(pd_t0010*(q1[0]*0.0010724633545320364 - pd_t0029*0.022555573976028451) - pd_t0010*(pd_t0008*0.014373811576562241)) + (pd_t0033*0.1232741032024484 + (pd_t0023*0.0061208410997268927 + pd_t0031*0.029907999238518453))) - 0.32607257743127305*(pd_t0010*(pd_t0028*0.080582069460536129) + pd_t0010*(pd_t0025*0.0076670047499683711))));
+}
+
+// ext_full: 310 operations (964 before CSE)
+static void harmonic_galerkin_gauss_s_4_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[1]*0.43835335626489408*pd_t0001;
+  const double pd_t0003 = z[0]*0.12379358188276635*pd_t0001 + z[2]*6.6712789727391666*pd_t0001 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0001 - pd_t0002;
+  const double pd_t0004 = z[2]*0.12379358188276635*pd_t0001 + z[0]*6.6712789727391666*pd_t0001 - pd_t0002 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0001;
+  const double pd_t0005 = q0[0] - z[2]*21.03155681796741;
+  const double pd_t0006 = z[1] - q1[0]*2.3254899862931988;
+  const double pd_t0007 = z[0] - pd_t0006*2.011680828019494;
+  const double pd_t0008 = pd_t0005 - pd_t0007*2.8649426664796089;
+  const double pd_t0009 = pd_t0008*0.0327484862937516;
+  const double pd_t0010 = p[0]*p[0];
+  const double pd_t0011 = z[0] + z[2]*0.13622114098715069;
+  const double pd_t0012 = z[1] - q0[0]*2.3254899862931988;
+  const double pd_t0013 = pd_t0011 - pd_t0012*0.27403345769479159;
+  const double pd_t0014 = q1[0]*0.0327484862937516 - pd_t0013*0.68875165018946372;
+  const double pd_t0015 = z[1]*3.7995286238720101*pd_t0001;
+  const double pd_t0016 = z[0]*0.38843642956475866*pd_t0001 + z[2]*3.8808713571172655*pd_t0001 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001 - pd_t0015;
+  const double pd_t0017 = z[2]*0.38843642956475866*pd_t0001 + z[0]*3.8808713571172655*pd_t0001 - pd_t0015 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001;
+  const double pd_t0018 = z[0] - z[2]*0.31637004279188791;
+  const double pd_t0019 = z[1] + q1[0]*0.095145294744796452;
+  const double pd_t0020 = pd_t0018*0.61060199273548066 + pd_t0019*0.64588385333726939 - q0[0]*0.12476247709889343;
+  const double pd_t0021 = q0[0] - q1[0]*2.0302159969205866;
+  const double pd_t0022 = z[1]*0.64588385333726939 + (pd_t0021*0.061452809596679384 + z[2]*0.61060199273548066) - z[0]*0.19317617857053604;
+  const double pd_t0023 = pd_t0004*pd_t0001;
+  const double pd_t0024 = pd_t0018 + pd_t0019*1.0577820921345622;
+  const double pd_t0025 = q0[0] - pd_t0024*4.8941156582798904;
+  const double pd_t0026 = z[1] - z[0]*0.29908810627854904;
+  const double pd_t0027 = pd_t0026 + 0.095145294744796452*pd_t0021;
+  const double pd_t0028 = pd_t0027 + z[2]*0.9453742953636507;
+  const double pd_t0029 = pd_t0011 - pd_t0012*0.27403345769479154;
+  const double pd_t0030 = pd_t0029 - q1[0]*0.047547597577070132;
+  const double pd_t0031 = pd_t0017*pd_t0001;
+  const double pd_t0032 = pd_t0003*pd_t0001;
+  const double pd_t0033 = pd_t0016*pd_t0001;
+  const double pd_t0034 = pd_t0027 + z[2]*0.94537429536365081;
+  const double pd_t0035 = pd_t0005 - pd_t0007*2.8649426664796085;
+  const double pd_t0036 = 1.0/(h*h);
+  const double pd_t0037 = -(h*(pd_t0010*0.040000000000000001 - pd_t0036*7.0));
+  const double pd_t0038 = pd_t0010*0.023333333333333334;
+  const double pd_t0039 = -(h*(pd_t0038 + pd_t0036*7.8257701508806026));
+  const double pd_t0040 = h*(pd_t0010*0.026666666666666668 + pd_t0036*1.0666666666666667);
+  const double pd_t0041 = -(h*(pd_t0038 + pd_t0036*0.340896515786064));
+  const double pd_t0042 = h*(pd_t0010*0.01 + pd_t0036*0.10000000000000001);
+  const double pd_t0043 = -(h*(pd_t0010*0.21777777777777776 - pd_t0036*12.703703703703704));
+  const double pd_t0044 = -(h*(pd_t0010*0.06222222222222222 + pd_t0036*5.8074074074074078));
+  const double pd_t0045 = h*(pd_t0010*0.054444444444444441 + pd_t0036*1.2703703703703704);
+  S[0] = h*((pd_t0003*pd_t0003 + pd_t0004*pd_t0004 - pd_t0009*pd_t0009*pd_t0010 - pd_t0010*(pd_t0014*pd_t0014))*0.086963711284363462 + (pd_t0016*pd_t0016 + pd_t0017*pd_t0017 - pd_t0010*(pd_t0020*pd_t0020) - pd_t0010*(pd_t0022*pd_t0022))*0.16303628871563652);
+  g[0] = -(h*(pd_t0023*1.0994869450636569 + ((pd_t0010*(pd_t0025*0.015565675691851908) + pd_t0010*(pd_t0028*0.039691377460704814))*0.32607257743127305 + ((pd_t0010*(pd_t0030*0.30230363486322648) + pd_t0010*(q0[0]*0.0010724633545320364 - pd_t0007*0.0030725460226346786 - z[2]*0.022555573976028451))*0.17392742256872692 + (pd_t0031*0.1232741032024484 + (pd_t0032*0.0061208410997268927 + pd_t0033*0.029907999238518453))))));
+  g[1] = h*(pd_t0031*1.2654457260944294 + (pd_t0023*1.1603183569654674 + (0.32607257743127305*(pd_t0010*(pd_t0034*0.12476937458810626) - pd_t0010*(pd_t0024*0.37283479353253995 - q0[0]*0.076180217135199096)) + (0.17392742256872692*(pd_t0010*(0.0030725460226346786*pd_t0035) - pd_t0010*(pd_t0030*0.47437883563870942)) + (pd_t0032*0.021531098627420201 + pd_t0033*0.12665846775638201)))));
+  g[2] = -(h*((pd_t0031 + pd_t0033)*1.2389220914098444 + (0.32607257743127305*(pd_t0010*(pd_t0026*0.41716595200179934 + (pd_t0021*0.039691377460704814 + z[2]*0.39437796792340762)) + pd_t0010*(z[1]*0.41716595200179934 + (q1[0]*0.039691377460704814 + pd_t0018*0.39437796792340762) - q0[0]*0.080582069460536129)) + ((pd_t0032 + pd_t0023)*0.07624166942950393 + 0.17392742256872692*(pd_t0010*(q1[0]*0.0061809819269417338 - pd_t0013*0.12999567258730474) + pd_t0010*(q0[0]*0.0061809819269417338 + pd_t0006*0.035623163644459152 - z[0]*0.01770815884323472 - z[2]*0.12999567258730474))))));
+  g[3] = h*(pd_t0033*1.2654457260944294 + (pd_t0032*1.1603183569654674 + (0.17392742256872692*(pd_t0010*(0.022555573976028451*pd_t0035) - pd_t0010*(pd_t0030*0.064620426250861021)) + (pd_t0023*0.021531098627420201 + pd_t0031*0.12665846775638201))) - 0.32607257743127305*(pd_t0010*(pd_t0034*0.39437796792340762) + pd_t0010*(pd_t0025*0.024101138554958251)));
+  g[4] = -(h*(pd_t0032*1.0994869450636569 + (0.17392742256872692*(pd_t0010*(q1[0]*0.0010724633545320364 - pd_t0029*0.022555573976028451) - pd_t0010*(pd_t0008*0.014373811576562241)) + (pd_t0033*0.1232741032024484 + (pd_t0023*0.0061208410997268927 + pd_t0031*0.029907999238518453))) - 0.32607257743127305*(pd_t0010*(pd_t0028*0.080582069460536129) + pd_t0010*(pd_t0025*0.0076670047499683711))));
+  H[0] = pd_t0037;
+  H[1] = pd_t0039;
+  H[2] = pd_t0040;
+  H[3] = pd_t0041;
+  H[4] = pd_t0042;
+  H[5] = pd_t0039;
+  H[6] = pd_t0043;
+  H[7] = pd_t0044;
+  H[8] = pd_t0045;
+  H[9] = pd_t0041;
+  H[10] = pd_t0040;
+  H[11] = pd_t0044;
+  H[12] = -(h*(pd_t0010*0.28444444444444444 - pd_t0036*9.481481481481481));
+  H[13] = pd_t0044;
+  H[14] = pd_t0040;
+  H[15] = pd_t0041;
+  H[16] = pd_t0045;
+  H[17] = pd_t0044;
+  H[18] = pd_t0043;
+  H[19] = pd_t0039;
+  H[20] = pd_t0042;
+  H[21] = pd_t0041;
+  H[22] = pd_t0040;
+  H[23] = pd_t0039;
+  H[24] = pd_t0037;
+}
+
+static const pardel_condensation::Interval harmonic_galerkin_gauss_s_4_interval = {
+    harmonic_galerkin_gauss_s_4_start,
+    harmonic_galerkin_gauss_s_4_interior,
+    harmonic_galerkin_gauss_s_4_ext_grad,
+    harmonic_galerkin_gauss_s_4_ext_full,
+};
+
+extern "C" void harmonic_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+  pardel_condensation::condensed<1, 1, 3>(harmonic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+}
+
+extern "C" void harmonic_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* D1, double* D2, double* D11, double* D22) {
+  pardel_condensation::condensed<1, 1, 3>(harmonic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, nullptr, D1, D2, D11, nullptr, D22);
+}
+
+extern "C" void harmonic_galerkin_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed<1, 1, 3>(harmonic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, nullptr, nullptr, nullptr);
+}
+
+extern "C" double harmonic_galerkin_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  double Ld, D1[1], D2[1];
+  pardel_condensation::condensed<1, 1, 3>(harmonic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, &Ld, D1, D2, nullptr, nullptr, nullptr);
+  return Ld;
+}
+
 static const char* const harmonic_coords[] = {
     "x",
 };
@@ -147,6 +478,8 @@ static const double harmonic_param_defaults[] = {
 static const pardel_discretization harmonic_discretizations[] = {
     {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action},
     {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action},
+    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action},
+    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action},
 };
 
 extern "C" const pardel_model harmonic_model = {
@@ -162,7 +495,7 @@ extern "C" const pardel_model harmonic_model = {
     harmonic_param_defaults,
     0,
     nullptr,
-    2,
+    4,
     harmonic_discretizations,
     nullptr,
     PARDEL_COST_ACTION,

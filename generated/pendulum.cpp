@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "pardel/condensation.hpp"
+
 // ---- trapezoid (consistency order 2)
 
 // full: 34 operations (58 before CSE)
@@ -139,6 +141,332 @@ extern "C" double pendulum_midpoint_action(double h, double t0, double t1, const
   return h*0.5*(pd_t0001*pd_t0001/(h*h) + std::cos(0.5*(q0[0] + q1[0]))*(p[0]*2.0)/p[1]);
 }
 
+// ---- galerkin_lobatto(s=2) (consistency order 4)
+// The interval's action S over its nodes and 1 interior values z, condensed by
+// pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
+
+// start: 2 operations (2 before CSE)
+static void pendulum_galerkin_lobatto_s_2_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* z) {
+  (void)h;
+  (void)t0;
+  (void)t1;
+  (void)p;
+  (void)z;
+  z[0] = (q0[0] + q1[0])*0.5;
+}
+
+// interior: 29 operations (31 before CSE)
+static void pendulum_galerkin_lobatto_s_2_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[0]*4.0*pd_t0001;
+  const double pd_t0003 = p[0]/p[1];
+  g[0] = h*0.66666666666666663*((pd_t0002 - (q0[0] + q1[0]*3.0)*pd_t0001)*pd_t0001 - ((q1[0] + q0[0]*3.0)*pd_t0001 - pd_t0002)*pd_t0001 - std::sin(z[0])*pd_t0003);
+  H[0] = -(h*(0.66666666666666663*(pd_t0003*std::cos(z[0])) - 1.0/(h*h)*5.333333333333333));
+}
+
+// ext_grad: 63 operations (127 before CSE)
+static void pendulum_galerkin_lobatto_s_2_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = p[0]/p[1];
+  const double pd_t0002 = q0[0] - q1[0];
+  const double pd_t0003 = 1.0/(h*h);
+  const double pd_t0004 = 1.0/h;
+  const double pd_t0005 = z[0]*4.0*pd_t0004;
+  const double pd_t0006 = (q1[0] + q0[0]*3.0)*pd_t0004 - pd_t0005;
+  const double pd_t0007 = pd_t0005 - (q0[0] + q1[0]*3.0)*pd_t0004;
+  const double pd_t0008 = pd_t0007*pd_t0004;
+  const double pd_t0009 = pd_t0006*pd_t0004;
+  const double pd_t0010 = 0.66666666666666663*(pd_t0002*pd_t0003);
+  S[0] = h*(pd_t0001*std::cos(z[0])*0.66666666666666663 + (pd_t0002*pd_t0002*pd_t0003*0.33333333333333331 + ((pd_t0006*pd_t0006 + pd_t0007*pd_t0007)*0.083333333333333329 + (std::cos(q1[0])*pd_t0001 + pd_t0001*std::cos(q0[0]))*0.16666666666666666)));
+  g[0] = -(h*(0.16666666666666666*(pd_t0008 + pd_t0001*std::sin(q0[0])) - pd_t0009*0.5 - pd_t0010));
+  g[1] = h*0.66666666666666663*(pd_t0008 - pd_t0009 - pd_t0001*std::sin(z[0]));
+  g[2] = -(h*(pd_t0008*0.5 + (pd_t0010 + 0.16666666666666666*(pd_t0001*std::sin(q1[0]) - pd_t0009))));
+}
+
+// ext_full: 79 operations (173 before CSE)
+static void pendulum_galerkin_lobatto_s_2_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = p[0]/p[1];
+  const double pd_t0002 = pd_t0001*std::cos(z[0])*0.66666666666666663;
+  const double pd_t0003 = q0[0] - q1[0];
+  const double pd_t0004 = 1.0/(h*h);
+  const double pd_t0005 = 1.0/h;
+  const double pd_t0006 = z[0]*4.0*pd_t0005;
+  const double pd_t0007 = (q1[0] + q0[0]*3.0)*pd_t0005 - pd_t0006;
+  const double pd_t0008 = pd_t0006 - (q0[0] + q1[0]*3.0)*pd_t0005;
+  const double pd_t0009 = std::cos(q1[0])*pd_t0001;
+  const double pd_t0010 = pd_t0001*std::cos(q0[0]);
+  const double pd_t0011 = pd_t0008*pd_t0005;
+  const double pd_t0012 = pd_t0007*pd_t0005;
+  const double pd_t0013 = 0.66666666666666663*(pd_t0003*pd_t0004);
+  const double pd_t0014 = pd_t0004*2.3333333333333335;
+  const double pd_t0015 = -(pd_t0005*2.6666666666666665);
+  const double pd_t0016 = 0.33333333333333331*pd_t0005;
+  S[0] = h*(pd_t0002 + (pd_t0003*pd_t0003*pd_t0004*0.33333333333333331 + ((pd_t0007*pd_t0007 + pd_t0008*pd_t0008)*0.083333333333333329 + (pd_t0009 + pd_t0010)*0.16666666666666666)));
+  g[0] = -(h*(0.16666666666666666*(pd_t0011 + pd_t0001*std::sin(q0[0])) - pd_t0012*0.5 - pd_t0013));
+  g[1] = h*0.66666666666666663*(pd_t0011 - pd_t0012 - pd_t0001*std::sin(z[0]));
+  g[2] = -(h*(pd_t0011*0.5 + (pd_t0013 + 0.16666666666666666*(pd_t0001*std::sin(q1[0]) - pd_t0012))));
+  H[0] = -(h*(pd_t0010*0.16666666666666666 - pd_t0014));
+  H[1] = pd_t0015;
+  H[2] = pd_t0016;
+  H[3] = pd_t0015;
+  H[4] = -(h*(pd_t0002 - pd_t0004*5.333333333333333));
+  H[5] = pd_t0015;
+  H[6] = pd_t0016;
+  H[7] = pd_t0015;
+  H[8] = -(h*(pd_t0009*0.16666666666666666 - pd_t0014));
+}
+
+static const pardel_condensation::Interval pendulum_galerkin_lobatto_s_2_interval = {
+    pendulum_galerkin_lobatto_s_2_start,
+    pendulum_galerkin_lobatto_s_2_interior,
+    pendulum_galerkin_lobatto_s_2_ext_grad,
+    pendulum_galerkin_lobatto_s_2_ext_full,
+};
+
+extern "C" void pendulum_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+  pardel_condensation::condensed<1, 1, 1>(pendulum_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+}
+
+extern "C" void pendulum_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* D1, double* D2, double* D11, double* D22) {
+  pardel_condensation::condensed<1, 1, 1>(pendulum_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, nullptr, D1, D2, D11, nullptr, D22);
+}
+
+extern "C" void pendulum_galerkin_lobatto_s_2_grad(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed<1, 1, 1>(pendulum_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, nullptr, nullptr, nullptr);
+}
+
+extern "C" double pendulum_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  double Ld, D1[1], D2[1];
+  pardel_condensation::condensed<1, 1, 1>(pendulum_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, &Ld, D1, D2, nullptr, nullptr, nullptr);
+  return Ld;
+}
+
+// ---- galerkin_gauss(s=4) (consistency order 8)
+// The interval's action S over its nodes and 3 interior values z, condensed by
+// pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
+
+// start: 8 operations (8 before CSE)
+static void pendulum_galerkin_gauss_s_4_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* z) {
+  (void)h;
+  (void)t0;
+  (void)t1;
+  (void)p;
+  (void)z;
+  z[0] = q1[0]*0.17267316464601143 + q0[0]*0.82732683535398854;
+  z[1] = (q0[0] + q1[0])*0.5;
+  z[2] = q0[0]*0.17267316464601143 + q1[0]*0.82732683535398854;
+}
+
+// interior: 207 operations (896 before CSE)
+static void pendulum_galerkin_gauss_s_4_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[1]*3.7995286238720101*pd_t0001;
+  const double pd_t0003 = (z[2]*0.38843642956475866*pd_t0001 + z[0]*3.8808713571172655*pd_t0001 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001 - pd_t0002)*pd_t0001;
+  const double pd_t0004 = z[1]*0.43835335626489408*pd_t0001;
+  const double pd_t0005 = (z[2]*0.12379358188276635*pd_t0001 + z[0]*6.6712789727391666*pd_t0001 - pd_t0004 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0001)*pd_t0001;
+  const double pd_t0006 = (z[0]*0.38843642956475866*pd_t0001 + z[2]*3.8808713571172655*pd_t0001 - pd_t0002 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001)*pd_t0001;
+  const double pd_t0007 = p[0]/p[1];
+  const double pd_t0008 = z[1]*0.18874099619441229;
+  const double pd_t0009 = q1[0]*0.0327484862937516 + pd_t0008 - z[2]*0.093822535645591634 - q0[0]*0.43891529665310852 - z[0]*0.68875165018946372;
+  const double pd_t0010 = pd_t0007*std::sin(pd_t0009);
+  const double pd_t0011 = z[1]*0.64588385333726939;
+  const double pd_t0012 = z[2]*0.61060199273548066 + (pd_t0011 + q0[0]*0.061452809596679384) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
+  const double pd_t0013 = pd_t0007*std::sin(pd_t0012);
+  const double pd_t0014 = pd_t0008 + q0[0]*0.0327484862937516 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[2]*0.68875165018946372;
+  const double pd_t0015 = pd_t0007*std::sin(pd_t0014);
+  const double pd_t0016 = (z[0]*0.12379358188276635*pd_t0001 + z[2]*6.6712789727391666*pd_t0001 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0001 - pd_t0004)*pd_t0001;
+  const double pd_t0017 = pd_t0011 + (q1[0]*0.061452809596679384 + z[0]*0.61060199273548066) - q0[0]*0.12476247709889343 - z[2]*0.19317617857053604;
+  const double pd_t0018 = pd_t0007*std::sin(pd_t0017);
+  const double pd_t0019 = pd_t0007*std::cos(pd_t0017);
+  const double pd_t0020 = pd_t0007*std::cos(pd_t0009);
+  const double pd_t0021 = pd_t0007*std::cos(pd_t0014);
+  const double pd_t0022 = pd_t0007*std::cos(pd_t0012);
+  const double pd_t0023 = 1.0/(h*h);
+  const double pd_t0024 = pd_t0023*12.703703703703704;
+  const double pd_t0025 = pd_t0023*5.8074074074074078;
+  const double pd_t0026 = h*(pd_t0022*0.040683871556431793 + (pd_t0021*0.0030799344260414238 + pd_t0020*0.022609812278198024) - pd_t0019*0.12859584048289346 - pd_t0025);
+  const double pd_t0027 = pd_t0019 + pd_t0022;
+  const double pd_t0028 = pd_t0021 + pd_t0020;
+  const double pd_t0029 = h*(pd_t0027*0.038461486405326983 + pd_t0023*1.2703703703703704 - pd_t0028*0.011239264183104759);
+  const double pd_t0030 = -(h*(pd_t0025 + pd_t0022*0.12859584048289346 - pd_t0020*0.0030799344260414238 - pd_t0021*0.022609812278198024 - pd_t0019*0.040683871556431793));
+  g[0] = h*(pd_t0003*1.2654457260944294 + (pd_t0005*1.1603183569654674 + (pd_t0006*0.12665846775638201 + (pd_t0010*0.11979279930741085 + (pd_t0013*0.062989454444818543 + (pd_t0015*0.016318311803700261 + pd_t0016*0.021531098627420201))))) - pd_t0018*0.19910056555592964);
+  g[1] = -(h*((pd_t0003 + pd_t0006)*1.2389220914098444 + ((pd_t0018 + pd_t0013)*0.21060501277892579 + ((pd_t0010 + pd_t0015)*0.032827235001148022 + (pd_t0016 + pd_t0005)*0.07624166942950393))));
+  g[2] = h*(pd_t0006*1.2654457260944294 + (pd_t0016*1.1603183569654674 + (pd_t0003*0.12665846775638201 + (pd_t0015*0.11979279930741085 + (pd_t0018*0.062989454444818543 + (pd_t0010*0.016318311803700261 + pd_t0005*0.021531098627420201))))) - pd_t0013*0.19910056555592964);
+  H[0] = -(h*(pd_t0019*0.12157120208321184 + (pd_t0020*0.082507488203794471 + (pd_t0021*0.0015310253908785464 + pd_t0022*0.01216806209989291)) - pd_t0024));
+  H[1] = pd_t0026;
+  H[2] = pd_t0029;
+  H[3] = pd_t0026;
+  H[4] = -(h*(pd_t0028*0.0061958450364247566 + pd_t0027*0.13602637718579746 - pd_t0023*9.481481481481481));
+  H[5] = pd_t0030;
+  H[6] = pd_t0029;
+  H[7] = pd_t0030;
+  H[8] = -(h*(pd_t0022*0.12157120208321184 + (pd_t0021*0.082507488203794471 + (pd_t0020*0.0015310253908785464 + pd_t0019*0.01216806209989291)) - pd_t0024));
+}
+
+// ext_grad: 199 operations (767 before CSE)
+static void pendulum_galerkin_gauss_s_4_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = p[0]/p[1];
+  const double pd_t0002 = z[1]*0.64588385333726939;
+  const double pd_t0003 = pd_t0002 + (q1[0]*0.061452809596679384 + z[0]*0.61060199273548066) - q0[0]*0.12476247709889343 - z[2]*0.19317617857053604;
+  const double pd_t0004 = z[2]*0.61060199273548066 + (pd_t0002 + q0[0]*0.061452809596679384) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
+  const double pd_t0005 = z[1]*0.18874099619441229;
+  const double pd_t0006 = q0[0]*0.0327484862937516 + pd_t0005 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[2]*0.68875165018946372;
+  const double pd_t0007 = pd_t0005 + q1[0]*0.0327484862937516 - z[2]*0.093822535645591634 - q0[0]*0.43891529665310852 - z[0]*0.68875165018946372;
+  const double pd_t0008 = 1.0/h;
+  const double pd_t0009 = z[1]*0.43835335626489408*pd_t0008;
+  const double pd_t0010 = z[0]*0.12379358188276635*pd_t0008 + z[2]*6.6712789727391666*pd_t0008 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0008 - pd_t0009;
+  const double pd_t0011 = z[2]*0.12379358188276635*pd_t0008 + z[0]*6.6712789727391666*pd_t0008 - pd_t0009 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0008;
+  const double pd_t0012 = z[1]*3.7995286238720101*pd_t0008;
+  const double pd_t0013 = z[0]*0.38843642956475866*pd_t0008 + z[2]*3.8808713571172655*pd_t0008 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0008 - pd_t0012;
+  const double pd_t0014 = z[2]*0.38843642956475866*pd_t0008 + z[0]*3.8808713571172655*pd_t0008 - pd_t0012 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0008;
+  const double pd_t0015 = pd_t0011*pd_t0008;
+  const double pd_t0016 = pd_t0014*pd_t0008;
+  const double pd_t0017 = pd_t0013*pd_t0008;
+  const double pd_t0018 = pd_t0001*std::sin(pd_t0004);
+  const double pd_t0019 = pd_t0001*std::sin(pd_t0006);
+  const double pd_t0020 = pd_t0010*pd_t0008;
+  const double pd_t0021 = pd_t0001*std::sin(pd_t0003);
+  const double pd_t0022 = pd_t0001*std::sin(pd_t0007);
+  S[0] = h*((pd_t0001*std::cos(pd_t0003) + pd_t0001*std::cos(pd_t0004))*0.32607257743127305 + ((std::cos(pd_t0006)*pd_t0001 + pd_t0001*std::cos(pd_t0007))*0.17392742256872692 + ((pd_t0010*pd_t0010 + pd_t0011*pd_t0011)*0.086963711284363462 + (pd_t0013*pd_t0013 + pd_t0014*pd_t0014)*0.16303628871563652)));
+  g[0] = -(h*(pd_t0015*1.0994869450636569 + (pd_t0016*0.1232741032024484 + (pd_t0017*0.029907999238518453 + (pd_t0018*0.02003807601558252 + (pd_t0019*0.0056958598140994963 + pd_t0020*0.0061208410997268927)))) - pd_t0021*0.040681622474346361 - pd_t0022*0.076339406272863342));
+  g[1] = h*(pd_t0016*1.2654457260944294 + (pd_t0015*1.1603183569654674 + (pd_t0017*0.12665846775638201 + (pd_t0022*0.11979279930741085 + (pd_t0018*0.062989454444818543 + (pd_t0019*0.016318311803700261 + pd_t0020*0.021531098627420201))))) - pd_t0021*0.19910056555592964);
+  g[2] = -(h*((pd_t0016 + pd_t0017)*1.2389220914098444 + ((pd_t0021 + pd_t0018)*0.21060501277892579 + ((pd_t0022 + pd_t0019)*0.032827235001148022 + (pd_t0020 + pd_t0015)*0.07624166942950393))));
+  g[3] = h*(pd_t0017*1.2654457260944294 + (pd_t0020*1.1603183569654674 + (pd_t0016*0.12665846775638201 + (pd_t0019*0.11979279930741085 + (pd_t0021*0.062989454444818543 + (pd_t0022*0.016318311803700261 + pd_t0015*0.021531098627420201))))) - pd_t0018*0.19910056555592964);
+  g[4] = -(h*(pd_t0020*1.0994869450636569 + (pd_t0017*0.1232741032024484 + (pd_t0016*0.029907999238518453 + (pd_t0021*0.02003807601558252 + (pd_t0022*0.0056958598140994963 + pd_t0015*0.0061208410997268927)))) - pd_t0018*0.040681622474346361 - pd_t0019*0.076339406272863342));
+}
+
+// ext_full: 341 operations (2268 before CSE)
+static void pendulum_galerkin_gauss_s_4_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  const double pd_t0001 = p[0]/p[1];
+  const double pd_t0002 = z[1]*0.64588385333726939;
+  const double pd_t0003 = pd_t0002 + (q1[0]*0.061452809596679384 + z[0]*0.61060199273548066) - q0[0]*0.12476247709889343 - z[2]*0.19317617857053604;
+  const double pd_t0004 = pd_t0001*std::cos(pd_t0003);
+  const double pd_t0005 = z[2]*0.61060199273548066 + (pd_t0002 + q0[0]*0.061452809596679384) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
+  const double pd_t0006 = pd_t0001*std::cos(pd_t0005);
+  const double pd_t0007 = pd_t0004 + pd_t0006;
+  const double pd_t0008 = z[1]*0.18874099619441229;
+  const double pd_t0009 = q0[0]*0.0327484862937516 + pd_t0008 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[2]*0.68875165018946372;
+  const double pd_t0010 = std::cos(pd_t0009)*pd_t0001;
+  const double pd_t0011 = pd_t0008 + q1[0]*0.0327484862937516 - z[2]*0.093822535645591634 - q0[0]*0.43891529665310852 - z[0]*0.68875165018946372;
+  const double pd_t0012 = pd_t0001*std::cos(pd_t0011);
+  const double pd_t0013 = pd_t0010 + pd_t0012;
+  const double pd_t0014 = 1.0/h;
+  const double pd_t0015 = z[1]*0.43835335626489408*pd_t0014;
+  const double pd_t0016 = z[0]*0.12379358188276635*pd_t0014 + z[2]*6.6712789727391666*pd_t0014 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0014 - pd_t0015;
+  const double pd_t0017 = z[2]*0.12379358188276635*pd_t0014 + z[0]*6.6712789727391666*pd_t0014 - pd_t0015 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0014;
+  const double pd_t0018 = z[1]*3.7995286238720101*pd_t0014;
+  const double pd_t0019 = z[0]*0.38843642956475866*pd_t0014 + z[2]*3.8808713571172655*pd_t0014 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0014 - pd_t0018;
+  const double pd_t0020 = z[2]*0.38843642956475866*pd_t0014 + z[0]*3.8808713571172655*pd_t0014 - pd_t0018 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0014;
+  const double pd_t0021 = pd_t0017*pd_t0014;
+  const double pd_t0022 = pd_t0020*pd_t0014;
+  const double pd_t0023 = pd_t0019*pd_t0014;
+  const double pd_t0024 = pd_t0001*std::sin(pd_t0005);
+  const double pd_t0025 = pd_t0001*std::sin(pd_t0009);
+  const double pd_t0026 = pd_t0016*pd_t0014;
+  const double pd_t0027 = pd_t0001*std::sin(pd_t0003);
+  const double pd_t0028 = pd_t0001*std::sin(pd_t0011);
+  const double pd_t0029 = 1.0/(h*h);
+  const double pd_t0030 = pd_t0029*7.0;
+  const double pd_t0031 = pd_t0029*7.8257701508806026;
+  const double pd_t0032 = h*(pd_t0004*0.024840279750548405 + (pd_t0010*0.0005344000104406429 + pd_t0006*0.0038708789505961438) - pd_t0012*0.052578892044918522 - pd_t0031);
+  const double pd_t0033 = pd_t0029*1.0666666666666667;
+  const double pd_t0034 = -(h*(pd_t0010*0.0010750422554968589 + pd_t0006*0.012942269750409557 - pd_t0012*0.014408375588830192 - pd_t0004*0.026275603083742889 - pd_t0033));
+  const double pd_t0035 = pd_t0029*0.340896515786064;
+  const double pd_t0036 = -(h*(pd_t0035 + (pd_t0006*0.012235289145699726 + (pd_t0012*0.0071623566661990221 + pd_t0004*0.0078587203676434639)) - pd_t0010*0.0039230328462088807));
+  const double pd_t0037 = h*((pd_t0013 + pd_t0007)*0.0025000000000000001 + pd_t0029*0.10000000000000001);
+  const double pd_t0038 = pd_t0029*12.703703703703704;
+  const double pd_t0039 = pd_t0029*5.8074074074074078;
+  const double pd_t0040 = h*(pd_t0006*0.040683871556431793 + (pd_t0010*0.0030799344260414238 + pd_t0012*0.022609812278198024) - pd_t0004*0.12859584048289346 - pd_t0039);
+  const double pd_t0041 = h*(pd_t0007*0.038461486405326983 + pd_t0029*1.2703703703703704 - pd_t0013*0.011239264183104759);
+  const double pd_t0042 = -(h*(pd_t0004*0.012235289145699726 + (pd_t0006*0.0078587203676434639 + (pd_t0035 + pd_t0010*0.0071623566661990221)) - pd_t0012*0.0039230328462088807));
+  const double pd_t0043 = -(h*(pd_t0039 + pd_t0006*0.12859584048289346 - pd_t0012*0.0030799344260414238 - pd_t0010*0.022609812278198024 - pd_t0004*0.040683871556431793));
+  const double pd_t0044 = h*(pd_t0006*0.026275603083742889 + (pd_t0033 + pd_t0010*0.014408375588830192) - pd_t0012*0.0010750422554968589 - pd_t0004*0.012942269750409557);
+  const double pd_t0045 = h*(pd_t0006*0.024840279750548405 + (pd_t0012*0.0005344000104406429 + pd_t0004*0.0038708789505961438) - pd_t0031 - pd_t0010*0.052578892044918522);
+  S[0] = h*(pd_t0007*0.32607257743127305 + (pd_t0013*0.17392742256872692 + ((pd_t0016*pd_t0016 + pd_t0017*pd_t0017)*0.086963711284363462 + (pd_t0019*pd_t0019 + pd_t0020*pd_t0020)*0.16303628871563652)));
+  g[0] = -(h*(pd_t0021*1.0994869450636569 + (pd_t0022*0.1232741032024484 + (pd_t0023*0.029907999238518453 + (pd_t0024*0.02003807601558252 + (pd_t0025*0.0056958598140994963 + pd_t0026*0.0061208410997268927)))) - pd_t0027*0.040681622474346361 - pd_t0028*0.076339406272863342));
+  g[1] = h*(pd_t0022*1.2654457260944294 + (pd_t0021*1.1603183569654674 + (pd_t0023*0.12665846775638201 + (pd_t0028*0.11979279930741085 + (pd_t0024*0.062989454444818543 + (pd_t0025*0.016318311803700261 + pd_t0026*0.021531098627420201))))) - pd_t0027*0.19910056555592964);
+  g[2] = -(h*((pd_t0022 + pd_t0023)*1.2389220914098444 + ((pd_t0027 + pd_t0024)*0.21060501277892579 + ((pd_t0028 + pd_t0025)*0.032827235001148022 + (pd_t0026 + pd_t0021)*0.07624166942950393))));
+  g[3] = h*(pd_t0023*1.2654457260944294 + (pd_t0026*1.1603183569654674 + (pd_t0022*0.12665846775638201 + (pd_t0025*0.11979279930741085 + (pd_t0027*0.062989454444818543 + (pd_t0028*0.016318311803700261 + pd_t0021*0.021531098627420201))))) - pd_t0024*0.19910056555592964);
+  g[4] = -(h*(pd_t0026*1.0994869450636569 + (pd_t0023*0.1232741032024484 + (pd_t0022*0.029907999238518453 + (pd_t0027*0.02003807601558252 + (pd_t0028*0.0056958598140994963 + pd_t0021*0.0061208410997268927)))) - pd_t0024*0.040681622474346361 - pd_t0025*0.076339406272863342));
+  H[0] = -(h*(pd_t0012*0.033506533150575987 + (pd_t0004*0.0050755399923014663 + (pd_t0010*0.00018653078705316791 + pd_t0006*0.0012313960700693805)) - pd_t0030));
+  H[1] = pd_t0032;
+  H[2] = pd_t0034;
+  H[3] = pd_t0036;
+  H[4] = pd_t0037;
+  H[5] = pd_t0032;
+  H[6] = -(h*(pd_t0004*0.12157120208321184 + (pd_t0012*0.082507488203794471 + (pd_t0010*0.0015310253908785464 + pd_t0006*0.01216806209989291)) - pd_t0038));
+  H[7] = pd_t0040;
+  H[8] = pd_t0041;
+  H[9] = pd_t0042;
+  H[10] = pd_t0034;
+  H[11] = pd_t0040;
+  H[12] = -(h*(pd_t0013*0.0061958450364247566 + pd_t0007*0.13602637718579746 - pd_t0029*9.481481481481481));
+  H[13] = pd_t0043;
+  H[14] = pd_t0044;
+  H[15] = pd_t0036;
+  H[16] = pd_t0041;
+  H[17] = pd_t0043;
+  H[18] = -(h*(pd_t0006*0.12157120208321184 + (pd_t0010*0.082507488203794471 + (pd_t0012*0.0015310253908785464 + pd_t0004*0.01216806209989291)) - pd_t0038));
+  H[19] = pd_t0045;
+  H[20] = pd_t0037;
+  H[21] = pd_t0042;
+  H[22] = pd_t0044;
+  H[23] = pd_t0045;
+  H[24] = -(h*(pd_t0010*0.033506533150575987 + (pd_t0006*0.0050755399923014663 + (pd_t0012*0.00018653078705316791 + pd_t0004*0.0012313960700693805)) - pd_t0030));
+}
+
+static const pardel_condensation::Interval pendulum_galerkin_gauss_s_4_interval = {
+    pendulum_galerkin_gauss_s_4_start,
+    pendulum_galerkin_gauss_s_4_interior,
+    pendulum_galerkin_gauss_s_4_ext_grad,
+    pendulum_galerkin_gauss_s_4_ext_full,
+};
+
+extern "C" void pendulum_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+  pardel_condensation::condensed<1, 1, 3>(pendulum_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+}
+
+extern "C" void pendulum_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* D1, double* D2, double* D11, double* D22) {
+  pardel_condensation::condensed<1, 1, 3>(pendulum_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, nullptr, D1, D2, D11, nullptr, D22);
+}
+
+extern "C" void pendulum_galerkin_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed<1, 1, 3>(pendulum_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, nullptr, nullptr, nullptr);
+}
+
+extern "C" double pendulum_galerkin_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  double Ld, D1[1], D2[1];
+  pardel_condensation::condensed<1, 1, 3>(pendulum_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, &Ld, D1, D2, nullptr, nullptr, nullptr);
+  return Ld;
+}
+
 static const char* const pendulum_coords[] = {
     "x",
 };
@@ -153,6 +481,8 @@ static const double pendulum_param_defaults[] = {
 static const pardel_discretization pendulum_discretizations[] = {
     {"trapezoid", 2, pendulum_trapezoid_full, pendulum_trapezoid_sweep, pendulum_trapezoid_grad, pendulum_trapezoid_action},
     {"midpoint", 2, pendulum_midpoint_full, pendulum_midpoint_sweep, pendulum_midpoint_grad, pendulum_midpoint_action},
+    {"galerkin_lobatto(s=2)", 4, pendulum_galerkin_lobatto_s_2_full, pendulum_galerkin_lobatto_s_2_sweep, pendulum_galerkin_lobatto_s_2_grad, pendulum_galerkin_lobatto_s_2_action},
+    {"galerkin_gauss(s=4)", 8, pendulum_galerkin_gauss_s_4_full, pendulum_galerkin_gauss_s_4_sweep, pendulum_galerkin_gauss_s_4_grad, pendulum_galerkin_gauss_s_4_action},
 };
 
 extern "C" const pardel_model pendulum_model = {
@@ -168,7 +498,7 @@ extern "C" const pardel_model pendulum_model = {
     pendulum_param_defaults,
     0,
     nullptr,
-    2,
+    4,
     pendulum_discretizations,
     nullptr,
     PARDEL_COST_ACTION,

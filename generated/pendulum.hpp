@@ -30,6 +30,24 @@ void pendulum_midpoint_grad(double h, double t0, double t1, const double* q0, co
     double* Ld, double* D1, double* D2);
 double pendulum_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
 
+/* galerkin_lobatto(s=2) */
+void pendulum_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
+void pendulum_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* D1, double* D2, double* D11, double* D22);
+void pendulum_galerkin_lobatto_s_2_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* Ld, double* D1, double* D2);
+double pendulum_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+
+/* galerkin_gauss(s=4) */
+void pendulum_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
+void pendulum_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* D1, double* D2, double* D11, double* D22);
+void pendulum_galerkin_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* Ld, double* D1, double* D2);
+double pendulum_galerkin_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+
 #ifdef __cplusplus
 }
 #endif

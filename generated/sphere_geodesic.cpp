@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "pardel/condensation.hpp"
+
 // ---- trapezoid (consistency order 2)
 
 // full: 65 operations (227 before CSE)
@@ -265,6 +267,725 @@ extern "C" double sphere_geodesic_midpoint_action(double h, double t0, double t1
   return h*0.5*(pd_t0001*pd_t0001*(pd_t0002*pd_t0002)*pd_t0003 + pd_t0004*pd_t0004*pd_t0003);
 }
 
+// ---- galerkin_lobatto(s=2) (consistency order 4)
+// The interval's action S over its nodes and 2 interior values z, condensed by
+// pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
+
+// start: 4 operations (4 before CSE)
+static void sphere_geodesic_galerkin_lobatto_s_2_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* z) {
+  (void)h;
+  (void)t0;
+  (void)t1;
+  (void)p;
+  (void)z;
+  z[0] = (q0[0] + q1[0])*0.5;
+  z[1] = 0.5*(q0[1] + q1[1]);
+}
+
+// interior: 61 operations (90 before CSE)
+static void sphere_geodesic_galerkin_lobatto_s_2_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  (void)p;
+  const double pd_t0001 = h*0.66666666666666663;
+  const double pd_t0002 = 1.0/h;
+  const double pd_t0003 = z[0]*4.0*pd_t0002;
+  const double pd_t0004 = std::sin(z[0]);
+  const double pd_t0005 = std::cos(z[0]);
+  const double pd_t0006 = h/(q0[1] - q1[1]);
+  const double pd_t0007 = 1.0/(pd_t0006*pd_t0006);
+  const double pd_t0008 = std::sin(q0[0]);
+  const double pd_t0009 = pd_t0008*pd_t0008;
+  const double pd_t0010 = 4.0*z[1]*pd_t0002;
+  const double pd_t0011 = std::sin(q1[0]);
+  const double pd_t0012 = pd_t0011*pd_t0011;
+  const double pd_t0013 = 1.0/(h*h);
+  g[0] = pd_t0001*((pd_t0003 - (q0[0] + q1[0]*3.0)*pd_t0002)*pd_t0002 + pd_t0004*pd_t0005*pd_t0007 - ((q1[0] + q0[0]*3.0)*pd_t0002 - pd_t0003)*pd_t0002);
+  g[1] = pd_t0001*(pd_t0009*(pd_t0010 - (q1[1] + 3.0*q0[1])*pd_t0002)*pd_t0002 - pd_t0012*((q0[1] + 3.0*q1[1])*pd_t0002 - pd_t0010)*pd_t0002);
+  H[0] = h*(0.66666666666666663*(pd_t0005*pd_t0005*pd_t0007 - pd_t0004*pd_t0004*pd_t0007) + pd_t0013*5.333333333333333);
+  H[1] = 0.0;
+  H[2] = 0.0;
+  H[3] = h*2.6666666666666665*(pd_t0009*pd_t0013 + pd_t0012*pd_t0013);
+}
+
+// ext_grad: 101 operations (289 before CSE)
+static void sphere_geodesic_galerkin_lobatto_s_2_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g) {
+  (void)t0;
+  (void)t1;
+  (void)p;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = 4.0*z[0]*pd_t0001;
+  const double pd_t0003 = pd_t0002 - (q0[0] + 3.0*q1[0])*pd_t0001;
+  const double pd_t0004 = std::sin(q1[0]);
+  const double pd_t0005 = pd_t0004*pd_t0004;
+  const double pd_t0006 = z[1]*4.0*pd_t0001;
+  const double pd_t0007 = (q0[1] + q1[1]*3.0)*pd_t0001 - pd_t0006;
+  const double pd_t0008 = pd_t0007*pd_t0007;
+  const double pd_t0009 = std::sin(q0[0]);
+  const double pd_t0010 = pd_t0009*pd_t0009;
+  const double pd_t0011 = pd_t0006 - (q1[1] + q0[1]*3.0)*pd_t0001;
+  const double pd_t0012 = pd_t0011*pd_t0011;
+  const double pd_t0013 = (q1[0] + q0[0]*3.0)*pd_t0001 - pd_t0002;
+  const double pd_t0014 = q0[0] - q1[0];
+  const double pd_t0015 = 1.0/(h*h);
+  const double pd_t0016 = q0[1] - q1[1];
+  const double pd_t0017 = pd_t0016*pd_t0016;
+  const double pd_t0018 = std::sin(z[0]);
+  const double pd_t0019 = pd_t0018*pd_t0001;
+  const double pd_t0020 = pd_t0019*pd_t0019;
+  const double pd_t0021 = pd_t0003*pd_t0001;
+  const double pd_t0022 = pd_t0013*pd_t0001;
+  const double pd_t0023 = pd_t0014*pd_t0015*0.66666666666666663;
+  const double pd_t0024 = pd_t0005*pd_t0007*pd_t0001;
+  const double pd_t0025 = 0.66666666666666663*(pd_t0016*pd_t0020);
+  const double pd_t0026 = pd_t0010*pd_t0011*pd_t0001;
+  const double pd_t0027 = h*0.66666666666666663;
+  S[0] = h*((pd_t0003*pd_t0003 + (pd_t0005*pd_t0008 + (pd_t0010*pd_t0012 + pd_t0013*pd_t0013)))*0.083333333333333329 + (pd_t0014*pd_t0014*pd_t0015 + pd_t0017*pd_t0020)*0.33333333333333331);
+  g[0] = -(h*((pd_t0021 - std::cos(q0[0])*(pd_t0009*pd_t0012))*0.16666666666666666 - pd_t0022*0.5 - pd_t0023));
+  g[1] = h*(0.16666666666666666*pd_t0024 + pd_t0025 - 0.5*pd_t0026);
+  g[2] = pd_t0027*(pd_t0021 + std::cos(z[0])*(pd_t0017*pd_t0018)*pd_t0015 - pd_t0022);
+  g[3] = pd_t0027*(pd_t0026 - pd_t0024);
+  g[4] = -(h*(pd_t0023 + pd_t0021*0.5 - 0.16666666666666666*(pd_t0022 + std::cos(q1[0])*(pd_t0004*pd_t0008))));
+  g[5] = -(h*(pd_t0025 + 0.16666666666666666*pd_t0026 - 0.5*pd_t0024));
+}
+
+// ext_full: 170 operations (732 before CSE)
+static void sphere_geodesic_galerkin_lobatto_s_2_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  (void)p;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[0]*4.0*pd_t0001;
+  const double pd_t0003 = pd_t0002 - (q0[0] + q1[0]*3.0)*pd_t0001;
+  const double pd_t0004 = (q1[0] + q0[0]*3.0)*pd_t0001 - pd_t0002;
+  const double pd_t0005 = std::sin(q0[0]);
+  const double pd_t0006 = z[1]*4.0*pd_t0001;
+  const double pd_t0007 = pd_t0006 - (q1[1] + q0[1]*3.0)*pd_t0001;
+  const double pd_t0008 = pd_t0005*pd_t0007;
+  const double pd_t0009 = pd_t0008*pd_t0008;
+  const double pd_t0010 = std::sin(q1[0]);
+  const double pd_t0011 = (q0[1] + q1[1]*3.0)*pd_t0001 - pd_t0006;
+  const double pd_t0012 = pd_t0010*pd_t0011;
+  const double pd_t0013 = pd_t0012*pd_t0012;
+  const double pd_t0014 = q0[1] - q1[1];
+  const double pd_t0015 = std::sin(z[0]);
+  const double pd_t0016 = pd_t0015*pd_t0001;
+  const double pd_t0017 = pd_t0014*pd_t0016;
+  const double pd_t0018 = pd_t0017*pd_t0017;
+  const double pd_t0019 = q0[0] - q1[0];
+  const double pd_t0020 = 1.0/(h*h);
+  const double pd_t0021 = pd_t0003*pd_t0001;
+  const double pd_t0022 = std::cos(q0[0]);
+  const double pd_t0023 = pd_t0007*pd_t0007;
+  const double pd_t0024 = pd_t0004*pd_t0001;
+  const double pd_t0025 = pd_t0019*pd_t0020*0.66666666666666663;
+  const double pd_t0026 = pd_t0010*pd_t0010;
+  const double pd_t0027 = pd_t0011*pd_t0026*pd_t0001;
+  const double pd_t0028 = pd_t0016*pd_t0016;
+  const double pd_t0029 = 0.66666666666666663*(pd_t0014*pd_t0028);
+  const double pd_t0030 = pd_t0005*pd_t0005;
+  const double pd_t0031 = pd_t0007*pd_t0030*pd_t0001;
+  const double pd_t0032 = h*0.66666666666666663;
+  const double pd_t0033 = std::cos(z[0]);
+  const double pd_t0034 = h/pd_t0014;
+  const double pd_t0035 = 1.0/(pd_t0034*pd_t0034);
+  const double pd_t0036 = std::cos(q1[0]);
+  const double pd_t0037 = pd_t0011*pd_t0011;
+  const double pd_t0038 = pd_t0020*2.3333333333333335;
+  const double pd_t0039 = pd_t0008*pd_t0022;
+  const double pd_t0040 = -pd_t0039;
+  const double pd_t0041 = -(pd_t0001*2.6666666666666665);
+  const double pd_t0042 = pd_t0039*1.3333333333333333;
+  const double pd_t0043 = 0.33333333333333331*pd_t0001;
+  const double pd_t0044 = -(0.33333333333333331*pd_t0039);
+  const double pd_t0045 = pd_t0030*pd_t0020;
+  const double pd_t0046 = pd_t0026*pd_t0020;
+  const double pd_t0047 = 0.66666666666666663*pd_t0028;
+  const double pd_t0048 = 1.3333333333333333*(pd_t0017*pd_t0033);
+  const double pd_t0049 = -(h*(0.66666666666666663*pd_t0046 + pd_t0045*2.0));
+  const double pd_t0050 = pd_t0012*pd_t0036;
+  const double pd_t0051 = 0.33333333333333331*pd_t0050;
+  const double pd_t0052 = pd_t0045 + pd_t0046;
+  const double pd_t0053 = h*(0.5*pd_t0052 - pd_t0047);
+  const double pd_t0054 = -pd_t0048;
+  const double pd_t0055 = -(1.3333333333333333*pd_t0050);
+  const double pd_t0056 = -(h*(0.66666666666666663*pd_t0045 + pd_t0046*2.0));
+  S[0] = h*((pd_t0003*pd_t0003 + (pd_t0004*pd_t0004 + (pd_t0009 + pd_t0013)))*0.083333333333333329 + (pd_t0018 + pd_t0019*pd_t0019*pd_t0020)*0.33333333333333331);
+  g[0] = -(h*((pd_t0021 - pd_t0022*(pd_t0005*pd_t0023))*0.16666666666666666 - pd_t0024*0.5 - pd_t0025));
+  g[1] = h*(0.16666666666666666*pd_t0027 + pd_t0029 - 0.5*pd_t0031);
+  g[2] = pd_t0032*(pd_t0021 + pd_t0015*pd_t0033*pd_t0035 - pd_t0024);
+  g[3] = pd_t0032*(pd_t0031 - pd_t0027);
+  g[4] = -(h*(pd_t0025 + pd_t0021*0.5 - 0.16666666666666666*(pd_t0024 + pd_t0036*(pd_t0010*pd_t0037))));
+  g[5] = -(h*(pd_t0029 + 0.16666666666666666*pd_t0031 - 0.5*pd_t0027));
+  H[0] = -(h*(0.16666666666666666*(pd_t0009 - pd_t0023*(pd_t0022*pd_t0022)) - pd_t0038));
+  H[1] = pd_t0040;
+  H[2] = pd_t0041;
+  H[3] = pd_t0042;
+  H[4] = pd_t0043;
+  H[5] = pd_t0044;
+  H[6] = pd_t0040;
+  H[7] = h*(pd_t0045*1.5 + (0.16666666666666666*pd_t0046 + pd_t0047));
+  H[8] = pd_t0048;
+  H[9] = pd_t0049;
+  H[10] = pd_t0051;
+  H[11] = pd_t0053;
+  H[12] = pd_t0041;
+  H[13] = pd_t0048;
+  H[14] = h*(0.66666666666666663*(pd_t0033*pd_t0033*pd_t0035 - pd_t0018) + pd_t0020*5.333333333333333);
+  H[15] = 0.0;
+  H[16] = pd_t0041;
+  H[17] = pd_t0054;
+  H[18] = pd_t0042;
+  H[19] = pd_t0049;
+  H[20] = 0.0;
+  H[21] = pd_t0052*(h*2.6666666666666665);
+  H[22] = pd_t0055;
+  H[23] = pd_t0056;
+  H[24] = pd_t0043;
+  H[25] = pd_t0051;
+  H[26] = pd_t0041;
+  H[27] = pd_t0055;
+  H[28] = h*(pd_t0038 + 0.16666666666666666*(pd_t0037*(pd_t0036*pd_t0036) - pd_t0013));
+  H[29] = pd_t0050;
+  H[30] = pd_t0044;
+  H[31] = pd_t0053;
+  H[32] = pd_t0054;
+  H[33] = pd_t0056;
+  H[34] = pd_t0050;
+  H[35] = h*(pd_t0046*1.5 + (pd_t0047 + 0.16666666666666666*pd_t0045));
+}
+
+static const pardel_condensation::Interval sphere_geodesic_galerkin_lobatto_s_2_interval = {
+    sphere_geodesic_galerkin_lobatto_s_2_start,
+    sphere_geodesic_galerkin_lobatto_s_2_interior,
+    sphere_geodesic_galerkin_lobatto_s_2_ext_grad,
+    sphere_geodesic_galerkin_lobatto_s_2_ext_full,
+};
+
+extern "C" void sphere_geodesic_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+  pardel_condensation::condensed<2, 2, 2>(sphere_geodesic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+}
+
+extern "C" void sphere_geodesic_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* D1, double* D2, double* D11, double* D22) {
+  pardel_condensation::condensed<2, 2, 2>(sphere_geodesic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, nullptr, D1, D2, D11, nullptr, D22);
+}
+
+extern "C" void sphere_geodesic_galerkin_lobatto_s_2_grad(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed<2, 2, 2>(sphere_geodesic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, nullptr, nullptr, nullptr);
+}
+
+extern "C" double sphere_geodesic_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  double Ld, D1[2], D2[2];
+  pardel_condensation::condensed<2, 2, 2>(sphere_geodesic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, &Ld, D1, D2, nullptr, nullptr, nullptr);
+  return Ld;
+}
+
+// ---- galerkin_gauss(s=4) (consistency order 8)
+// The interval's action S over its nodes and 6 interior values z, condensed by
+// pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
+
+// start: 16 operations (16 before CSE)
+static void sphere_geodesic_galerkin_gauss_s_4_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    double* z) {
+  (void)h;
+  (void)t0;
+  (void)t1;
+  (void)p;
+  (void)z;
+  z[0] = q1[0]*0.17267316464601143 + q0[0]*0.82732683535398854;
+  z[1] = 0.17267316464601143*q1[1] + 0.82732683535398854*q0[1];
+  z[2] = (q0[0] + q1[0])*0.5;
+  z[3] = 0.5*(q0[1] + q1[1]);
+  z[4] = q0[0]*0.17267316464601143 + q1[0]*0.82732683535398854;
+  z[5] = 0.17267316464601143*q0[1] + 0.82732683535398854*q1[1];
+}
+
+// interior: 437 operations (8565 before CSE)
+static void sphere_geodesic_galerkin_gauss_s_4_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  (void)p;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[2]*3.7995286238720101*pd_t0001;
+  const double pd_t0003 = (pd_t0002 + (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001 - z[4]*0.38843642956475866*pd_t0001 - z[0]*3.8808713571172655*pd_t0001)*pd_t0001;
+  const double pd_t0004 = z[2]*0.43835335626489408*pd_t0001;
+  const double pd_t0005 = ((q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0001 + pd_t0004 - z[4]*0.12379358188276635*pd_t0001 - z[0]*6.6712789727391666*pd_t0001)*pd_t0001;
+  const double pd_t0006 = 3.7995286238720101*z[3]*pd_t0001;
+  const double pd_t0007 = 0.38843642956475866*z[5]*pd_t0001 + 3.8808713571172655*z[1]*pd_t0001 - (0.091721908889508555*q1[1] + 0.37805725392050521*q0[1])*pd_t0001 - pd_t0006;
+  const double pd_t0008 = pd_t0007*pd_t0007;
+  const double pd_t0009 = z[2]*0.64588385333726939;
+  const double pd_t0010 = q0[0]*0.12476247709889343 + z[4]*0.19317617857053604 - q1[0]*0.061452809596679384 - z[0]*0.61060199273548066 - pd_t0009;
+  const double pd_t0011 = std::sin(pd_t0010);
+  const double pd_t0012 = std::cos(pd_t0010);
+  const double pd_t0013 = pd_t0008*(pd_t0011*pd_t0012);
+  const double pd_t0014 = ((q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001 + pd_t0002 - z[0]*0.38843642956475866*pd_t0001 - z[4]*3.8808713571172655*pd_t0001)*pd_t0001;
+  const double pd_t0015 = z[4]*0.61060199273548066 + (pd_t0009 + q0[0]*0.061452809596679384) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
+  const double pd_t0016 = std::cos(pd_t0015);
+  const double pd_t0017 = std::sin(pd_t0015);
+  const double pd_t0018 = pd_t0016*pd_t0017;
+  const double pd_t0019 = pd_t0006 + (0.091721908889508555*q0[1] + 0.37805725392050521*q1[1])*pd_t0001 - 0.38843642956475866*z[1]*pd_t0001 - 3.8808713571172655*z[5]*pd_t0001;
+  const double pd_t0020 = pd_t0019*pd_t0019;
+  const double pd_t0021 = pd_t0018*pd_t0020;
+  const double pd_t0022 = z[2]*0.18874099619441229;
+  const double pd_t0023 = q0[0]*0.0327484862937516 + pd_t0022 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[4]*0.68875165018946372;
+  const double pd_t0024 = std::cos(pd_t0023);
+  const double pd_t0025 = z[3]*0.43835335626489408*pd_t0001;
+  const double pd_t0026 = z[1]*0.12379358188276635*pd_t0001 + z[5]*6.6712789727391666*pd_t0001 - (q0[1]*0.035191926663020949 + q1[1]*6.3215272716940181)*pd_t0001 - pd_t0025;
+  const double pd_t0027 = pd_t0026*pd_t0026;
+  const double pd_t0028 = std::sin(pd_t0023);
+  const double pd_t0029 = pd_t0024*(pd_t0027*pd_t0028);
+  const double pd_t0030 = (pd_t0004 + (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0001 - z[0]*0.12379358188276635*pd_t0001 - z[4]*6.6712789727391666*pd_t0001)*pd_t0001;
+  const double pd_t0031 = z[0]*0.68875165018946372 + (z[4]*0.093822535645591634 + q0[0]*0.43891529665310852) - pd_t0022 - q1[0]*0.0327484862937516;
+  const double pd_t0032 = std::sin(pd_t0031);
+  const double pd_t0033 = pd_t0025 + (q1[1]*0.035191926663020949 + q0[1]*6.3215272716940181)*pd_t0001 - z[5]*0.12379358188276635*pd_t0001 - z[1]*6.6712789727391666*pd_t0001;
+  const double pd_t0034 = pd_t0033*pd_t0033;
+  const double pd_t0035 = std::cos(pd_t0031);
+  const double pd_t0036 = pd_t0032*(pd_t0034*pd_t0035);
+  const double pd_t0037 = pd_t0028*pd_t0028;
+  const double pd_t0038 = pd_t0026*pd_t0037*pd_t0001;
+  const double pd_t0039 = pd_t0011*pd_t0011;
+  const double pd_t0040 = pd_t0007*pd_t0039*pd_t0001;
+  const double pd_t0041 = pd_t0017*pd_t0017;
+  const double pd_t0042 = 1.0/(h/pd_t0019);
+  const double pd_t0043 = pd_t0041*pd_t0042;
+  const double pd_t0044 = pd_t0032*pd_t0032;
+  const double pd_t0045 = pd_t0033*pd_t0044*pd_t0001;
+  const double pd_t0046 = 1.0/(h*h);
+  const double pd_t0047 = pd_t0046*12.703703703703704;
+  const double pd_t0048 = pd_t0012*pd_t0007;
+  const double pd_t0049 = pd_t0048*pd_t0048 - pd_t0008*pd_t0039;
+  const double pd_t0050 = pd_t0026*pd_t0028;
+  const double pd_t0051 = pd_t0027*(pd_t0024*pd_t0024) - pd_t0050*pd_t0050;
+  const double pd_t0052 = pd_t0033*pd_t0035;
+  const double pd_t0053 = pd_t0052*pd_t0052 - pd_t0034*pd_t0044;
+  const double pd_t0054 = pd_t0020*pd_t0041 - pd_t0020*(pd_t0016*pd_t0016);
+  const double pd_t0055 = pd_t0018*pd_t0042;
+  const double pd_t0056 = pd_t0024*pd_t0050*pd_t0001;
+  const double pd_t0057 = h/pd_t0011;
+  const double pd_t0058 = pd_t0048/pd_t0057;
+  const double pd_t0059 = h/pd_t0032;
+  const double pd_t0060 = pd_t0052/pd_t0059;
+  const double pd_t0061 = h*(pd_t0055*0.048934797569554662 - pd_t0056*0.0040402045369197616 - pd_t0058*1.5453673641037116 - pd_t0060*1.5983423662101859);
+  const double pd_t0062 = pd_t0046*5.8074074074074078;
+  const double pd_t0063 = -(h*(pd_t0062 + (pd_t0051*0.0030799344260414238 + pd_t0053*0.022609812278198024) - pd_t0054*0.040683871556431793 - pd_t0049*0.12859584048289346));
+  const double pd_t0064 = pd_t0060 + pd_t0056*0.13622114098715069;
+  const double pd_t0065 = -(h*(pd_t0055*0.47866047033034015 - pd_t0064*0.10502315126554085 - pd_t0058*1.5129765957177206));
+  const double pd_t0066 = pd_t0051 + pd_t0053;
+  const double pd_t0067 = pd_t0049 - pd_t0054;
+  const double pd_t0068 = h*(pd_t0066*0.011239264183104759 + pd_t0046*1.2703703703703704 - pd_t0067*0.038461486405326983);
+  const double pd_t0069 = pd_t0056 + pd_t0060*0.13622114098715069;
+  const double pd_t0070 = h*(pd_t0055*0.4889079391106782 - pd_t0058*0.15467582561773896 - pd_t0069*0.21772802081325376);
+  const double pd_t0071 = 1.0/(pd_t0059*pd_t0059);
+  const double pd_t0072 = 1.0/(pd_t0057*pd_t0057);
+  const double pd_t0073 = pd_t0037*pd_t0046;
+  const double pd_t0074 = pd_t0041*pd_t0046;
+  const double pd_t0075 = -(h*(pd_t0055*0.16361331842457263 + pd_t0058*1.6346619235180975 - pd_t0056*0.0081276020081988629 - pd_t0060*0.43799928519265202));
+  const double pd_t0076 = -(h*(pd_t0072*4.8080972582522836 + (pd_t0071*0.50862944611158012 + (pd_t0073*0.0094382293474000976 + pd_t0074*0.48124247369614354))));
+  const double pd_t0077 = h*(pd_t0058*0.4889079391106782 - pd_t0055*0.15467582561773896 - pd_t0064*0.21772802081325376);
+  const double pd_t0078 = pd_t0073 + pd_t0071;
+  const double pd_t0079 = pd_t0072 + pd_t0074;
+  const double pd_t0080 = h*(pd_t0078*0.1436399655330815 + pd_t0079*0.49154521965210368);
+  const double pd_t0081 = h*((pd_t0055 + pd_t0058)*1.6003995487689182 - (pd_t0060 + pd_t0056)*0.028779857279299281);
+  const double pd_t0082 = -(h*(pd_t0054*0.12859584048289346 + (pd_t0049*0.040683871556431793 + (pd_t0051*0.022609812278198024 + (pd_t0062 + pd_t0053*0.0030799344260414238)))));
+  const double pd_t0083 = -(h*(pd_t0058*0.16361331842457263 + pd_t0055*1.6346619235180975 - pd_t0060*0.0081276020081988629 - pd_t0056*0.43799928519265202));
+  const double pd_t0084 = -(h*(pd_t0058*0.47866047033034015 - 0.10502315126554085*pd_t0069 - pd_t0055*1.5129765957177206));
+  const double pd_t0085 = -(h*(pd_t0074*4.8080972582522836 + (pd_t0073*0.50862944611158012 + (pd_t0071*0.0094382293474000976 + pd_t0072*0.48124247369614354))));
+  const double pd_t0086 = h*(pd_t0058*0.048934797569554662 - pd_t0060*0.0040402045369197616 - pd_t0055*1.5453673641037116 - pd_t0056*1.5983423662101859);
+  g[0] = -(h*(pd_t0003*1.2654457260944294 + (pd_t0005*1.1603183569654674 + (pd_t0013*0.19910056555592964 + (pd_t0014*0.12665846775638201 + (pd_t0021*0.062989454444818543 + (pd_t0029*0.016318311803700261 + pd_t0030*0.021531098627420201))))) - pd_t0036*0.11979279930741085));
+  g[1] = h*(0.021531098627420201*pd_t0038 + 1.2654457260944294*pd_t0040 - 0.12665846775638201*pd_t0043 - 1.1603183569654674*pd_t0045);
+  g[2] = h*((pd_t0014 + pd_t0003)*1.2389220914098444 + ((pd_t0021 - pd_t0013)*0.21060501277892579 + ((pd_t0029 - pd_t0036)*0.032827235001148022 + (pd_t0005 + pd_t0030)*0.07624166942950393)));
+  g[3] = -(h*(0.07624166942950393*(pd_t0038 - pd_t0045) + 1.2389220914098444*(pd_t0040 - pd_t0043)));
+  g[4] = -(h*(pd_t0014*1.2654457260944294 + (pd_t0030*1.1603183569654674 + (pd_t0003*0.12665846775638201 + (pd_t0005*0.021531098627420201 + pd_t0029*0.11979279930741085))) - pd_t0036*0.016318311803700261 - pd_t0013*0.062989454444818543 - pd_t0021*0.19910056555592964));
+  g[5] = h*(0.12665846775638201*pd_t0040 + 1.1603183569654674*pd_t0038 - 0.021531098627420201*pd_t0045 - 1.2654457260944294*pd_t0043);
+  H[0] = h*(pd_t0047 + (pd_t0049*0.12157120208321184 + (pd_t0051*0.0015310253908785464 + pd_t0053*0.082507488203794471)) - pd_t0054*0.01216806209989291);
+  H[1] = pd_t0061;
+  H[2] = pd_t0063;
+  H[3] = pd_t0065;
+  H[4] = pd_t0068;
+  H[5] = pd_t0070;
+  H[6] = pd_t0061;
+  H[7] = h*(pd_t0071*7.7408074565069809 + (pd_t0072*4.9110320723863312 + (pd_t0073*0.0026654118209594605 + pd_t0074*0.04919876298943214)));
+  H[8] = pd_t0075;
+  H[9] = pd_t0076;
+  H[10] = pd_t0077;
+  H[11] = pd_t0080;
+  H[12] = pd_t0063;
+  H[13] = pd_t0075;
+  H[14] = h*(pd_t0046*9.481481481481481 + (pd_t0066*0.0061958450364247566 + pd_t0067*0.13602637718579746));
+  H[15] = pd_t0081;
+  H[16] = pd_t0082;
+  H[17] = pd_t0083;
+  H[18] = pd_t0065;
+  H[19] = pd_t0076;
+  H[20] = pd_t0081;
+  H[21] = h*(pd_t0078*0.033420791681661621 + pd_t0079*4.7073199490590794);
+  H[22] = pd_t0084;
+  H[23] = pd_t0085;
+  H[24] = pd_t0068;
+  H[25] = pd_t0077;
+  H[26] = pd_t0082;
+  H[27] = pd_t0084;
+  H[28] = h*(pd_t0051*0.082507488203794471 + (pd_t0049*0.01216806209989291 + (pd_t0047 + pd_t0053*0.0015310253908785464)) - pd_t0054*0.12157120208321184);
+  H[29] = pd_t0086;
+  H[30] = pd_t0070;
+  H[31] = pd_t0080;
+  H[32] = pd_t0083;
+  H[33] = pd_t0085;
+  H[34] = pd_t0086;
+  H[35] = h*(pd_t0073*7.7408074565069809 + (pd_t0074*4.9110320723863312 + (pd_t0071*0.0026654118209594605 + pd_t0072*0.04919876298943214)));
+}
+
+// ext_grad: 304 operations (2413 before CSE)
+static void sphere_geodesic_galerkin_gauss_s_4_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g) {
+  (void)t0;
+  (void)t1;
+  (void)p;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = 0.43835335626489408*z[2]*pd_t0001;
+  const double pd_t0003 = pd_t0002 + (0.035191926663020949*q0[0] + 6.3215272716940181*q1[0])*pd_t0001 - 0.12379358188276635*z[0]*pd_t0001 - 6.6712789727391666*z[4]*pd_t0001;
+  const double pd_t0004 = (0.035191926663020949*q1[0] + 6.3215272716940181*q0[0])*pd_t0001 + pd_t0002 - 0.12379358188276635*z[4]*pd_t0001 - 6.6712789727391666*z[0]*pd_t0001;
+  const double pd_t0005 = z[3]*0.43835335626489408*pd_t0001;
+  const double pd_t0006 = (q1[1]*0.035191926663020949 + q0[1]*6.3215272716940181)*pd_t0001 + pd_t0005 - z[5]*0.12379358188276635*pd_t0001 - z[1]*6.6712789727391666*pd_t0001;
+  const double pd_t0007 = pd_t0006*pd_t0006;
+  const double pd_t0008 = z[2]*0.18874099619441229;
+  const double pd_t0009 = z[0]*0.68875165018946372 + (z[4]*0.093822535645591634 + q0[0]*0.43891529665310852) - q1[0]*0.0327484862937516 - pd_t0008;
+  const double pd_t0010 = std::sin(pd_t0009);
+  const double pd_t0011 = pd_t0010*pd_t0010;
+  const double pd_t0012 = z[1]*0.12379358188276635*pd_t0001 + z[5]*6.6712789727391666*pd_t0001 - pd_t0005 - (q0[1]*0.035191926663020949 + q1[1]*6.3215272716940181)*pd_t0001;
+  const double pd_t0013 = pd_t0012*pd_t0012;
+  const double pd_t0014 = pd_t0008 + q0[0]*0.0327484862937516 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[4]*0.68875165018946372;
+  const double pd_t0015 = std::sin(pd_t0014);
+  const double pd_t0016 = pd_t0015*pd_t0015;
+  const double pd_t0017 = z[2]*0.64588385333726939;
+  const double pd_t0018 = q0[0]*0.12476247709889343 + z[4]*0.19317617857053604 - pd_t0017 - q1[0]*0.061452809596679384 - z[0]*0.61060199273548066;
+  const double pd_t0019 = std::sin(pd_t0018);
+  const double pd_t0020 = pd_t0019*pd_t0019;
+  const double pd_t0021 = z[3]*3.7995286238720101*pd_t0001;
+  const double pd_t0022 = z[5]*0.38843642956475866*pd_t0001 + z[1]*3.8808713571172655*pd_t0001 - pd_t0021 - (q1[1]*0.091721908889508555 + q0[1]*0.37805725392050521)*pd_t0001;
+  const double pd_t0023 = pd_t0022*pd_t0022;
+  const double pd_t0024 = z[2]*3.7995286238720101*pd_t0001;
+  const double pd_t0025 = pd_t0024 + (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001 - z[0]*0.38843642956475866*pd_t0001 - z[4]*3.8808713571172655*pd_t0001;
+  const double pd_t0026 = (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001 + pd_t0024 - z[4]*0.38843642956475866*pd_t0001 - z[0]*3.8808713571172655*pd_t0001;
+  const double pd_t0027 = (q0[1]*0.091721908889508555 + q1[1]*0.37805725392050521)*pd_t0001 + pd_t0021 - z[1]*0.38843642956475866*pd_t0001 - z[5]*3.8808713571172655*pd_t0001;
+  const double pd_t0028 = pd_t0027*pd_t0027;
+  const double pd_t0029 = pd_t0017 + (q0[0]*0.061452809596679384 + z[4]*0.61060199273548066) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
+  const double pd_t0030 = std::sin(pd_t0029);
+  const double pd_t0031 = pd_t0030*pd_t0030;
+  const double pd_t0032 = pd_t0004*pd_t0001;
+  const double pd_t0033 = pd_t0026*pd_t0001;
+  const double pd_t0034 = std::cos(pd_t0009)*(pd_t0007*pd_t0010);
+  const double pd_t0035 = std::cos(pd_t0018)*(pd_t0019*pd_t0023);
+  const double pd_t0036 = pd_t0025*pd_t0001;
+  const double pd_t0037 = std::cos(pd_t0029)*(pd_t0028*pd_t0030);
+  const double pd_t0038 = std::cos(pd_t0014)*(pd_t0013*pd_t0015);
+  const double pd_t0039 = pd_t0003*pd_t0001;
+  const double pd_t0040 = pd_t0012*pd_t0016*pd_t0001;
+  const double pd_t0041 = pd_t0020*pd_t0022*pd_t0001;
+  const double pd_t0042 = pd_t0027*pd_t0031*pd_t0001;
+  const double pd_t0043 = pd_t0006*pd_t0011*pd_t0001;
+  S[0] = h*((pd_t0003*pd_t0003 + (pd_t0004*pd_t0004 + (pd_t0007*pd_t0011 + pd_t0013*pd_t0016)))*0.086963711284363462 + (pd_t0020*pd_t0023 + (pd_t0025*pd_t0025 + (pd_t0026*pd_t0026 + pd_t0028*pd_t0031)))*0.16303628871563652);
+  g[0] = h*(pd_t0032*1.0994869450636569 + (pd_t0033*0.1232741032024484 + (pd_t0034*0.076339406272863342 + (pd_t0035*0.040681622474346361 + (pd_t0036*0.029907999238518453 + (pd_t0037*0.02003807601558252 + (pd_t0038*0.0056958598140994963 + pd_t0039*0.0061208410997268927)))))));
+  g[1] = -(h*(0.0061208410997268927*pd_t0040 + 0.1232741032024484*pd_t0041 - 0.029907999238518453*pd_t0042 - 1.0994869450636569*pd_t0043));
+  g[2] = -(h*(pd_t0033*1.2654457260944294 + (pd_t0032*1.1603183569654674 + (pd_t0035*0.19910056555592964 + (pd_t0036*0.12665846775638201 + (pd_t0037*0.062989454444818543 + (pd_t0038*0.016318311803700261 + pd_t0039*0.021531098627420201))))) - pd_t0034*0.11979279930741085));
+  g[3] = h*(pd_t0040*0.021531098627420201 + pd_t0041*1.2654457260944294 - pd_t0042*0.12665846775638201 - pd_t0043*1.1603183569654674);
+  g[4] = h*((pd_t0036 + pd_t0033)*1.2389220914098444 + ((pd_t0037 - pd_t0035)*0.21060501277892579 + ((pd_t0038 - pd_t0034)*0.032827235001148022 + (pd_t0032 + pd_t0039)*0.07624166942950393)));
+  g[5] = -(h*(0.07624166942950393*(pd_t0040 - pd_t0043) + 1.2389220914098444*(pd_t0041 - pd_t0042)));
+  g[6] = -(h*(pd_t0036*1.2654457260944294 + (pd_t0039*1.1603183569654674 + (pd_t0033*0.12665846775638201 + (pd_t0032*0.021531098627420201 + pd_t0038*0.11979279930741085))) - pd_t0034*0.016318311803700261 - pd_t0035*0.062989454444818543 - pd_t0037*0.19910056555592964));
+  g[7] = h*(pd_t0041*0.12665846775638201 + pd_t0040*1.1603183569654674 - pd_t0043*0.021531098627420201 - pd_t0042*1.2654457260944294);
+  g[8] = h*(pd_t0039*1.0994869450636569 + (pd_t0036*0.1232741032024484 + (pd_t0032*0.0061208410997268927 + pd_t0033*0.029907999238518453)) - pd_t0034*0.0056958598140994963 - pd_t0035*0.02003807601558252 - pd_t0037*0.040681622474346361 - pd_t0038*0.076339406272863342);
+  g[9] = -(h*(0.029907999238518453*pd_t0041 + 1.0994869450636569*pd_t0040 - 0.0061208410997268927*pd_t0043 - 0.1232741032024484*pd_t0042));
+}
+
+// ext_full: 787 operations (22737 before CSE)
+static void sphere_geodesic_galerkin_gauss_s_4_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+    const double* z, double* S, double* g, double* H) {
+  (void)t0;
+  (void)t1;
+  (void)p;
+  const double pd_t0001 = 1.0/h;
+  const double pd_t0002 = z[3]*0.43835335626489408*pd_t0001;
+  const double pd_t0003 = z[1]*0.12379358188276635*pd_t0001 + z[5]*6.6712789727391666*pd_t0001 - pd_t0002 - (q0[1]*0.035191926663020949 + q1[1]*6.3215272716940181)*pd_t0001;
+  const double pd_t0004 = z[2]*0.18874099619441229;
+  const double pd_t0005 = pd_t0004 + q0[0]*0.0327484862937516 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[4]*0.68875165018946372;
+  const double pd_t0006 = std::sin(pd_t0005);
+  const double pd_t0007 = pd_t0003*pd_t0006;
+  const double pd_t0008 = pd_t0007*pd_t0007;
+  const double pd_t0009 = 0.43835335626489408*z[2]*pd_t0001;
+  const double pd_t0010 = pd_t0009 + (0.035191926663020949*q0[0] + 6.3215272716940181*q1[0])*pd_t0001 - 0.12379358188276635*z[0]*pd_t0001 - 6.6712789727391666*z[4]*pd_t0001;
+  const double pd_t0011 = (q1[1]*0.035191926663020949 + q0[1]*6.3215272716940181)*pd_t0001 + pd_t0002 - z[5]*0.12379358188276635*pd_t0001 - z[1]*6.6712789727391666*pd_t0001;
+  const double pd_t0012 = pd_t0011*pd_t0011;
+  const double pd_t0013 = z[0]*0.68875165018946372 + (z[4]*0.093822535645591634 + q0[0]*0.43891529665310852) - q1[0]*0.0327484862937516 - pd_t0004;
+  const double pd_t0014 = std::sin(pd_t0013);
+  const double pd_t0015 = pd_t0014*pd_t0014;
+  const double pd_t0016 = pd_t0012*pd_t0015;
+  const double pd_t0017 = (0.035191926663020949*q1[0] + 6.3215272716940181*q0[0])*pd_t0001 + pd_t0009 - 0.12379358188276635*z[4]*pd_t0001 - 6.6712789727391666*z[0]*pd_t0001;
+  const double pd_t0018 = z[2]*0.64588385333726939;
+  const double pd_t0019 = q0[0]*0.12476247709889343 + z[4]*0.19317617857053604 - pd_t0018 - q1[0]*0.061452809596679384 - z[0]*0.61060199273548066;
+  const double pd_t0020 = std::sin(pd_t0019);
+  const double pd_t0021 = pd_t0020*pd_t0020;
+  const double pd_t0022 = z[3]*3.7995286238720101*pd_t0001;
+  const double pd_t0023 = z[5]*0.38843642956475866*pd_t0001 + z[1]*3.8808713571172655*pd_t0001 - pd_t0022 - (q1[1]*0.091721908889508555 + q0[1]*0.37805725392050521)*pd_t0001;
+  const double pd_t0024 = pd_t0023*pd_t0023;
+  const double pd_t0025 = pd_t0021*pd_t0024;
+  const double pd_t0026 = z[2]*3.7995286238720101*pd_t0001;
+  const double pd_t0027 = pd_t0026 + (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001 - z[0]*0.38843642956475866*pd_t0001 - z[4]*3.8808713571172655*pd_t0001;
+  const double pd_t0028 = (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001 + pd_t0026 - z[4]*0.38843642956475866*pd_t0001 - z[0]*3.8808713571172655*pd_t0001;
+  const double pd_t0029 = (q0[1]*0.091721908889508555 + q1[1]*0.37805725392050521)*pd_t0001 + pd_t0022 - z[1]*0.38843642956475866*pd_t0001 - z[5]*3.8808713571172655*pd_t0001;
+  const double pd_t0030 = pd_t0029*pd_t0029;
+  const double pd_t0031 = pd_t0018 + (q0[0]*0.061452809596679384 + z[4]*0.61060199273548066) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
+  const double pd_t0032 = std::sin(pd_t0031);
+  const double pd_t0033 = pd_t0032*pd_t0032;
+  const double pd_t0034 = pd_t0030*pd_t0033;
+  const double pd_t0035 = pd_t0017*pd_t0001;
+  const double pd_t0036 = pd_t0028*pd_t0001;
+  const double pd_t0037 = std::cos(pd_t0013);
+  const double pd_t0038 = pd_t0037*(pd_t0012*pd_t0014);
+  const double pd_t0039 = std::cos(pd_t0019);
+  const double pd_t0040 = pd_t0039*(pd_t0020*pd_t0024);
+  const double pd_t0041 = pd_t0027*pd_t0001;
+  const double pd_t0042 = std::cos(pd_t0031);
+  const double pd_t0043 = pd_t0032*pd_t0042;
+  const double pd_t0044 = pd_t0030*pd_t0043;
+  const double pd_t0045 = std::cos(pd_t0005);
+  const double pd_t0046 = pd_t0003*pd_t0003;
+  const double pd_t0047 = pd_t0045*(pd_t0006*pd_t0046);
+  const double pd_t0048 = pd_t0010*pd_t0001;
+  const double pd_t0049 = pd_t0006*pd_t0006;
+  const double pd_t0050 = pd_t0003*pd_t0049*pd_t0001;
+  const double pd_t0051 = pd_t0021*pd_t0023*pd_t0001;
+  const double pd_t0052 = 1.0/(h/pd_t0029);
+  const double pd_t0053 = pd_t0033*pd_t0052;
+  const double pd_t0054 = pd_t0011*pd_t0015*pd_t0001;
+  const double pd_t0055 = 1.0/(h*h);
+  const double pd_t0056 = pd_t0055*7.0;
+  const double pd_t0057 = pd_t0011*pd_t0037;
+  const double pd_t0058 = pd_t0057*pd_t0057 - pd_t0016;
+  const double pd_t0059 = pd_t0046*(pd_t0045*pd_t0045) - pd_t0008;
+  const double pd_t0060 = pd_t0023*pd_t0039;
+  const double pd_t0061 = pd_t0060*pd_t0060 - pd_t0025;
+  const double pd_t0062 = pd_t0034 - pd_t0030*(pd_t0042*pd_t0042);
+  const double pd_t0063 = pd_t0043*pd_t0052;
+  const double pd_t0064 = h/pd_t0014;
+  const double pd_t0065 = pd_t0057/pd_t0064;
+  const double pd_t0066 = pd_t0007*pd_t0045*pd_t0001;
+  const double pd_t0067 = h/pd_t0020;
+  const double pd_t0068 = pd_t0060/pd_t0067;
+  const double pd_t0069 = h*(pd_t0063*0.003675861165244613 + pd_t0065*0.96516327731766993 - pd_t0066*0.00040089656172127521 - pd_t0068*0.030759964955364191);
+  const double pd_t0070 = pd_t0055*7.8257701508806026;
+  const double pd_t0071 = -(h*(pd_t0070 + (pd_t0059*0.0005344000104406429 + pd_t0061*0.024840279750548405) - pd_t0062*0.0038708789505961438 - pd_t0058*0.052578892044918522));
+  const double pd_t0072 = -(h*(pd_t0063*0.0155670374056802 + pd_t0065*1.0185629517190913 - pd_t0066*0.0014102217765789686 - pd_t0068*0.31576028684349761));
+  const double pd_t0073 = pd_t0055*1.0666666666666667;
+  const double pd_t0074 = h*(pd_t0059*0.0010750422554968589 + pd_t0073 - pd_t0062*0.012942269750409557 - pd_t0058*0.014408375588830192 - pd_t0061*0.026275603083742889);
+  const double pd_t0075 = pd_t0065 - pd_t0066*0.074612314821267164;
+  const double pd_t0076 = pd_t0063 - pd_t0068*2.0302159969205866;
+  const double pd_t0077 = h*(pd_t0075*0.066927269909957898 + pd_t0076*0.15227048677705798);
+  const double pd_t0078 = pd_t0055*0.340896515786064;
+  const double pd_t0079 = -(h*(pd_t0078 + (pd_t0059*0.0039230328462088807 + pd_t0062*0.012235289145699726) - pd_t0058*0.0071623566661990221 - pd_t0061*0.0078587203676434639));
+  const double pd_t0080 = -(h*(pd_t0065*0.018900657082642949 + pd_t0063*0.15553039052122533 - pd_t0068*0.031604448365673089 - pd_t0066*0.075997339618943976));
+  const double pd_t0081 = pd_t0061 - pd_t0062;
+  const double pd_t0082 = pd_t0059 + pd_t0058;
+  const double pd_t0083 = -(h*((pd_t0081 + pd_t0082)*0.0025000000000000001 - pd_t0055*0.10000000000000001));
+  const double pd_t0084 = pd_t0063*2.0302159969205866 - pd_t0068;
+  const double pd_t0085 = pd_t0065*0.074612314821267164 - pd_t0066;
+  const double pd_t0086 = h*(pd_t0084*0.007462792140138761 + pd_t0085*0.072013066301151965);
+  const double pd_t0087 = 1.0/(pd_t0064*pd_t0064);
+  const double pd_t0088 = 1.0/(pd_t0067*pd_t0067);
+  const double pd_t0089 = pd_t0049*pd_t0055;
+  const double pd_t0090 = pd_t0033*pd_t0055;
+  const double pd_t0091 = -(h*(pd_t0063*0.011555026003174991 - pd_t0066*0.0011485456645202573 - pd_t0068*0.15054282613618858 - pd_t0065*1.5145468955487318));
+  const double pd_t0092 = -(h*(pd_t0087*7.3349841374043967 + (pd_t0088*0.47841093619269975 + (pd_t0089*0.00075772084387044263 + pd_t0090*0.011617356439635629))));
+  const double pd_t0093 = h*(pd_t0063*0.038634187587564831 + pd_t0068*0.15924150558618722 - pd_t0066*0.0023105072934203113 - pd_t0065*0.41503652262813129);
+  const double pd_t0094 = h*(pd_t0087*0.48196379253808919 + (pd_t0088*0.46838348369985494 + (pd_t0089*0.0026830912392293883 + pd_t0090*0.11363629918949314)));
+  const double pd_t0095 = -(h*(pd_t0068*0.047627240346717718 - pd_t0066*0.0084314788159687779 - pd_t0063*0.036523767867541211 - pd_t0065*0.20631330619019519));
+  const double pd_t0096 = -(h*(pd_t0087*0.13610942716277041 + (pd_t0090*0.11606909759345124 + (pd_t0089*0.040833838524085689 + pd_t0088*0.047884152505756644))));
+  const double pd_t0097 = -(h*(pd_t0076*0.007462792140138761 + pd_t0075*0.072013066301151965));
+  const double pd_t0098 = pd_t0088 + pd_t0090;
+  const double pd_t0099 = pd_t0089 + pd_t0087;
+  const double pd_t0100 = h*(pd_t0098*0.011306936062370846 + pd_t0099*0.038693063937629155);
+  const double pd_t0101 = pd_t0055*12.703703703703704;
+  const double pd_t0102 = h*(pd_t0063*0.048934797569554662 - pd_t0066*0.0040402045369197616 - pd_t0068*1.5453673641037116 - pd_t0065*1.5983423662101859);
+  const double pd_t0103 = pd_t0055*5.8074074074074078;
+  const double pd_t0104 = -(h*(pd_t0103 + (pd_t0059*0.0030799344260414238 + pd_t0058*0.022609812278198024) - pd_t0062*0.040683871556431793 - pd_t0061*0.12859584048289346));
+  const double pd_t0105 = pd_t0065 + pd_t0066*0.13622114098715069;
+  const double pd_t0106 = -(h*(pd_t0063*0.47866047033034015 - pd_t0105*0.10502315126554085 - pd_t0068*1.5129765957177206));
+  const double pd_t0107 = h*(pd_t0082*0.011239264183104759 + pd_t0055*1.2703703703703704 - pd_t0081*0.038461486405326983);
+  const double pd_t0108 = pd_t0066 + pd_t0065*0.13622114098715069;
+  const double pd_t0109 = h*(pd_t0063*0.4889079391106782 - pd_t0068*0.15467582561773896 - pd_t0108*0.21772802081325376);
+  const double pd_t0110 = h*(pd_t0059*0.0071623566661990221 + pd_t0061*0.012235289145699726 - pd_t0078 - pd_t0058*0.0039230328462088807 - pd_t0062*0.0078587203676434639);
+  const double pd_t0111 = -(h*(pd_t0063*0.047627240346717718 - pd_t0065*0.0084314788159687779 - pd_t0068*0.036523767867541211 - pd_t0066*0.20631330619019519));
+  const double pd_t0112 = -(h*(pd_t0063*0.16361331842457263 + pd_t0068*1.6346619235180975 - pd_t0066*0.0081276020081988629 - pd_t0065*0.43799928519265202));
+  const double pd_t0113 = -(h*(pd_t0088*4.8080972582522836 + (pd_t0087*0.50862944611158012 + (pd_t0089*0.0094382293474000976 + pd_t0090*0.48124247369614354))));
+  const double pd_t0114 = h*(pd_t0068*0.4889079391106782 - pd_t0063*0.15467582561773896 - pd_t0105*0.21772802081325376);
+  const double pd_t0115 = h*(pd_t0099*0.1436399655330815 + pd_t0098*0.49154521965210368);
+  const double pd_t0116 = h*(pd_t0063*0.031604448365673089 + pd_t0065*0.075997339618943976 - pd_t0066*0.018900657082642949 - pd_t0068*0.15553039052122533);
+  const double pd_t0117 = -(h*(pd_t0089*0.13610942716277041 + (pd_t0088*0.11606909759345124 + (pd_t0087*0.040833838524085689 + pd_t0090*0.047884152505756644))));
+  const double pd_t0118 = h*((pd_t0063 + pd_t0068)*1.6003995487689182 - (pd_t0065 + pd_t0066)*0.028779857279299281);
+  const double pd_t0119 = -(h*(pd_t0062*0.12859584048289346 + (pd_t0061*0.040683871556431793 + (pd_t0059*0.022609812278198024 + (pd_t0103 + pd_t0058*0.0030799344260414238)))));
+  const double pd_t0120 = -(h*(pd_t0068*0.16361331842457263 + pd_t0063*1.6346619235180975 - pd_t0065*0.0081276020081988629 - pd_t0066*0.43799928519265202));
+  const double pd_t0121 = -(h*(pd_t0059*0.014408375588830192 - pd_t0073 - pd_t0058*0.0010750422554968589 - pd_t0061*0.012942269750409557 - pd_t0062*0.026275603083742889));
+  const double pd_t0122 = h*(pd_t0068*0.038634187587564831 + pd_t0063*0.15924150558618722 - pd_t0065*0.0023105072934203113 - pd_t0066*0.41503652262813129);
+  const double pd_t0123 = -(h*(pd_t0068*0.47866047033034015 - 0.10502315126554085*pd_t0108 - pd_t0063*1.5129765957177206));
+  const double pd_t0124 = -(h*(pd_t0090*4.8080972582522836 + (pd_t0089*0.50862944611158012 + (pd_t0087*0.0094382293474000976 + pd_t0088*0.48124247369614354))));
+  const double pd_t0125 = -(h*(0.066927269909957898*pd_t0085 + 0.15227048677705798*pd_t0084));
+  const double pd_t0126 = h*(pd_t0089*0.48196379253808919 + (pd_t0090*0.46838348369985494 + (pd_t0087*0.0026830912392293883 + pd_t0088*0.11363629918949314)));
+  const double pd_t0127 = h*(pd_t0068*0.048934797569554662 - pd_t0065*0.0040402045369197616 - pd_t0063*1.5453673641037116 - pd_t0066*1.5983423662101859);
+  const double pd_t0128 = h*(pd_t0062*0.024840279750548405 + pd_t0059*0.052578892044918522 - pd_t0070 - pd_t0058*0.0005344000104406429 - pd_t0061*0.0038708789505961438);
+  const double pd_t0129 = -(h*(pd_t0068*0.011555026003174991 - pd_t0065*0.0011485456645202573 - pd_t0063*0.15054282613618858 - pd_t0066*1.5145468955487318));
+  const double pd_t0130 = h*(pd_t0065*0.0014102217765789686 + pd_t0063*0.31576028684349761 - pd_t0068*0.0155670374056802 - pd_t0066*1.0185629517190913);
+  const double pd_t0131 = -(h*(pd_t0089*7.3349841374043967 + (pd_t0090*0.47841093619269975 + (pd_t0087*0.00075772084387044263 + pd_t0088*0.011617356439635629))));
+  const double pd_t0132 = -(h*(pd_t0065*0.00040089656172127521 + pd_t0063*0.030759964955364191 - pd_t0068*0.003675861165244613 - pd_t0066*0.96516327731766993));
+  S[0] = h*((pd_t0008 + (pd_t0010*pd_t0010 + (pd_t0016 + pd_t0017*pd_t0017)))*0.086963711284363462 + (pd_t0025 + (pd_t0027*pd_t0027 + (pd_t0028*pd_t0028 + pd_t0034)))*0.16303628871563652);
+  g[0] = h*(pd_t0035*1.0994869450636569 + (pd_t0036*0.1232741032024484 + (pd_t0038*0.076339406272863342 + (pd_t0040*0.040681622474346361 + (pd_t0041*0.029907999238518453 + (pd_t0044*0.02003807601558252 + (pd_t0047*0.0056958598140994963 + pd_t0048*0.0061208410997268927)))))));
+  g[1] = -(h*(0.0061208410997268927*pd_t0050 + 0.1232741032024484*pd_t0051 - 0.029907999238518453*pd_t0053 - 1.0994869450636569*pd_t0054));
+  g[2] = -(h*(pd_t0036*1.2654457260944294 + (pd_t0035*1.1603183569654674 + (pd_t0040*0.19910056555592964 + (pd_t0041*0.12665846775638201 + (pd_t0044*0.062989454444818543 + (pd_t0047*0.016318311803700261 + pd_t0048*0.021531098627420201))))) - pd_t0038*0.11979279930741085));
+  g[3] = h*(pd_t0050*0.021531098627420201 + pd_t0051*1.2654457260944294 - pd_t0053*0.12665846775638201 - pd_t0054*1.1603183569654674);
+  g[4] = h*((pd_t0041 + pd_t0036)*1.2389220914098444 + ((pd_t0044 - pd_t0040)*0.21060501277892579 + ((pd_t0047 - pd_t0038)*0.032827235001148022 + (pd_t0035 + pd_t0048)*0.07624166942950393)));
+  g[5] = -(h*(0.07624166942950393*(pd_t0050 - pd_t0054) + 1.2389220914098444*(pd_t0051 - pd_t0053)));
+  g[6] = -(h*(pd_t0041*1.2654457260944294 + (pd_t0048*1.1603183569654674 + (pd_t0036*0.12665846775638201 + (pd_t0035*0.021531098627420201 + pd_t0047*0.11979279930741085))) - pd_t0038*0.016318311803700261 - pd_t0040*0.062989454444818543 - pd_t0044*0.19910056555592964));
+  g[7] = h*(pd_t0051*0.12665846775638201 + pd_t0050*1.1603183569654674 - pd_t0054*0.021531098627420201 - pd_t0053*1.2654457260944294);
+  g[8] = h*(pd_t0048*1.0994869450636569 + (pd_t0041*0.1232741032024484 + (pd_t0035*0.0061208410997268927 + pd_t0036*0.029907999238518453)) - pd_t0038*0.0056958598140994963 - pd_t0040*0.02003807601558252 - pd_t0044*0.040681622474346361 - pd_t0047*0.076339406272863342);
+  g[9] = -(h*(0.029907999238518453*pd_t0051 + 1.0994869450636569*pd_t0050 - 0.0061208410997268927*pd_t0054 - 0.1232741032024484*pd_t0053));
+  H[0] = h*(pd_t0056 + (pd_t0058*0.033506533150575987 + (pd_t0059*0.00018653078705316791 + pd_t0061*0.0050755399923014663)) - pd_t0062*0.0012313960700693805);
+  H[1] = pd_t0069;
+  H[2] = pd_t0071;
+  H[3] = pd_t0072;
+  H[4] = pd_t0074;
+  H[5] = pd_t0077;
+  H[6] = pd_t0079;
+  H[7] = pd_t0080;
+  H[8] = pd_t0083;
+  H[9] = pd_t0086;
+  H[10] = pd_t0069;
+  H[11] = h*(pd_t0087*6.9504367080914493 + (pd_t0088*0.046604668936230602 + (pd_t0089*0.00021540419109759327 + pd_t0090*0.0027432187812228806)));
+  H[12] = pd_t0091;
+  H[13] = pd_t0092;
+  H[14] = pd_t0093;
+  H[15] = pd_t0094;
+  H[16] = pd_t0095;
+  H[17] = pd_t0096;
+  H[18] = pd_t0097;
+  H[19] = pd_t0100;
+  H[20] = pd_t0071;
+  H[21] = pd_t0091;
+  H[22] = h*(pd_t0101 + (pd_t0061*0.12157120208321184 + (pd_t0059*0.0015310253908785464 + pd_t0058*0.082507488203794471)) - pd_t0062*0.01216806209989291);
+  H[23] = pd_t0102;
+  H[24] = pd_t0104;
+  H[25] = pd_t0106;
+  H[26] = pd_t0107;
+  H[27] = pd_t0109;
+  H[28] = pd_t0110;
+  H[29] = pd_t0111;
+  H[30] = pd_t0072;
+  H[31] = pd_t0092;
+  H[32] = pd_t0102;
+  H[33] = h*(pd_t0087*7.7408074565069809 + (pd_t0088*4.9110320723863312 + (pd_t0089*0.0026654118209594605 + pd_t0090*0.04919876298943214)));
+  H[34] = pd_t0112;
+  H[35] = pd_t0113;
+  H[36] = pd_t0114;
+  H[37] = pd_t0115;
+  H[38] = pd_t0116;
+  H[39] = pd_t0117;
+  H[40] = pd_t0074;
+  H[41] = pd_t0093;
+  H[42] = pd_t0104;
+  H[43] = pd_t0112;
+  H[44] = h*(pd_t0055*9.481481481481481 + (pd_t0082*0.0061958450364247566 + pd_t0081*0.13602637718579746));
+  H[45] = pd_t0118;
+  H[46] = pd_t0119;
+  H[47] = pd_t0120;
+  H[48] = pd_t0121;
+  H[49] = pd_t0122;
+  H[50] = pd_t0077;
+  H[51] = pd_t0094;
+  H[52] = pd_t0106;
+  H[53] = pd_t0113;
+  H[54] = pd_t0118;
+  H[55] = h*(pd_t0099*0.033420791681661621 + pd_t0098*4.7073199490590794);
+  H[56] = pd_t0123;
+  H[57] = pd_t0124;
+  H[58] = pd_t0125;
+  H[59] = pd_t0126;
+  H[60] = pd_t0079;
+  H[61] = pd_t0095;
+  H[62] = pd_t0107;
+  H[63] = pd_t0114;
+  H[64] = pd_t0119;
+  H[65] = pd_t0123;
+  H[66] = h*(pd_t0059*0.082507488203794471 + (pd_t0061*0.01216806209989291 + (pd_t0101 + pd_t0058*0.0015310253908785464)) - pd_t0062*0.12157120208321184);
+  H[67] = pd_t0127;
+  H[68] = pd_t0128;
+  H[69] = pd_t0129;
+  H[70] = pd_t0080;
+  H[71] = pd_t0096;
+  H[72] = pd_t0109;
+  H[73] = pd_t0115;
+  H[74] = pd_t0120;
+  H[75] = pd_t0124;
+  H[76] = pd_t0127;
+  H[77] = h*(pd_t0089*7.7408074565069809 + (pd_t0090*4.9110320723863312 + (pd_t0087*0.0026654118209594605 + pd_t0088*0.04919876298943214)));
+  H[78] = pd_t0130;
+  H[79] = pd_t0131;
+  H[80] = pd_t0083;
+  H[81] = pd_t0097;
+  H[82] = pd_t0110;
+  H[83] = pd_t0116;
+  H[84] = pd_t0121;
+  H[85] = pd_t0125;
+  H[86] = pd_t0128;
+  H[87] = pd_t0130;
+  H[88] = h*(pd_t0059*0.033506533150575987 + (pd_t0061*0.0012313960700693805 + (pd_t0056 + pd_t0058*0.00018653078705316791)) - pd_t0062*0.0050755399923014663);
+  H[89] = pd_t0132;
+  H[90] = pd_t0086;
+  H[91] = pd_t0100;
+  H[92] = pd_t0111;
+  H[93] = pd_t0117;
+  H[94] = pd_t0122;
+  H[95] = pd_t0126;
+  H[96] = pd_t0129;
+  H[97] = pd_t0131;
+  H[98] = pd_t0132;
+  H[99] = h*(pd_t0089*6.9504367080914493 + (pd_t0090*0.046604668936230602 + (pd_t0087*0.00021540419109759327 + pd_t0088*0.0027432187812228806)));
+}
+
+static const pardel_condensation::Interval sphere_geodesic_galerkin_gauss_s_4_interval = {
+    sphere_geodesic_galerkin_gauss_s_4_start,
+    sphere_geodesic_galerkin_gauss_s_4_interior,
+    sphere_geodesic_galerkin_gauss_s_4_ext_grad,
+    sphere_geodesic_galerkin_gauss_s_4_ext_full,
+};
+
+extern "C" void sphere_geodesic_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+  pardel_condensation::condensed<2, 2, 6>(sphere_geodesic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+}
+
+extern "C" void sphere_geodesic_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* D1, double* D2, double* D11, double* D22) {
+  pardel_condensation::condensed<2, 2, 6>(sphere_geodesic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, nullptr, D1, D2, D11, nullptr, D22);
+}
+
+extern "C" void sphere_geodesic_galerkin_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed<2, 2, 6>(sphere_geodesic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, nullptr, nullptr, nullptr);
+}
+
+extern "C" double sphere_geodesic_galerkin_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  double Ld, D1[2], D2[2];
+  pardel_condensation::condensed<2, 2, 6>(sphere_geodesic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, &Ld, D1, D2, nullptr, nullptr, nullptr);
+  return Ld;
+}
+
 static const char* const sphere_geodesic_coords[] = {
     "theta",
     "phi",
@@ -272,6 +993,8 @@ static const char* const sphere_geodesic_coords[] = {
 static const pardel_discretization sphere_geodesic_discretizations[] = {
     {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action},
     {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action},
+    {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action},
+    {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action},
 };
 
 extern "C" const pardel_model sphere_geodesic_model = {
@@ -287,7 +1010,7 @@ extern "C" const pardel_model sphere_geodesic_model = {
     nullptr,
     0,
     nullptr,
-    2,
+    4,
     sphere_geodesic_discretizations,
     nullptr,
     PARDEL_COST_ACTION,

@@ -161,17 +161,19 @@ void condensed(const Interval& f, double h, double t0, double t1, const double* 
     for (int i = 0; i < M; ++i)
       for (int b = 0; b < 2 * D; ++b) X[i * 2 * D + b] = Hx[(D + i) * E + node(b)];
     for (int b = 0; b < 2 * D; ++b) lu_solve(M, Hzz, piv, X + b, 2 * D);
+    // D11 and D22 from their upper triangles, mirrored: exactly symmetric like every other kernel's.
     for (int a = 0; a < 2 * D; ++a) {
-      for (int b = 0; b < 2 * D; ++b) {
-        if (a >= D && b < D) continue;  // D21 = D12^T is not an output
+      for (int b = a; b < 2 * D; ++b) {
         if (a < D && b >= D && D12 == nullptr) continue;
         double s = Hx[node(a) * E + node(b)];
         for (int i = 0; i < M; ++i) s -= Hx[node(a) * E + D + i] * X[i * 2 * D + b];
-        if (a < D && b < D) D11[a * D + b] = s;
+        if (a < D && b < D) D11[a * D + b] = D11[b * D + a] = s;
         else if (a < D) D12[a * D + (b - D)] = s;
-        else D22[(a - D) * D + (b - D)] = s;
+        else D22[(a - D) * D + (b - D)] = D22[(b - D) * D + (a - D)] = s;
       }
     }
+    // D12's lower-left part (a >= D, b < D) is D12 transposed, not an output; the loop above
+    // covers D12 whole because b runs over all of q1 for every a in q0.
   }
   if (Ld) *Ld = S;
   for (int a = 0; a < D; ++a) {
