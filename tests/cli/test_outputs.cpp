@@ -1,8 +1,10 @@
 // Tests of the solve outputs (pardel/app/outputs.hpp): convergence.csv, the
 // certificate's JSON, the physical cost (the summed clock checked against path length) and the
-// boundary momenta of summary.json (checked against the harmonic oscillator's exact velocities).
+// boundary momenta of summary.json (checked against the harmonic oscillator's exact velocities) and
+// its error estimate.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -161,6 +163,41 @@ TEST(Outputs, SummaryBoundaryMomentaAreNullWithoutATrajectory) {
   ASSERT_NE(scene.model, nullptr);
   const nlohmann::ordered_json j = summary_json(scene, Summary{}, Trajectory{}, Certificate{}, "");
   EXPECT_TRUE(j["boundary_momenta"].is_null());
+}
+
+TEST(Outputs, SummaryHasTheErrorEstimateOrNullWithItsReason) {
+  // x'' = -x from 0 to 1 over T = 1.3: the estimate, by coordinate name, is close to the largest
+  // node error against x = sin t / sin T; a summary without one has null and the reason.
+  Scene scene = scene_for("harmonic");
+  ASSERT_NE(scene.model, nullptr);
+  const double T = 1.3;
+  scene.problem.T = T;
+  scene.problem.N = 40;
+  scene.problem.q0 = {0};
+  scene.problem.qN = {1};
+  Trajectory trajectory = linear_guess(scene.problem);
+  const Summary summary = solve(scene.problem, Options{}, trajectory);
+  ASSERT_TRUE(summary.converged()) << summary.message;
+  double truth = 0;
+  for (int k = 0; k <= 40; ++k)
+    truth = std::max(truth, std::fabs(trajectory.node(k)[0] - std::sin(trajectory.t[k]) / std::sin(T)));
+  const nlohmann::ordered_json j = summary_json(scene, summary, trajectory, Certificate{}, "");
+  const double estimate = j["error_estimate"].get<double>();
+  EXPECT_GT(estimate, truth / 3);
+  EXPECT_LT(estimate, truth * 3);
+  EXPECT_EQ(j["error"]["by_coordinate"]["x"].get<double>(), estimate);
+  EXPECT_EQ(j["error"]["coarse_N"].get<int>(), 20);
+  EXPECT_FALSE(j["error"]["extrapolated"].get<bool>());
+  EXPECT_EQ(j["error"]["note"].get<std::string>(), summary.error_note);
+
+  Summary not_converged;
+  not_converged.termination = Termination::max_iterations;
+  not_converged.error_note = "not estimated: the solve ended max_iterations";
+  const nlohmann::ordered_json n = summary_json(scene, not_converged, trajectory, Certificate{}, "");
+  EXPECT_TRUE(n["error_estimate"].is_null());
+  EXPECT_TRUE(n["error"]["by_coordinate"].empty());
+  EXPECT_EQ(n["error"]["coarse_N"].get<int>(), 0);
+  EXPECT_EQ(n["error"]["note"].get<std::string>(), "not estimated: the solve ended max_iterations");
 }
 
 }  // namespace

@@ -137,6 +137,8 @@ clock_update_every = 10
 history_every = 5
 divergence_factor = 1e6
 clock = "none"
+error_estimate = true
+extrapolate = true
 [output]
 dir = "somewhere"
 )TOML");
@@ -169,6 +171,8 @@ dir = "somewhere"
   EXPECT_EQ(scene.options.refine_settle, 0.01);
   EXPECT_EQ(scene.options.history_every, 5);
   EXPECT_EQ(scene.options.divergence_factor, 1e6);
+  EXPECT_TRUE(scene.options.error_estimate);
+  EXPECT_TRUE(scene.options.extrapolate);
   EXPECT_EQ(scene.problem.clock, ClockMode::none);
   EXPECT_EQ(scene.output_dir, "somewhere");
 }
@@ -183,6 +187,8 @@ TEST(Scene, DefaultsWhenKeysAreLeftOut) {
   EXPECT_EQ(scene.options.rtol, 1e-10);
   EXPECT_EQ(scene.options.newton_shift, NewtonShift::difference);
   EXPECT_EQ(scene.options.linear_solver, LinearSolver::block_ldlt);
+  EXPECT_TRUE(scene.options.error_estimate);
+  EXPECT_FALSE(scene.options.extrapolate);
   EXPECT_TRUE(scene.output_dir.empty());
 }
 

@@ -182,7 +182,10 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   j["tolerance"] = summary.tolerance;
   j["scene"] = scene.path;
   j["point"] = point_json(summary.point);
-  j["error_estimate"] = summary.error_estimate;  // NaN (not estimated) is written as null
+  if (std::isfinite(summary.error_estimate))
+    j["error_estimate"] = summary.error_estimate;
+  else
+    j["error_estimate"] = nullptr;  // not estimated
   nlohmann::ordered_json by_coordinate = nlohmann::ordered_json::object();
   for (std::size_t i = 0; i < summary.error_by_coordinate.size() && i < static_cast<std::size_t>(scene.model->ncoords); ++i)
     by_coordinate[scene.model->coords[i]] = summary.error_by_coordinate[i];
