@@ -263,6 +263,10 @@ const BoundedMember kBoundedMembers[] = {
      [](const Options& o) { return o.refine_settle; }},
     {{"divergence_factor", 1, false, kInf, true, false, "must be > 1"},
      [](const Options& o) { return o.divergence_factor; }},
+    {{"accuracy", 0, false, kInf, false, true, "must be a positive finite number, or 0 (off)"},
+     [](const Options& o) { return o.accuracy; }},
+    {{"accuracy_max_N", 4, true, 1 << 30, true, false, "must be in [4, 2^30]"},
+     [](const Options& o) { return static_cast<double>(o.accuracy_max_N); }},
 };
 
 }  // namespace
@@ -336,6 +340,22 @@ bool validate(const Problem& problem, const Trajectory& trajectory, std::string*
     return bad("problem.clock needs a clock but model '" + std::string(m.name ? m.name : "?") + "' declares none");
   if (problem.clock != ClockMode::none && !problem.knots.empty())
     return bad("problem.knots cannot be combined with a clock (knot times are grid times)");
+  if (!problem.times.empty()) {
+    if (problem.clock != ClockMode::none)
+      return bad("problem.times cannot be combined with a clock (the clock sets the node times)");
+    if (problem.times.size() != static_cast<std::size_t>(problem.N) + 1)
+      return bad("problem.times has " + std::to_string(problem.times.size()) + " values, expected N+1 = " +
+                 std::to_string(problem.N + 1));
+    if (problem.times.front() != problem.t0 || problem.times.back() != problem.t0 + problem.T)
+      return bad("problem.times must run from t0 = " + number(problem.t0) + " to t0 + T = " +
+                 number(problem.t0 + problem.T) + ", not from " + number(problem.times.front()) + " to " +
+                 number(problem.times.back()));
+    for (std::size_t k = 0; k + 1 < problem.times.size(); ++k)
+      if (!(problem.times[k + 1] > problem.times[k]) || !std::isfinite(problem.times[k + 1]))
+        return bad("problem.times must increase strictly: times[" + std::to_string(k + 1) + "] = " +
+                   number(problem.times[k + 1]) + " after times[" + std::to_string(k) + "] = " +
+                   number(problem.times[k]));
+  }
   for (std::size_t a = 0; a < problem.knots.size(); ++a) {
     const Knot& k = problem.knots[a];
     if (!std::isfinite(k.t)) return bad("problem.knots[" + std::to_string(a) + "].t is not finite");

@@ -47,6 +47,10 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   fit(ctx.hk, static_cast<std::size_t>(N), problem.T / N);
   for (int k = 0; k <= N; ++k) ctx.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / N;
   ctx.t[static_cast<std::size_t>(N)] = problem.t0 + problem.T;
+  if (!problem.times.empty() && N == problem.N) {  // a non-uniform grid (Problem::times)
+    for (int k = 0; k <= N; ++k) ctx.t[static_cast<std::size_t>(k)] = problem.times[static_cast<std::size_t>(k)];
+    for (int k = 0; k < N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+  }
   fit(ctx.is_free, n1 * d, static_cast<unsigned char>(1));
   fit(ctx.free_count, n1, m.dim);
   fit(ctx.q, n1 * d, 0.0);
@@ -73,6 +77,20 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
 
 int knot_node(const Problem& problem, std::size_t a, int N, std::string* message) {
   const Knot& knot = problem.knots[a];
+  if (!problem.times.empty() && N == problem.N) {  // a given grid: the node at the knot's time
+    const std::vector<double>& t = problem.times;
+    const double tol = 1e-9 * std::max(1.0, std::fabs(knot.t));
+    const int k = static_cast<int>(std::lower_bound(t.begin(), t.end(), knot.t - tol) - t.begin());
+    if (k > 0 && k < N && std::fabs(t[static_cast<std::size_t>(k)] - knot.t) <= tol) return k;
+    char buf[320];
+    const int hi = std::min(N, std::max(1, k)), lo = hi - 1;
+    std::snprintf(buf, sizeof buf,
+                  "knot %zu at t = %.12g is not on an interior node of the given grid (problem.times); nearest "
+                  "nodes: %d (t = %.12g) and %d (t = %.12g)",
+                  a, knot.t, lo, t[static_cast<std::size_t>(lo)], hi, t[static_cast<std::size_t>(hi)]);
+    if (message) *message = buf;
+    return -1;
+  }
   const double s = (knot.t - problem.t0) / problem.T * N;
   const double k_near = std::floor(s);
   const int k = static_cast<int>(std::lround(s));

@@ -11,6 +11,7 @@
 #include <limits>
 #include <string>
 
+#include "engine.hpp"
 #include "invariant.hpp"
 #include "levels.hpp"
 
@@ -25,10 +26,8 @@ std::string number(double v) {
 
 /** The index of the knot that lies on an odd node of the grid with N intervals, or -1. */
 int knot_on_odd_node(const Problem& problem) {
-  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
-    const double s = (problem.knots[a].t - problem.t0) / problem.T * problem.N;
-    if (std::lround(s) % 2 != 0) return static_cast<int>(a);
-  }
+  for (std::size_t a = 0; a < problem.knots.size(); ++a)
+    if (knot_node(problem, a, problem.N, nullptr) % 2 != 0) return static_cast<int>(a);
   return -1;
 }
 
@@ -55,7 +54,8 @@ std::string coarse_grid_refusal(const Problem& problem) {
   if (knot >= 0)
     return "knot " + std::to_string(knot) + " (t = " + number(problem.knots[static_cast<std::size_t>(knot)].t) +
            ") is on an odd node, which the coarse grid of every other node does not have";
-  PARDEL_INVARIANT(knots_on_grid(problem, problem.N / 2), "knots on even nodes lie on the coarse grid");
+  PARDEL_INVARIANT(!problem.times.empty() || knots_on_grid(problem, problem.N / 2),
+                   "knots on even nodes lie on the coarse grid");
   return "";
 }
 

@@ -16,6 +16,12 @@
 namespace pardel::detail {
 
 bool knots_on_grid(const Problem& problem, int n) {
+  if (!problem.times.empty()) {  // a given grid: only its own N, each knot at one of its times
+    if (n != problem.N) return false;
+    for (std::size_t a = 0; a < problem.knots.size(); ++a)
+      if (knot_node(problem, a, n, nullptr) < 0) return false;
+    return true;
+  }
   for (const Knot& knot : problem.knots) {
     const double s = (knot.t - problem.t0) / problem.T * n;
     const long k = std::lround(s);
@@ -43,6 +49,7 @@ namespace {
 std::vector<int> unchecked_levels(const Problem& problem, const Options& options, bool automatic) {
   std::vector<int> levels;
   const int N = problem.N;
+  if (!problem.times.empty()) return {N};  // a given non-uniform grid has no coarser levels
   if (automatic && options.refine_start_N <= 0) return automatic_levels(problem);
   if (options.refine_start_N <= 0 || options.refine_start_N >= N) return {N};
   int n = options.refine_start_N;

@@ -23,7 +23,8 @@ BoundaryMomenta boundary_momenta(const Problem& problem, const Trajectory& traje
   // The step the kernels are called with: the span of the path parameter over N, except under the
   // Sundman clock, whose steps are the node-time differences (as in the solvers).
   auto step = [&](int k) {
-    return problem.clock == ClockMode::fixed_total_time ? trajectory.t[k + 1] - trajectory.t[k] : problem.T / N;
+    return problem.clock == ClockMode::fixed_total_time || !problem.times.empty() ? trajectory.t[k + 1] - trajectory.t[k]
+                                                                                  : problem.T / N;
   };
   std::vector<double> D1(d), D2(d);
   double Ld = 0;

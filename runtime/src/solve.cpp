@@ -14,6 +14,7 @@
 #include <limits>
 #include <utility>
 
+#include "adaptive.hpp"
 #include "assessment.hpp"
 #include "engine.hpp"
 #include "error_estimate.hpp"
@@ -320,6 +321,11 @@ void estimate_error(const Problem& problem, const Options& requested, const Traj
   if (!refusal.empty()) return detail::not_estimated(summary, refusal);
   Problem coarse_problem = problem;
   coarse_problem.N = problem.N / 2;
+  if (!problem.times.empty()) {  // a given grid: its every other node
+    coarse_problem.times.resize(static_cast<std::size_t>(coarse_problem.N) + 1);
+    for (int m = 0; m <= coarse_problem.N; ++m)
+      coarse_problem.times[static_cast<std::size_t>(m)] = problem.times[static_cast<std::size_t>(2 * m)];
+  }
   Trajectory coarse = detail::every_other_node(trajectory, 2);
   Options options = requested;
   options.method = summary.method;  // the method that converged (auto resolved, or its second attempt)
@@ -357,6 +363,7 @@ void estimate_error(const Problem& problem, const Options& requested, const Traj
 }  // namespace
 
 Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
+  if (requested.accuracy > 0) return detail::solve_adaptive(problem, requested, trajectory);
   Trajectory level;
   Summary summary = solve_attempts(problem, requested, trajectory, &level);
   estimate_error(problem, requested, level, trajectory, summary);

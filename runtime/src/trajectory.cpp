@@ -18,6 +18,7 @@ Trajectory empty_for(const Problem& problem, int N) {
   tr.dim = problem.model ? problem.model->dim : static_cast<int>(problem.q0.size());
   tr.t.resize(static_cast<std::size_t>(N) + 1);
   for (int k = 0; k <= N; ++k) tr.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / N;
+  if (!problem.times.empty() && problem.times.size() == tr.t.size()) tr.t = problem.times;
   tr.q.assign((static_cast<std::size_t>(N) + 1) * tr.dim, 0.0);
   return tr;
 }
@@ -38,7 +39,7 @@ Trajectory linear_guess(const Problem& problem) {
   Trajectory tr = empty_for(problem, problem.N);
   const int d = tr.dim, N = problem.N;
   for (int k = 0; k <= N; ++k) {
-    const double s = static_cast<double>(k) / N;
+    const double s = (tr.t[static_cast<std::size_t>(k)] - tr.t.front()) / (tr.t.back() - tr.t.front());
     for (int i = 0; i < d; ++i)
       tr.node(k)[i] = (1 - s) * problem.q0[static_cast<std::size_t>(i)] + s * problem.qN[static_cast<std::size_t>(i)];
   }
@@ -55,7 +56,7 @@ Trajectory polyline_guess(const Problem& problem, const std::vector<std::vector<
   P.back().assign(problem.qN.begin(), problem.qN.begin() + nc);
   const int segments = static_cast<int>(P.size()) - 1;
   for (int k = 0; k <= N; ++k) {
-    const double u = static_cast<double>(k) / N * segments;
+    const double u = (tr.t[static_cast<std::size_t>(k)] - tr.t.front()) / (tr.t.back() - tr.t.front()) * segments;
     const int j = std::min(segments - 1, static_cast<int>(std::floor(u)));
     const double w = u - j;
     double* q = tr.node(k);

@@ -71,6 +71,11 @@ struct Problem {
   std::vector<double> qN;      ///< dim values
   std::vector<Knot> knots;
   ClockMode clock = ClockMode::none;
+  /** The node times of a non-uniform grid: N+1 strictly increasing values from t0 to t0 + T (the
+   *  step of interval k is times[k+1] - times[k]); empty: the uniform grid t_k = t0 + k T/N. Only
+   *  without a clock; knots must lie on nodes; the solve then uses that one grid (no grid levels).
+   *  Options::accuracy chooses such grids. */
+  std::vector<double> times;
 };
 
 /** The index of the model's param of that name (declaration order, as Problem::params), or -1. */
@@ -240,6 +245,14 @@ struct Options {
    *  (the discrete solution plus the estimated error) instead of the discrete solution; the summary's
    *  residual, action and point still describe the discrete solution. */
   bool extrapolate = false;
+  /** Adaptive grid: when > 0, the requested bound on the estimated error of the coordinates at the
+   *  nodes (Summary::error_estimate). The solve starts on problem's grid, then places nodes to
+   *  equidistribute the local error indicated by the coarse grid's residual at the solution, and
+   *  chooses N from the estimate and the discretization's order, until the estimate is at or below
+   *  `accuracy` or N would exceed accuracy_max_N (docs/solvers.md, "Adaptive grids"). 0: the
+   *  problem's grid only. One process only (not over MPI ranks), no clock. */
+  double accuracy = 0;
+  int accuracy_max_N = 1 << 20;  ///< the largest N an adaptive solve may use
   /** Checks the options against their bounds (option_bound); on failure writes a message naming
    *  the option, its value and the rule it breaks. */
   bool is_valid(std::string* error) const;
@@ -363,6 +376,11 @@ struct Summary {
   double error_seconds = 0;     ///< time the estimate took (its coarse solve), included in wall_seconds
   bool extrapolated = false;    ///< the returned trajectory holds the extrapolated values (Options::extrapolate)
   std::string error_note;       ///< one line: how the estimate was made, or "not estimated: " and why
+  /** An adaptive solve (Options::accuracy): the N of every grid it solved, in order (the last is
+   *  the returned one), and one line on the outcome ("accuracy 1e-08 reached on N = 96 after 3
+   *  grids", or why not); both empty otherwise. The returned trajectory carries the grid's times. */
+  std::vector<int> grid_sizes;
+  std::string grid_note;
   std::vector<IterationRecord> history;
   SolverState state;  ///< filled (state.valid) when the solve ended `interrupted`
   bool converged() const { return termination == Termination::converged; }

@@ -72,6 +72,9 @@ bool distributed_supported(const Problem& problem, const Options& options, int r
     return fail("solver.method = \"stationary-newton\" runs in one process only: its indefinite block "
                 "factorization has no counterpart in the distributed Schur-complement solver (run it without "
                 "mpirun, or use \"newton\" or \"auto\" over ranks)");
+  if (!problem.times.empty() || options.accuracy > 0)
+    return fail("a given non-uniform grid (problem.times) and an adaptive grid (grid.accuracy) run in one process "
+                "only: the distributed solver places its nodes uniformly (run it without mpirun)");
   if (!fits_ranks(problem.N, ranks))
     return fail("grid.N = " + std::to_string(problem.N) + " is too small for " + std::to_string(ranks) +
                 " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks)");
