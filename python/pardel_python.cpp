@@ -224,6 +224,8 @@ const std::vector<std::pair<std::string, std::string>> kArguments = {
     {"clock_update_every", "solver.clock_update_every"},
     {"error_estimate", "solver.error_estimate"},
     {"extrapolate", "solver.extrapolate"},
+    {"accuracy", "grid.accuracy"},
+    {"accuracy_max_N", "grid.accuracy_max_N"},
     {"history_every", ""},
     {"refine_settle", ""},
     {"divergence_factor", ""},
@@ -851,7 +853,7 @@ PYBIND11_MODULE(_pardel, m) {
   py::dict bounds;
   for (const char* name : {"tol", "rtol", "max_iterations", "damping", "newton_substeps", "threads", "refine_start_N",
                            "refine_factor", "clock_update_every", "history_every", "refine_settle",
-                           "divergence_factor"}) {
+                           "divergence_factor", "accuracy", "accuracy_max_N"}) {
     const OptionBound* b = pardel::option_bound(name);
     bounds[name] = py::make_tuple(b->low, b->low_included, b->high, b->high_included, b->zero_allowed, b->rule);
   }

@@ -205,7 +205,8 @@ class Result:
     N, residual, action, seconds), error_estimate (Richardson's estimate of the discretization error
     of the coordinates at the nodes, NaN when not estimated), error_by_coordinate (dict by name,
     empty when not estimated), error_note (how it was made, or "not estimated: " and why),
-    extrapolated (whether q holds the extrapolated values), summary (the whole summary.json
+    extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
+    solve's grids, in order, and its outcome; empty otherwise), summary (the whole summary.json
     dictionary).
     """
 
@@ -232,6 +233,8 @@ class Result:
         self.error_by_coordinate = dict(s["error"]["by_coordinate"])
         self.error_note = s["error"]["note"]
         self.extrapolated = s["error"]["extrapolated"]
+        self.grid_sizes = list(s["grid"]["sizes"])
+        self.grid_note = s["grid"]["note"]
         self.method = s["method"]
         self.N = s["N"]
         self.final_time = s["final_time"]
@@ -283,8 +286,9 @@ _MAX_N = 100000000
 # The integer options of pardel::Options and the largest value their C++ type holds; the ranges
 # themselves are the runtime's (pardel::option_bound, _pardel.option_bounds).
 _INT_OPTIONS = {"max_iterations": _LONG_MAX, "newton_substeps": _INT_MAX, "threads": _INT_MAX,
-                "refine_start_N": _INT_MAX, "clock_update_every": _INT_MAX, "history_every": _LONG_MAX}
-_NUMBER_OPTIONS = ("tol", "rtol", "damping", "refine_factor", "refine_settle", "divergence_factor")
+                "refine_start_N": _INT_MAX, "clock_update_every": _INT_MAX, "history_every": _LONG_MAX,
+                "accuracy_max_N": _INT_MAX}
+_NUMBER_OPTIONS = ("tol", "rtol", "damping", "refine_factor", "refine_settle", "divergence_factor", "accuracy")
 _STRING_OPTIONS = ("discretization", "clock", "method", "linear_solver", "newton_shift")
 _BOOL_OPTIONS = ("error_estimate", "extrapolate")
 
@@ -488,7 +492,11 @@ def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=N
     """Solves one boundary-value problem.
 
     model: a bundled name, a .lag path, .lag text or a Model. q0, qN: boundary points (dim values:
-    coords, then derivatives up to order - 1). T: final time minus t0. N: intervals.
+    coords, then derivatives up to order - 1). T: final time minus t0. N: intervals (with accuracy:
+    the first grid's, optional, default 16).
+    accuracy (a positive number): an adaptive grid, refined until the estimated error of the
+    coordinates at the nodes is at most accuracy (accuracy_max_N: the largest N it may use);
+    Result.grid_sizes and grid_note say which grids it solved and whether it got there.
     Keyword options (the scene keys of `pardel solve`, docs/examples.md): discretization, params
     (dict by name, or a list in declaration order), t0, knots ([(t, q), ...]), polyline (guess
     vertices), clock, method, tol, rtol, max_iterations, damping, newton_substeps, newton_shift,
@@ -516,12 +524,15 @@ def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options):
     where = "pardel.solve"
     _check_model(where, "model", model)
     given = {"q0": q0, "qN": qN, "T": T, "N": N}
-    missing = [(name, what) for name, what in _REQUIRED if given[name] is None]
+    adaptive = options.get("accuracy") is not None  # N is then the first grid's, and optional
+    missing = [(name, what) for name, what in _REQUIRED if given[name] is None and not (name == "N" and adaptive)]
     if missing:
         raise TypeError("%s: missing argument%s %s" % (where, "s" if len(missing) > 1 else "",
                         ", ".join("%s (%s)" % m for m in missing)))
     arguments = {"q0": _check_vector(where, "q0", q0), "qN": _check_vector(where, "qN", qN),
-                 "T": _check_number(where, "T", T), "N": _check_int(where, "N", N, 2, _MAX_N)}
+                 "T": _check_number(where, "T", T)}
+    if N is not None:
+        arguments["N"] = _check_int(where, "N", N, 2, _MAX_N)
     if arguments["T"] <= 0:
         raise PardelError("%s: T must be > 0, got %s" % (where, _shown(T)))
     _guess_arrays(guess, where)

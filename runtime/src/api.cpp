@@ -396,6 +396,11 @@ std::string Summary::brief_report() const {
   }
   if (!message.empty()) out += "\n  " + message;
   if (!error_note.empty()) out += "\n  error estimate: " + error_note;
+  if (!grid_note.empty()) {
+    std::string sizes;
+    for (std::size_t i = 0; i < grid_sizes.size(); ++i) sizes += (i ? ", " : "") + std::to_string(grid_sizes[i]);
+    out += "\n  adaptive grid: " + grid_note + (sizes.empty() ? "" : " (N = " + sizes + ")");
+  }
   return out;
 }
 

@@ -194,6 +194,9 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
                 {"seconds", summary.error_seconds},
                 {"extrapolated", summary.extrapolated},
                 {"note", summary.error_note}};
+  j["grid"] = {{"accuracy", scene.options.accuracy > 0 ? nlohmann::ordered_json(scene.options.accuracy) : nlohmann::ordered_json()},
+               {"sizes", summary.grid_sizes},
+               {"note", summary.grid_note}};
   j["boundary_momenta"] = boundary_momenta_json(problem, trajectory);
   if (certificate.free_components > 0 || !certificate.error.empty()) j["certificate"] = certificate_json(certificate);
   return j;

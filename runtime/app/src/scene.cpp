@@ -382,19 +382,34 @@ void read_params(const SceneReader& r, const toml::table& root, Scene& scene) {
   }
 }
 
-/** [grid]: t0, T and N, with node times that a double can tell apart. */
+/** The first grid of an adaptive solve (grid.accuracy) whose scene gives no grid.N. */
+constexpr int kAdaptiveStartN = 16;
+
+/** [grid]: t0, T and N, with node times that a double can tell apart; or an adaptive grid:
+ *  accuracy (and accuracy_max_N), N then being the first grid's (default kAdaptiveStartN). */
 void read_grid(const SceneReader& r, const toml::table& root, Scene& scene) {
   Problem& problem = scene.problem;
   const toml::table* grid = r.table(root, "grid", "grid");
   if (!grid) throw SceneError(fmt::format("{}: error: missing table [grid] (keys t0, T, N)", r.file()));
-  r.check_keys(*grid, "grid", {"t0", "T", "N"});
+  r.check_keys(*grid, "grid", {"t0", "T", "N", "accuracy", "accuracy_max_N"});
+  if (const auto accuracy = r.bounded_number(grid, "accuracy", "grid.accuracy", "accuracy")) {
+    if (!(*accuracy > 0))
+      r.fail(*grid->get("accuracy"), "grid.accuracy", "grid.accuracy must be > 0 (the requested error; leave it out for a fixed grid)");
+    scene.options.accuracy = *accuracy;
+  }
+  if (const auto max_N = r.bounded_integer(grid, "accuracy_max_N", "grid.accuracy_max_N", "accuracy_max_N")) {
+    if (scene.options.accuracy <= 0)
+      r.fail(*grid->get("accuracy_max_N"), "grid.accuracy_max_N", "grid.accuracy_max_N needs grid.accuracy (an adaptive grid)");
+    scene.options.accuracy_max_N = static_cast<int>(*max_N);
+  }
   problem.t0 = r.number(grid, "t0", "grid.t0").value_or(0.0);
   const auto T = r.number(grid, "T", "grid.T");
   if (!T) r.fail(grid->source(), "grid", "missing key 'grid.T' (the final time minus t0)");
   if (!(*T > 0)) r.fail(*grid->get("T"), "grid.T", fmt::format("grid.T must be > 0, got {}", *T));
   problem.T = *T;
-  const auto N = r.integer(grid, "N", "grid.N");
-  if (!N) r.fail(grid->source(), "grid", "missing key 'grid.N' (the number of intervals)");
+  auto N = r.integer(grid, "N", "grid.N");
+  if (!N && scene.options.accuracy > 0) N = kAdaptiveStartN;
+  if (!N) r.fail(grid->source(), "grid", "missing key 'grid.N' (the number of intervals; or grid.accuracy for an adaptive grid)");
   constexpr long long kMaxN = 100000000;
   if (*N < 2 || *N > kMaxN) {
     r.fail(*grid->get("N"), "grid.N", fmt::format("grid.N must be between 2 and {}, got {}", kMaxN, *N));
@@ -687,6 +702,13 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
   read_knots(r, root, scene);
   read_guess(r, root, scene);
   read_output(r, root, scene);
+  if (scene.options.accuracy > 0) {
+    const toml::node* accuracy = r.table(root, "grid", "grid")->get("accuracy");
+    if (scene.problem.clock != ClockMode::none)
+      r.fail(*accuracy, "grid.accuracy", "an adaptive grid (grid.accuracy) needs solver.clock = \"none\": the clock sets the node times");
+    if (!scene.options.error_estimate)
+      r.fail(*accuracy, "grid.accuracy", "an adaptive grid (grid.accuracy) needs the error estimate; solver.error_estimate is false");
+  }
 
   std::string why;
   const toml::table* solver = r.table(root, "solver", "solver");

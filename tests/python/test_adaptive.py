@@ -1,0 +1,66 @@
+"""Adaptive grids from Python (pardel.solve(accuracy=...), Result.grid_sizes, grid_note): on a
+model written here, a stiff spring eps x'' = x + sin(t) with boundary layers, whose exact motion
+is known, the returned estimate meets the request and lies within a factor 3 of the true error at
+the nodes; N is optional (the first grid's); the options' types and bounds are checked."""
+import math
+
+import numpy as np
+import pytest
+
+import pardel
+
+LAYER_LAG = """\
+# eps x'' = x + sin(t): boundary layers of width sqrt(eps) at both ends
+model forced_layer
+coords x
+param eps = 4e-4
+L = eps/2*x'^2 + 1/2*x^2 + sin(t)*x
+discretizations trapezoid galerkin_gauss(s=3)
+"""
+EPS = 4e-4
+R = 1 / math.sqrt(EPS)
+P = -1 / (1 + EPS)  # the particular solution P sin(t) of eps x'' = x + sin(t)
+
+
+def exact(t):
+    """x = a e^(-R t) + b e^(-R (1 - t)) + P sin(t), with x(0) = 1 and x(1) = 0 (to 1e-21)."""
+    a = 1.0
+    b = -P * math.sin(1.0)
+    return a * np.exp(-R * t) + b * np.exp(-R * (1 - t)) + P * np.sin(t)
+
+
+@pytest.mark.parametrize("discretization,accuracy", [("trapezoid", 1e-5), ("galerkin_gauss(s=3)", 1e-9)])
+def test_the_request_is_met_and_the_estimate_is_honest(discretization, accuracy):
+    r = pardel.solve(LAYER_LAG, q0=[exact(np.array([0.0]))[0]], qN=[exact(np.array([1.0]))[0]], T=1,
+                     accuracy=accuracy, discretization=discretization, method="newton", rtol=1e-13)
+    assert r.status == "converged", r.message
+    assert r.error_estimate <= accuracy, r.grid_note
+    assert "reached" in r.grid_note and "not reached" not in r.grid_note
+    assert r.grid_sizes[0] == 16 and r.grid_sizes[-1] == r.N == len(r.t) - 1
+    error = np.abs(r.q[:, 0] - exact(r.t)).max()
+    assert error / 3 <= r.error_estimate <= 3 * error, (r.error_estimate, error)
+    steps = np.diff(r.t)
+    assert steps.max() / steps.min() > 5  # graded towards the layers
+
+
+def test_a_fixed_grid_reports_no_adaptive_grid():
+    r = pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, N=32)
+    assert r.grid_sizes == [] and r.grid_note == ""
+    np.testing.assert_allclose(np.diff(r.t), 1 / 32)
+
+
+def test_the_largest_N_bounds_the_grid():
+    r = pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, accuracy=1e-12, accuracy_max_N=100, method="newton")
+    assert r.status == "converged"
+    assert "not reached" in r.grid_note and r.N <= 100
+
+
+@pytest.mark.parametrize("name,value,error", [
+    ("accuracy", -1.0, pardel.PardelError), ("accuracy", float("nan"), pardel.PardelError),
+    ("accuracy", "1e-6", TypeError), ("accuracy_max_N", 2, pardel.PardelError),
+    ("accuracy_max_N", 1.5, TypeError)])
+def test_bad_options_name_the_argument(name, value, error):
+    options = {"accuracy": 1e-6}
+    options[name] = value
+    with pytest.raises(error, match=name):
+        pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, **options)
