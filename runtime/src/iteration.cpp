@@ -314,6 +314,9 @@ bool Iteration::non_finite_residual(int node) {
   } else {
     msg += " (the initial guess)";
   }
+  msg += ": a kernel of the intervals next to it returned a value that is not finite (L is not finite there, or, "
+         "for a Galerkin discretization with interior values, the interval's interior Newton iteration did not "
+         "converge; more intervals or a closer guess help)";
   finish(Termination::non_finite, msg);
   return false;
 }
