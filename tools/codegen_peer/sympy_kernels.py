@@ -260,6 +260,18 @@ def parse_lag(path):
 # ---------------------------------------------------------------------------------------------
 # Discretizations (definitions in docs/discretizations.md)
 
+def lobatto_nodes(points):
+    """The Gauss-Lobatto nodes of [-1, 1] (both ends and the roots of P'_(points-1)), ascending, in
+    the current mpmath precision."""
+    k = points - 1
+    inner = []
+    for i in range(k - 1, 0, -1):
+        x = mpmath.cos(mpmath.pi * i / k)
+        x = mpmath.findroot(lambda y: mpmath.diff(lambda u: mpmath.legendre(k, u), y), x)
+        inner.append(x)
+    return [mpmath.mpf(-1)] + sorted(inner) + [mpmath.mpf(1)]
+
+
 def _disc_name_and_options(disc):
     m = re.fullmatch(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:\((.*)\))?\s*", disc)
     if not m:
@@ -291,6 +303,8 @@ class DiscreteLagrangian:
         self.q0 = [sympy.Symbol("q0[%d]" % i, real=True) for i in range(self.dim)]
         self.q1 = [sympy.Symbol("q1[%d]" % i, real=True) for i in range(self.dim)]
         self.p = list(model.param_symbols)
+        self.z = []       # interior values (Galerkin discretizations with S above the order)
+        self.z_start = []  # their starting values, linear in q0 and q1
         self.stages = self._stages(disc)
 
     def _stages(self, disc):
@@ -366,7 +380,73 @@ class DiscreteLagrangian:
                     jets.append(jet)
                 stages.append((w / 2, t0 + c * (t1 - t0), jets))
             return stages
+        if name in ("galerkin_gauss", "galerkin_lobatto") and set(options) == {"s"} and int(options["s"]) >= order:
+            return self._galerkin_stages(name, int(options["s"]))
         raise LagError("discretization '%s' is not defined for an order-%d model" % (disc, order))
+
+    def _galerkin_stages(self, name, s):
+        """The Galerkin family: the polynomial of degree s + order - 1 through both nodes' jets and
+        s - order values per coordinate (the symbols z[j*n + i]) at the inner nodes of the Gauss-Lobatto
+        rule with s - order + 2 points, under s Gauss or s + 1 Gauss-Lobatto points. The basis is found
+        in mpmath (2*DECIMALS digits) by inverting the matrix of the end and interior conditions."""
+        n = len(self.model.coords)
+        order = self.model.order
+        h, t0, t1, q0, q1 = self.h, self.t0, self.t1, self.q0, self.q1
+        m_in = s - order
+        degree = s + order - 1
+        with mpmath.workdps(2 * DECIMALS):
+            fractions = [(1 + x) / 2 for x in lobatto_nodes(m_in + 2)[1:-1]]
+
+            def row(k, at):  # the k-th derivative at `at` of each monomial
+                return [mpmath.mpf(0) if e < k else mpmath.factorial(e) / mpmath.factorial(e - k) * mpmath.mpf(at) ** (e - k)
+                        for e in range(degree + 1)]
+            rows = [row(k, 0) for k in range(order)] + [row(k, 1) for k in range(order)] + [row(0, c) for c in fractions]
+            inverse = mpmath.inverse(mpmath.matrix(rows))
+            basis = [[inverse[e, col] for e in range(degree + 1)] for col in range(degree + 1)]
+
+            def derivative(coeffs, j, at):
+                return sum((mpmath.factorial(e) / mpmath.factorial(e - j) * coeffs[e] * mpmath.mpf(at) ** (e - j)
+                            for e in range(j, degree + 1)), mpmath.mpf(0))
+            if name == "galerkin_gauss":
+                xs, ws = gauss_legendre(s, 2 * DECIMALS)
+                nodes = [(1 + mpmath.mpf(str(x))) / 2 for x in xs]
+                weights = [mpmath.mpf(str(w)) / 2 for w in ws]
+            else:
+                xs = lobatto_nodes(s + 1)
+                k = s
+                nodes = [(1 + x) / 2 for x in xs]
+                weights = [1 / (mpmath.mpf(k * (k + 1)) * mpmath.legendre(k, x) ** 2) for x in xs]
+            self.z = [sympy.Symbol("z[%d]" % (j * n + i), real=True) for j in range(m_in) for i in range(n)]
+            F = lambda v: sympy.Float(mpmath.nstr(v, 2 * DECIMALS), 2 * DECIMALS)
+            stages = []
+            for c, w in zip(nodes, weights):
+                jets = []
+                for i in range(n):
+                    jet = []
+                    for j in range(order + 1):
+                        value = 0
+                        for k in range(order):
+                            value += h**(k - j) * (F(derivative(basis[k], j, c)) * q0[k * n + i] +
+                                                   F(derivative(basis[order + k], j, c)) * q1[k * n + i])
+                        for jj in range(m_in):
+                            value += h**(-j) * F(derivative(basis[2 * order + jj], j, c)) * self.z[jj * n + i]
+                        jet.append(value)
+                    jets.append(jet)
+                stages.append((F(w), t0 + F(c) * (t1 - t0), jets))
+            # Starting values: the Hermite interpolant of degree 2 order - 1 of the nodes' jets.
+            hermite_rows = [row(k, 0)[:2 * order] for k in range(order)] + [row(k, 1)[:2 * order] for k in range(order)]
+            hermite = mpmath.inverse(mpmath.matrix(hermite_rows))
+            self.z_start = []
+            for c in fractions:
+                for i in range(n):
+                    value = 0
+                    for k in range(order):
+                        a = sum((hermite[e, k] * mpmath.mpf(c) ** e for e in range(2 * order)), mpmath.mpf(0))
+                        b = sum((hermite[e, order + k] * mpmath.mpf(c) ** e for e in range(2 * order)), mpmath.mpf(0))
+                        value += h**k * (F(a) * q0[k * n + i] + F(b) * q1[k * n + i])
+                    self.z_start.append(value)
+            # z_start is ordered like z (fraction by fraction, coordinate by coordinate).
+        return stages
 
     def _lagrangian_at(self, t, jets):
         repl = {self.model.time: t}
@@ -438,7 +518,8 @@ class ReferenceKernels:
         self._z = z
         self._nodes = [_Node(e, z, lets, inputs) for _, e in model.lets]
         self._nodes.append(_Node(model.lagrangian, z, lets, inputs))
-        qs = dl.q0 + dl.q1
+        qs = dl.q0 + dl.z + dl.q1
+        self._z_start_fn = sympy.lambdify([dl.h] + dl.q0 + dl.q1, dl.z_start, modules="mpmath") if dl.z else None
         self._stage_fns = []
         for w, t, jets in dl.stages:
             flat_jet = [jets[i][k] for i in range(len(model.coords)) for k in range(model.order + 1)]
@@ -493,30 +574,56 @@ class ReferenceKernels:
             hessians.append(hmat)
         return letvals[-1], grads[-1], hessians[-1]
 
+    def _interval(self, hh, tt0, tt1, xv, pv):
+        """The action over one interval, its gradient and Hessian in x = [q0, z, q1]."""
+        nx = len(xv)
+        ld = mpmath.mpf(0)
+        grad = [mpmath.mpf(0)] * nx
+        hess = [[mpmath.mpf(0)] * nx for _ in range(nx)]
+        for w, fn in self._stage_fns:
+            t, zval, jac = fn(hh, tt0, tt1, *xv)
+            value, g, hz = self._lagrangian_jet(t, pv, zval)
+            c = hh * w
+            ld += c * value
+            nz = len(zval)
+            for a in range(nx):
+                grad[a] += c * sum(jac[j][a] * g[j] for j in range(nz))
+                ha = [sum(jac[j][a] * hz[j][k] for j in range(nz)) for k in range(nz)]
+                for b in range(nx):
+                    hess[a][b] += c * sum(ha[k] * jac[k][b] for k in range(nz))
+        return ld, grad, hess
+
     def evaluate(self, h, t0, t1, q0, q1, params):
-        """Returns the dict {Ld, D1, D2, D11, D12, D22} of floats; raises ValueError if not real."""
+        """Returns the dict {Ld, D1, D2, D11, D12, D22} of floats; raises ValueError if not real.
+        With interior values z (Galerkin), Ld = S(z*) where dS/dz = 0, found by Newton's method from
+        the starting values, and the second derivatives are the Schur complements."""
         m = self.dim
         if len(q0) != m or len(q1) != m or len(params) != len(self.model.params):
             raise LagError("expected q0, q1 with %d values and %d params" % (m, len(self.model.params)))
         with mpmath.workdps(DECIMALS):
             mp = lambda xs: [mpmath.mpf(repr(float(x))) for x in xs]
             hh, tt0, tt1 = mp([h, t0, t1])
-            qv, pv = mp(list(q0) + list(q1)), mp(params)
-            ld = mpmath.mpf(0)
-            grad = [mpmath.mpf(0)] * (2 * m)
-            hess = [[mpmath.mpf(0)] * (2 * m) for _ in range(2 * m)]
+            q0v, q1v, pv = mp(q0), mp(q1), mp(params)
             try:
-                for w, fn in self._stage_fns:
-                    t, zval, jac = fn(hh, tt0, tt1, *qv)
-                    value, g, hz = self._lagrangian_jet(t, pv, zval)
-                    c = hh * w
-                    ld += c * value
-                    nz = len(zval)
-                    for a in range(2 * m):
-                        grad[a] += c * sum(jac[j][a] * g[j] for j in range(nz))
-                        ha = [sum(jac[j][a] * hz[j][k] for j in range(nz)) for k in range(nz)]
-                        for b in range(2 * m):
-                            hess[a][b] += c * sum(ha[k] * jac[k][b] for k in range(nz))
+                zv = list(self._z_start_fn(hh, *q0v, *q1v)) if self._z_start_fn else []
+                M = len(zv)
+                for _ in range(60 if M else 0):
+                    ld, g, H = self._interval(hh, tt0, tt1, q0v + zv + q1v, pv)
+                    step = mpmath.lu_solve(mpmath.matrix([[H[m + i][m + j] for j in range(M)] for i in range(M)]),
+                                           mpmath.matrix([g[m + i] for i in range(M)]))
+                    zv = [zv[i] - step[i] for i in range(M)]
+                    if max(abs(step[i]) for i in range(M)) < mpmath.mpf(10) ** (-DECIMALS + 8):
+                        break
+                ld, gx, hx = self._interval(hh, tt0, tt1, q0v + zv + q1v, pv)
+                nodes = list(range(m)) + list(range(m + M, 2 * m + M))
+                grad = [gx[a] for a in nodes]
+                hess = [[hx[a][b] for b in nodes] for a in nodes]
+                if M:
+                    hzz = mpmath.matrix([[hx[m + i][m + j] for j in range(M)] for i in range(M)])
+                    for col, b in enumerate(nodes):
+                        x = mpmath.lu_solve(hzz, mpmath.matrix([hx[m + i][b] for i in range(M)]))
+                        for r, a in enumerate(nodes):
+                            hess[r][col] -= sum(hx[a][m + i] * x[i] for i in range(M))
             except (ZeroDivisionError, ValueError) as exc:
                 raise ValueError("not defined at this point (%s)" % exc) from None
             flat = [ld] + grad + [x for row in hess for x in row]
