@@ -460,6 +460,9 @@ class DiscreteLagrangian:
 
     def outputs(self):
         """[Ld, D1 (dim), D2 (dim), D11, D12, D22 (dim x dim each, row-major)] by sympy.diff of Ld."""
+        if self.z:
+            raise LagError("discretization '%s' has interior values: its Ld has no closed form to differentiate "
+                           "(ReferenceKernels evaluates it)" % self.disc)
         ld = self.action()
         d1 = [sympy.diff(ld, s) for s in self.q0]
         d2 = [sympy.diff(ld, s) for s in self.q1]
