@@ -123,6 +123,18 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, boo
       et[static_cast<std::size_t>(m)] =
           (fine.t[static_cast<std::size_t>(m) * ratio] - coarse.t[static_cast<std::size_t>(m)]) / factor;
   }
+  // Below the round-off of the coordinates' values both solutions differ by rounding alone: such a
+  // difference does not resolve the error, which is reported as that level instead (not less).
+  bool at_roundoff = false;
+  for (int i = 0; i < nc; ++i) {
+    double size = 0;
+    for (int k = 0; k <= fine.N; ++k) size = std::max(size, std::fabs(fine.node(k)[i]));
+    const double level = 8 * std::numeric_limits<double>::epsilon() * size;
+    if (by_coordinate[static_cast<std::size_t>(i)] < level) {
+      by_coordinate[static_cast<std::size_t>(i)] = level;
+      at_roundoff = true;
+    }
+  }
   summary.error_estimate = *std::max_element(by_coordinate.begin(), by_coordinate.end());
   summary.error_by_coordinate = std::move(by_coordinate);
   summary.error_coarse_N = Nc;
@@ -132,6 +144,9 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, boo
                        std::to_string(fine.N) + " - x_" + std::to_string(Nc) + "| / (" + std::to_string(ratio) + "^" +
                        std::to_string(p) + " - 1), the solution on N = " + std::to_string(fine.N) +
                        " against that on every " + every + " node";
+  if (at_roundoff)
+    summary.error_note += "; below the round-off level of a coordinate (8 eps max|x|) the difference is rounding "
+                          "alone, and that level is reported instead";
   if (!extrapolate) return;
   // fine + e: at a common node its own e, elsewhere the cubic (fewer nodes on tiny grids) through
   // the four nearest common nodes, in the node index.

@@ -193,6 +193,24 @@ TEST(Galerkin, ErrorFallsFastWithSAtFixedN) {
   EXPECT_LT(previous, 1e-9);
 }
 
+// An order-16 discretization on a fine enough grid: both grids of the error estimate agree to
+// rounding, and the estimate reports the round-off level of the coordinates, not less.
+TEST(Galerkin, AnEstimateBelowRoundOffIsReportedAsRoundOff) {
+  pardel::Problem p = problem(galerkin_orbit_model, "galerkin_lobatto(s=8)", 0.3, 1.7, orbit);
+  p.N = 8;
+  pardel::Trajectory traj = pardel::linear_guess(p);
+  pardel::Options opt;
+  opt.method = pardel::Method::newton;
+  opt.rtol = 1e-13;
+  const pardel::Summary s = pardel::solve(p, opt, traj);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  double size = 0;
+  for (int k = 0; k <= p.N; ++k) size = std::max(size, std::fabs(traj.node(k)[0]));
+  EXPECT_GE(s.error_estimate, 8 * 2.220446049250313e-16 * size) << s.error_note;
+  EXPECT_NE(s.error_note.find("round-off"), std::string::npos) << s.error_note;
+  EXPECT_LT(max_error(p, 8, orbit), 1e-13);  // the true error is round-off too
+}
+
 // Jacobi-Newton (the seed's method) sees node blocks only: the same answer as Newton.
 TEST(Galerkin, JacobiNewtonSolvesTheCondensedSystem) {
   const pardel::Problem p = problem(galerkin_orbit_model, "galerkin_lobatto(s=3)", 0.3, 1.7, orbit);
