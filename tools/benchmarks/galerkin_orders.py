@@ -17,7 +17,6 @@ docs/discretizations.md.
   /usr/bin/python3 tools/benchmarks/galerkin_orders.py --reuse
 """
 import argparse
-import csv
 import math
 import os
 import sys
@@ -25,6 +24,9 @@ import sys
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from measured_rows import measured_or_reused  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MODELS = os.path.join(ROOT, "tools", "benchmarks", "models")
@@ -135,16 +137,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--reuse", action="store_true", help="tables and chart from the CSV")
     args = parser.parse_args()
-    if args.reuse:
-        with open(CSV) as f:
-            rows = list(csv.DictReader(f))
-    else:
-        rows = measure()
-        os.makedirs(IMAGES, exist_ok=True)
-        with open(CSV, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+    rows = measured_or_reused(CSV, measure, args.reuse)
     report(rows)
     chart(rows, os.path.join(IMAGES, "galerkin_orders.png"))
     return 0

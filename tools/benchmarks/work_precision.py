@@ -19,7 +19,6 @@ Writes docs/images/work_precision.csv and .png and prints one table per problem.
   /usr/bin/python3 tools/benchmarks/work_precision.py --reuse     # table and chart from the CSV
 """
 import argparse
-import csv
 import math
 import os
 import sys
@@ -28,6 +27,9 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from measured_rows import measured_or_reused  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MODELS = os.path.join(ROOT, "tools", "benchmarks", "models")
@@ -42,16 +44,6 @@ def kepler_exact(t):
     for _ in range(60):
         E = E - (E - e * np.sin(E) - t) / (1 - e * np.cos(E))
     return np.stack([np.cos(E) - e, math.sqrt(1 - e * e) * np.sin(E)], axis=-1)
-
-
-def kepler_velocity(t):
-    e = 0.3
-    t = np.asarray(t, dtype=float)
-    E = t.copy()
-    for _ in range(60):
-        E = E - (E - e * np.sin(E) - t) / (1 - e * np.cos(E))
-    dE = 1 / (1 - e * np.cos(E))
-    return np.stack([-np.sin(E) * dE, math.sqrt(1 - e * e) * np.cos(E) * dE], axis=-1)
 
 
 EPS = 1e-4
@@ -222,20 +214,13 @@ def main():
     parser.add_argument("--max-n", type=int, default=1 << 16)
     parser.add_argument("--problems", default="kepler,layer,driven,beam")
     args = parser.parse_args()
-    if args.reuse:
-        with open(CSV) as f:
-            rows = list(csv.DictReader(f))
-    else:
-        rows = []
-        probs = problems()
+    def measure():
+        rows, probs = [], problems()
         for name in args.problems.split(","):
             rows += run_pardel(name, probs[name], args.repeat, args.max_n)
             rows += run_scipy(name, probs[name], args.repeat)
-        os.makedirs(IMAGES, exist_ok=True)
-        with open(CSV, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+        return rows
+    rows = measured_or_reused(CSV, measure, args.reuse)
     table(rows)
     chart(rows, os.path.join(IMAGES, "work_precision.png"))
     return 0
