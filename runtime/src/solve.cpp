@@ -367,6 +367,12 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
   Trajectory level;
   Summary summary = solve_attempts(problem, requested, trajectory, &level);
   estimate_error(problem, requested, level, trajectory, summary);
+  // Richardson's rule assumes an error C h^p with C independent of h; along the soft direction of
+  // a nearly degenerate minimum the solutions of different grids move by more than that.
+  if (std::isfinite(summary.error_estimate) && summary.point.nearly_degenerate)
+    summary.error_note +=
+        "; caution: the point is a nearly degenerate minimum, whose trajectory is loosely determined, and the "
+        "estimate can be far below the error";
   return summary;
 }
 
