@@ -150,9 +150,9 @@ std::vector<std::string> newton_shift_names();
 /** Iterative refinement of a converged solution with the DEL residual evaluated in extended
  *  precision (Options::iterative_refinement; docs/solvers.md, "Iterative refinement"). */
 enum class Refinement {
-  automatic,  ///< "auto": computes the first correction wherever the discretization has the extended
-              ///< kernel, and applies the refinement only when that correction is above the
-              ///< rounding of the nodes (1000 eps max|q|): round-off of the double residual matters
+  automatic,  ///< "auto": for models of order >= 2 whose discretization has the extended kernel,
+              ///< computes the first correction and refines only when it is above the rounding of
+              ///< the nodes (1000 eps max|q|): round-off of the double residual matters
   on,         ///< refine wherever the extended kernel exists, whatever the first correction
   off         ///< never
 };
