@@ -33,13 +33,20 @@ double hermite_derivative(double u, double y0, double y1, double m0, double m1) 
   return (6 * u2 - 6 * u) * y0 + (3 * u2 - 4 * u + 1) * m0 + (-6 * u2 + 6 * u) * y1 + (3 * u2 - 2 * u) * m1;
 }
 
+/** Node k's fraction of the way along the grid: k/N on a uniform grid (exactly, so that uniform
+ *  guesses do not depend on the rounding of the node times), the time's fraction on a given one. */
+double path_fraction(const Problem& problem, const Trajectory& tr, int k, int N) {
+  if (problem.times.empty()) return static_cast<double>(k) / N;
+  return (tr.t[static_cast<std::size_t>(k)] - tr.t.front()) / (tr.t.back() - tr.t.front());
+}
+
 }  // namespace
 
 Trajectory linear_guess(const Problem& problem) {
   Trajectory tr = empty_for(problem, problem.N);
   const int d = tr.dim, N = problem.N;
   for (int k = 0; k <= N; ++k) {
-    const double s = (tr.t[static_cast<std::size_t>(k)] - tr.t.front()) / (tr.t.back() - tr.t.front());
+    const double s = path_fraction(problem, tr, k, N);
     for (int i = 0; i < d; ++i)
       tr.node(k)[i] = (1 - s) * problem.q0[static_cast<std::size_t>(i)] + s * problem.qN[static_cast<std::size_t>(i)];
   }
@@ -56,7 +63,7 @@ Trajectory polyline_guess(const Problem& problem, const std::vector<std::vector<
   P.back().assign(problem.qN.begin(), problem.qN.begin() + nc);
   const int segments = static_cast<int>(P.size()) - 1;
   for (int k = 0; k <= N; ++k) {
-    const double u = (tr.t[static_cast<std::size_t>(k)] - tr.t.front()) / (tr.t.back() - tr.t.front()) * segments;
+    const double u = path_fraction(problem, tr, k, N) * segments;
     const int j = std::min(segments - 1, static_cast<int>(std::floor(u)));
     const double w = u - j;
     double* q = tr.node(k);
