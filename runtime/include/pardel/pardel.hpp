@@ -416,6 +416,49 @@ PointAssessment assess_point(const Problem& problem, const Trajectory& trajector
 /** Checks a problem and a trajectory for it; on failure writes a message naming the field. */
 bool validate(const Problem& problem, const Trajectory& trajectory, std::string* error);
 
+// ---------------------------------------------------------------------------------------------
+// Batches: many independent problems at once
+
+/** One problem of a batch: what differs from solve_batch's base problem (an empty member: the base's). */
+struct BatchProblem {
+  std::vector<double> q0;      ///< dim values (empty: the base problem's)
+  std::vector<double> qN;      ///< dim values (empty: the base problem's)
+  std::vector<double> params;  ///< nparams values (empty: the base problem's)
+  Trajectory guess;            ///< the initial guess, as solve() takes it (N = 0: linear_guess of the problem)
+};
+
+/** What solve() returned for one problem of a batch. */
+struct BatchEntry {
+  Summary summary;
+  Trajectory trajectory;  ///< solve()'s trajectory (N = 0 where the problem was never started)
+};
+
+struct BatchSummary {
+  std::vector<BatchEntry> entries;  ///< one per problem, in the order given
+  /** Non-empty when the whole batch was refused before anything was solved (its estimated memory
+   *  does not fit the machine, or options solve_batch does not take); every entry then ends
+   *  invalid_input with this message. */
+  std::string refusal;
+  int threads = 1;          ///< problems solved at once
+  double wall_seconds = 0;
+  long converged = 0;       ///< entries that converged
+};
+
+/**
+ * Solves many independent problems that differ from `base` in their boundary values, params or
+ * initial guesses, each by solve() with `options` but one thread, Options::threads of them at once
+ * (0: all cores; OpenMP, dynamic schedule over the problems). Every entry is what solve() returns
+ * for that problem with Options::threads = 1, bit for bit, whatever the number of threads. A
+ * problem with bad input ends invalid_input alone; the others are solved. Before anything is
+ * allocated the batch's memory (the peak of the solves running at once, estimate_solve_memory, and
+ * the trajectories returned) is checked against the machine (memory_refusal). Options::keep_going
+ * is the batch's stop: it is polled from every thread (it must be safe to call concurrently) after
+ * each recorded iteration of each solve and before each problem; once it returns false the running
+ * solves end interrupted and the problems not started end interrupted with N = 0.
+ * Options::on_iteration is not called, and resume_from is refused.
+ */
+BatchSummary solve_batch(const Problem& base, const Options& options, const std::vector<BatchProblem>& problems);
+
 }  // namespace pardel
 
 #endif  // PARDEL_PARDEL_HPP
