@@ -795,6 +795,8 @@ py::dict scene_info(const Scene& s) {
 
 PYBIND11_MODULE(_pardel, m) {
   m.doc() = "pardel's compiled core: models, scenes and solves (use the package `pardel`)";
+  // project(pardel VERSION ...) of the top-level CMakeLists.txt, as `pardel --version` says it.
+  m.attr("__version__") = PARDEL_VERSION;
 
   static py::exception<InputError> input_error(m, "PardelError", PyExc_ValueError);
   static py::exception<SceneError> scene_error(m, "SceneError", input_error.ptr());

@@ -5,6 +5,7 @@ pkgs=(build-essential cmake ninja-build pkg-config
       libginac-dev libcln-dev libeigen3-dev libomp-dev
       python3 python3-jinja2 python3-matplotlib python3-numpy python3-sympy
       python3-dev pybind11-dev python3-pybind11 python3-pytest
+      python3-venv python3-setuptools python3-wheel
       libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libfmt-dev libssl-dev
       libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev
       libopenmpi-dev openmpi-bin clang-14 libclang-rt-14-dev)

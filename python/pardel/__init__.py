@@ -31,8 +31,13 @@ if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
 from . import _pardel  # noqa: E402
 from ._pardel import ModelError, ModelWarning, PardelError, SceneError  # noqa: E402
 
+# The version of project(pardel VERSION ...) in the top-level CMakeLists.txt, compiled into the core
+# (also what `pardel --version` prints and what pip records for the package).
+__version__ = _pardel.__version__
+
 # An installed package compiles .lag files with the installed pardel-gen and render script, which
-# `cmake --install` names in _installed.py; the build tree's package uses the build tree's.
+# _installed.py names (written by `cmake --install`, or by setup.py for `pip install`: then the
+# package's own copies beside it); the build tree's package uses the build tree's.
 try:
     from ._installed import LOADER_TOOLCHAIN as _INSTALLED_TOOLCHAIN
 except ImportError:

@@ -541,6 +541,8 @@ int main(int argc, char** argv) {
   const pardel::mpi::Session mpi_session(&argc, &argv);
   CLI::App app{"pardel: solve the boundary-value problems of variational integrators"};
   app.footer(kExitCodesHelp);
+  app.set_version_flag("--version", std::string("pardel ") + pardel::cli::config::version,
+                       "Print pardel's version and exit");
   app.require_subcommand(1);
 
   bool models_json = false;
