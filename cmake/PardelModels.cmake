@@ -20,6 +20,11 @@
 # to its installed copies before including this file.
 include_guard(GLOBAL)
 
+# Whether the C++ compiler finds quadmath.h: the generated kernels then use __float128 and
+# libquadmath for their extended-precision kernels (GCC), and long double otherwise (clang).
+include(CheckIncludeFileCXX)
+check_include_file_cxx(quadmath.h PARDEL_HAVE_QUADMATH_H)
+
 if(TARGET pardel-gen AND NOT TARGET pardel::pardel-gen)
   add_executable(pardel::pardel-gen ALIAS pardel-gen)
 endif()
@@ -91,6 +96,11 @@ function(pardel_add_model target lag)
   target_sources(${target} PRIVATE "${out_dir}/${model}.cpp")
   target_include_directories(${target} PUBLIC "$<BUILD_INTERFACE:${out_dir}>")
   target_link_libraries(${target} PUBLIC pardel::kernel_abi)
+  # The extended-precision kernels (grad_extended) call libquadmath (sinq, ...) where the compiler
+  # finds quadmath.h (GCC); elsewhere they compute in long double and need no library.
+  if(PARDEL_HAVE_QUADMATH_H)
+    target_link_libraries(${target} PUBLIC quadmath)
+  endif()
   if(NOT _arg_KERNELS_ONLY)
     target_link_libraries(${target} PUBLIC pardel::runtime)
   endif()

@@ -20,6 +20,8 @@ void bratu_trapezoid_sweep(double h, double t0, double t1, const double* q0, con
 void bratu_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double bratu_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void bratu_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* midpoint */
 void bratu_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -29,6 +31,8 @@ void bratu_midpoint_sweep(double h, double t0, double t1, const double* q0, cons
 void bratu_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double bratu_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void bratu_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 #ifdef __cplusplus
 }

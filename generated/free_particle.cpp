@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 // ---- trapezoid (consistency order 2)
 
 // full: 15 operations (31 before CSE)
@@ -86,6 +122,31 @@ extern "C" double free_particle_trapezoid_action(double h, double t0, double t1,
   const double pd_t0002 = 1.0/(h*h);
   const double pd_t0003 = q0[0] - q1[0];
   return h*0.5*(pd_t0001*pd_t0001*pd_t0002 + pd_t0003*pd_t0003*pd_t0002);
+}
+
+// grad_extended: the grad kernel in pd_quad, 13 operations; outputs as double-double pairs
+extern "C" void free_particle_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = (q0[0] - q1[0])/h;
+  const pd_quad pd_t0002 = h/(q0[1] - q1[1]);
+  const pd_quad pd_t0003 = 1.0/pd_t0002;
+  Ld[0] = h*0.5*(pd_t0001*pd_t0001 + 1.0/(pd_t0002*pd_t0002));
+  D1[0] = pd_t0001;
+  D1[1] = pd_t0003;
+  D2[0] = -pd_t0001;
+  D2[1] = -pd_t0003;
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
 }
 
 // ---- midpoint (consistency order 2)
@@ -171,13 +232,38 @@ extern "C" double free_particle_midpoint_action(double h, double t0, double t1, 
   return h*0.5*(pd_t0001*pd_t0001*pd_t0002 + pd_t0003*pd_t0003*pd_t0002);
 }
 
+// grad_extended: the grad kernel in pd_quad, 13 operations; outputs as double-double pairs
+extern "C" void free_particle_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = (q0[0] - q1[0])/h;
+  const pd_quad pd_t0002 = h/(q0[1] - q1[1]);
+  const pd_quad pd_t0003 = 1.0/pd_t0002;
+  Ld[0] = h*0.5*(pd_t0001*pd_t0001 + 1.0/(pd_t0002*pd_t0002));
+  D1[0] = pd_t0001;
+  D1[1] = pd_t0003;
+  D2[0] = -pd_t0001;
+  D2[1] = -pd_t0003;
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 static const char* const free_particle_coords[] = {
     "x",
     "y",
 };
 static const pardel_discretization free_particle_discretizations[] = {
-    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action},
-    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action},
+    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action, free_particle_trapezoid_grad_extended},
+    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action, free_particle_midpoint_grad_extended},
 };
 
 extern "C" const pardel_model free_particle_model = {

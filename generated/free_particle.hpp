@@ -20,6 +20,8 @@ void free_particle_trapezoid_sweep(double h, double t0, double t1, const double*
 void free_particle_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double free_particle_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void free_particle_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* midpoint */
 void free_particle_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -29,6 +31,8 @@ void free_particle_midpoint_sweep(double h, double t0, double t1, const double* 
 void free_particle_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double free_particle_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void free_particle_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 #ifdef __cplusplus
 }

@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 // ---- trapezoid (consistency order 2)
 
 // full: 154 operations (593 before CSE)
@@ -161,6 +197,44 @@ extern "C" double fuel_nav_trapezoid_action(double h, double t0, double t1, cons
   return h*0.027777777777777776*(pd_t0003*pd_t0003 + pd_t0004*pd_t0004 + 9.0*(pd_t0006*pd_t0006 + pd_t0007*pd_t0007));
 }
 
+// grad_extended: the grad kernel in pd_quad, 84 operations; outputs as double-double pairs
+extern "C" void fuel_nav_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = 1.0/h;
+  const pd_quad pd_t0002 = (q0[1] - q1[1])*pd_t0001;
+  const pd_quad pd_t0003 = 2.0*(sinq(q1[1]) + pd_t0002*1.5 + q1[0]*1.5);
+  const pd_quad pd_t0004 = pd_t0003 - 9.0;
+  const pd_quad pd_t0005 = q0[0] + pd_t0002 + sinq(q0[1])*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33));
+  const pd_quad pd_t0006 = pd_t0005*3.0 - 9.0;
+  const pd_quad pd_t0007 = (q0[0] - q1[0])*pd_t0001;
+  const pd_quad pd_t0008 = q0[0]*2.0 - (q0[1] + 6.0);
+  const pd_quad pd_t0009 = pd_t0007 + cosq(pd_t0008);
+  const pd_quad pd_t0010 = q1[0]*2.0 - (6.0 + q1[1]);
+  const pd_quad pd_t0011 = pd_t0007 + cosq(pd_t0010);
+  const pd_quad pd_t0012 = h*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34));
+  const pd_quad pd_t0013 = sinq(pd_t0008);
+  const pd_quad pd_t0014 = h*((pd_quad(0.055555555555555552) + 3.0839528461809902e-18 + 1.6851887013388314e-34));
+  const pd_quad pd_t0015 = 3.0*pd_t0001;
+  const pd_quad pd_t0016 = sinq(pd_t0010);
+  Ld[0] = h*((pd_quad(0.027777777777777776) + 1.5419764230904951e-18 + 8.4259435066941569e-35))*(pd_t0004*pd_t0004 + pd_t0006*pd_t0006 + 9.0*(pd_t0009*pd_t0009 + pd_t0011*pd_t0011));
+  D1[0] = pd_t0012*(3.0*(pd_t0011*pd_t0001 + (pd_t0005 + pd_t0009*(pd_t0001 - 2.0*pd_t0013))) - 9.0);
+  D1[1] = pd_t0014*(9.0*(pd_t0009*pd_t0013) + (pd_t0006*(2.0*cosq(q0[1]) + pd_t0015) + 3.0*(pd_t0004*pd_t0001)));
+  D2[0] = -(pd_t0012*(9.0 + 3.0*(pd_t0009*pd_t0001 + pd_t0011*(pd_t0001 + 2.0*pd_t0016)) - pd_t0003));
+  D2[1] = pd_t0014*(9.0*(pd_t0011*pd_t0016) - pd_t0004*(pd_t0015 - 2.0*cosq(q1[1])) - 3.0*(pd_t0006*pd_t0001));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 // ---- midpoint (consistency order 2)
 
 // full: 115 operations (756 before CSE)
@@ -306,13 +380,48 @@ extern "C" double fuel_nav_midpoint_action(double h, double t0, double t1, const
   return h*0.013888888888888888*(pd_t0004*pd_t0004 + pd_t0005*pd_t0005*36.0);
 }
 
+// grad_extended: the grad kernel in pd_quad, 53 operations; outputs as double-double pairs
+extern "C" void fuel_nav_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = q0[0] + q1[0];
+  const pd_quad pd_t0002 = (q0[1] + q1[1])*0.5;
+  const pd_quad pd_t0003 = 1.0/h;
+  const pd_quad pd_t0004 = (pd_t0001 + (sinq(pd_t0002) + (q0[1] - q1[1])*pd_t0003*1.5)*((pd_quad(1.3333333333333333) + 7.4014868308343765e-17 + 4.0444528832131953e-33)))*3.0;
+  const pd_quad pd_t0005 = pd_t0004 - 18.0;
+  const pd_quad pd_t0006 = pd_t0001 - 6.0 - pd_t0002;
+  const pd_quad pd_t0007 = (q0[0] - q1[0])*pd_t0003 + cosq(pd_t0006);
+  const pd_quad pd_t0008 = h*((pd_quad(0.083333333333333329) + 4.6259292692714853e-18 + 2.5277830520082471e-34));
+  const pd_quad pd_t0009 = sinq(pd_t0006);
+  const pd_quad pd_t0010 = h*((pd_quad(0.055555555555555552) + 3.0839528461809902e-18 + 1.6851887013388314e-34));
+  const pd_quad pd_t0011 = cosq(pd_t0002);
+  const pd_quad pd_t0012 = 3.0*pd_t0003;
+  const pd_quad pd_t0013 = pd_t0007*pd_t0009*9.0;
+  Ld[0] = h*((pd_quad(0.013888888888888888) + 7.7098821154524755e-19 + 4.2129717533470784e-35))*(pd_t0005*pd_t0005 + pd_t0007*pd_t0007*36.0);
+  D1[0] = pd_t0008*(pd_t0004 + pd_t0007*(pd_t0003 - pd_t0009)*12.0 - 18.0);
+  D1[1] = pd_t0010*(pd_t0005*(pd_t0011 + pd_t0012) + pd_t0013);
+  D2[0] = -(pd_t0008*(18.0 + 12.0*(pd_t0007*(pd_t0003 + pd_t0009)) - pd_t0004));
+  D2[1] = pd_t0010*(pd_t0013 - pd_t0005*(pd_t0012 - pd_t0011));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 static const char* const fuel_nav_coords[] = {
     "x",
     "y",
 };
 static const pardel_discretization fuel_nav_discretizations[] = {
-    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action},
-    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action},
+    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action, fuel_nav_trapezoid_grad_extended},
+    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action, fuel_nav_midpoint_grad_extended},
 };
 
 extern "C" const pardel_model fuel_nav_model = {

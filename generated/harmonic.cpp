@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 #include "pardel/condensation.hpp"
 
 // ---- trapezoid (consistency order 2)
@@ -67,6 +103,32 @@ extern "C" double harmonic_trapezoid_action(double h, double t0, double t1, cons
   const double pd_t0001 = p[0]*p[0];
   const double pd_t0002 = q0[0] - q1[0];
   return -(h*0.25*(pd_t0001*(q1[0]*q1[0]) + pd_t0001*(q0[0]*q0[0]) - pd_t0002*pd_t0002/(h*h)*2.0));
+}
+
+// grad_extended: the grad kernel in pd_quad, 26 operations; outputs as double-double pairs
+extern "C" void harmonic_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  const pd_quad h = h_in;
+  pd_quad q0[1];
+  for (int i = 0; i < 1; ++i) q0[i] = q0_in[i];
+  pd_quad q1[1];
+  for (int i = 0; i < 1; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[1], D2[1];
+  const pd_quad pd_t0001 = p[0]*p[0];
+  const pd_quad pd_t0002 = q0[0] - q1[0];
+  const pd_quad pd_t0003 = 1.0/(h*h);
+  const pd_quad pd_t0004 = h*0.5;
+  const pd_quad pd_t0005 = 2.0*(pd_t0002*pd_t0003);
+  Ld[0] = -(h*0.25*(pd_t0001*(q1[0]*q1[0]) + pd_t0001*(q0[0]*q0[0]) - pd_t0002*pd_t0002*pd_t0003*2.0));
+  D1[0] = pd_t0004*(pd_t0005 - pd_t0001*q0[0]);
+  D2[0] = -(pd_t0004*(pd_t0005 + pd_t0001*q1[0]));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 1);
+  pd_split(D2, D2_out, 1);
 }
 
 // ---- midpoint (consistency order 2)
@@ -135,6 +197,34 @@ extern "C" double harmonic_midpoint_action(double h, double t0, double t1, const
   const double pd_t0001 = q0[0] + q1[0];
   const double pd_t0002 = q0[0] - q1[0];
   return -(h*0.125*(p[0]*p[0]*(pd_t0001*pd_t0001) - pd_t0002*pd_t0002/(h*h)*4.0));
+}
+
+// grad_extended: the grad kernel in pd_quad, 23 operations; outputs as double-double pairs
+extern "C" void harmonic_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  const pd_quad h = h_in;
+  pd_quad q0[1];
+  for (int i = 0; i < 1; ++i) q0[i] = q0_in[i];
+  pd_quad q1[1];
+  for (int i = 0; i < 1; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[1], D2[1];
+  const pd_quad pd_t0001 = p[0]*p[0];
+  const pd_quad pd_t0002 = q0[0] + q1[0];
+  const pd_quad pd_t0003 = q0[0] - q1[0];
+  const pd_quad pd_t0004 = 1.0/(h*h);
+  const pd_quad pd_t0005 = h*0.25;
+  const pd_quad pd_t0006 = 4.0*(pd_t0003*pd_t0004);
+  const pd_quad pd_t0007 = pd_t0001*pd_t0002;
+  Ld[0] = -(h*0.125*(pd_t0001*(pd_t0002*pd_t0002) - pd_t0003*pd_t0003*pd_t0004*4.0));
+  D1[0] = pd_t0005*(pd_t0006 - pd_t0007);
+  D2[0] = -(pd_t0005*(pd_t0007 + pd_t0006));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 1);
+  pd_split(D2, D2_out, 1);
 }
 
 // ---- galerkin_lobatto(s=2) (consistency order 4)
@@ -476,10 +566,10 @@ static const double harmonic_param_defaults[] = {
     1.0,
 };
 static const pardel_discretization harmonic_discretizations[] = {
-    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action},
-    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action},
-    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action},
-    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action},
+    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, harmonic_trapezoid_grad_extended},
+    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, harmonic_midpoint_grad_extended},
+    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, nullptr},
+    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, nullptr},
 };
 
 extern "C" const pardel_model harmonic_model = {

@@ -20,6 +20,8 @@ void harmonic_trapezoid_sweep(double h, double t0, double t1, const double* q0, 
 void harmonic_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double harmonic_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void harmonic_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* midpoint */
 void harmonic_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -29,6 +31,8 @@ void harmonic_midpoint_sweep(double h, double t0, double t1, const double* q0, c
 void harmonic_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double harmonic_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void harmonic_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* galerkin_lobatto(s=2) */
 void harmonic_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,

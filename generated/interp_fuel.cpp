@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 // ---- trapezoid(alpha=1) (consistency order 2)
 
 // full: 508 operations (3362 before CSE)
@@ -383,6 +419,72 @@ extern "C" double interp_fuel_trapezoid_alpha_1_action(double h, double t0, doub
   const double pd_t0016 = q0[2] - std::cos(pd_t0011);
   const double pd_t0017 = q1[2] - std::cos(pd_t0005);
   return h*0.027777777777777776*(p[0]*(pd_t0004*pd_t0004 + 9.0*(pd_t0008*pd_t0008)) + (p[0]*(pd_t0010*pd_t0010 + 9.0*(pd_t0013*pd_t0013)) + (pd_t0014*pd_t0014 + pd_t0015*pd_t0015)) + 9.0*(pd_t0016*pd_t0016 + pd_t0017*pd_t0017));
+}
+
+// grad_extended: the grad kernel in pd_quad, 224 operations; outputs as double-double pairs
+extern "C" void interp_fuel_trapezoid_alpha_1_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  const pd_quad h = h_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[4], D2[4];
+  const pd_quad pd_t0001 = sinq(q0[1]);
+  const pd_quad pd_t0002 = q0[3] - q0[0] - pd_t0001*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33));
+  const pd_quad pd_t0003 = 9.0 + 3.0*pd_t0002;
+  const pd_quad pd_t0004 = sinq(q1[1]);
+  const pd_quad pd_t0005 = pd_t0004 - 1.5*q1[3] + 1.5*q1[0];
+  const pd_quad pd_t0006 = 2.0*pd_t0005;
+  const pd_quad pd_t0007 = pd_t0006 - 9.0;
+  const pd_quad pd_t0008 = cosq(q0[1]);
+  const pd_quad pd_t0009 = (q0[1] - q1[1])*3.0;
+  const pd_quad pd_t0010 = 1.0/(h*h);
+  const pd_quad pd_t0011 = 2.0*(q0[3]*pd_t0008 + q0[2]*1.5 + 3.0*((h*(q1[3] + q0[3]*2.0) + pd_t0009)*pd_t0010));
+  const pd_quad pd_t0012 = 2.0*q0[0] - (q0[1] + 6.0);
+  const pd_quad pd_t0013 = sinq(pd_t0012);
+  const pd_quad pd_t0014 = q0[2]*2.0;
+  const pd_quad pd_t0015 = 3.0*(q0[0] - q1[0]);
+  const pd_quad pd_t0016 = q0[3]*pd_t0013 + 2.0*((h*(q1[2] + pd_t0014) + pd_t0015)*pd_t0010 - q0[2]*pd_t0013);
+  const pd_quad pd_t0017 = cosq(q1[1]);
+  const pd_quad pd_t0018 = (pd_t0009 + h*(q0[3] + q1[3]*2.0))*pd_t0010 - (q1[3]*pd_t0017 + 1.5*q1[2])*((pd_quad(0.33333333333333331) + 1.8503717077085941e-17 + 1.0111132208032988e-33));
+  const pd_quad pd_t0019 = 6.0*pd_t0018;
+  const pd_quad pd_t0020 = 2.0*q1[0] - (q1[1] + 6.0);
+  const pd_quad pd_t0021 = sinq(pd_t0020);
+  const pd_quad pd_t0022 = q1[3]*pd_t0021 - 2.0*((pd_t0015 + h*(q0[2] + 2.0*q1[2]))*pd_t0010 + q1[2]*pd_t0021);
+  const pd_quad pd_t0023 = cosq(pd_t0012);
+  const pd_quad pd_t0024 = q0[2] - pd_t0023;
+  const pd_quad pd_t0025 = cosq(pd_t0020);
+  const pd_quad pd_t0026 = q1[2] - pd_t0025;
+  const pd_quad pd_t0027 = h*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34));
+  const pd_quad pd_t0028 = p[0]*pd_t0010;
+  const pd_quad pd_t0029 = q0[3]*pd_t0023 - pd_t0014*pd_t0023;
+  const pd_quad pd_t0030 = 3.0*pd_t0010;
+  const pd_quad pd_t0031 = pd_t0013*pd_t0024;
+  const pd_quad pd_t0032 = h*((pd_quad(0.055555555555555552) + 3.0839528461809902e-18 + 1.6851887013388314e-34));
+  const pd_quad pd_t0033 = 9.0*pd_t0010;
+  const pd_quad pd_t0034 = 1.0/h;
+  const pd_quad pd_t0035 = 2.0*pd_t0034;
+  const pd_quad pd_t0036 = p[0]*pd_t0034;
+  const pd_quad pd_t0037 = 6.0*pd_t0034;
+  const pd_quad pd_t0038 = 2.0*(q1[2]*pd_t0025 - pd_t0025*(q1[3]*0.5));
+  const pd_quad pd_t0039 = pd_t0021*pd_t0026;
+  Ld[0] = h*((pd_quad(0.027777777777777776) + 1.5419764230904951e-18 + 8.4259435066941569e-35))*(pd_t0003*pd_t0003 + (pd_t0007*pd_t0007 + (p[0]*(pd_t0011*pd_t0011 + pd_t0016*pd_t0016*9.0) + p[0]*(pd_t0019*pd_t0019 + 9.0*(pd_t0022*pd_t0022)))) + 9.0*(pd_t0024*pd_t0024 + pd_t0026*pd_t0026));
+  D1[0] = -(pd_t0027*(pd_t0003 + pd_t0022*pd_t0028*18.0 - 6.0*((pd_t0029 + pd_t0030)*(p[0]*pd_t0016) + pd_t0031)));
+  D1[1] = pd_t0032*(p[0]*(2.0*(pd_t0011*(pd_t0033 - q0[3]*pd_t0001)) - 9.0*(pd_t0016*pd_t0029)) + 18.0*(pd_t0019*pd_t0028) - 2.0*(pd_t0008*pd_t0003) - 9.0*pd_t0031);
+  D1[2] = pd_t0027*(p[0]*(pd_t0011 + 6.0*(pd_t0016*(pd_t0035 - pd_t0013))) + 3.0*pd_t0024 - 6.0*(pd_t0022*pd_t0036));
+  D1[3] = pd_t0032*(9.0*pd_t0002 + (p[0]*(2.0*(pd_t0011*(pd_t0008 + pd_t0037)) + 9.0*(pd_t0013*pd_t0016)) + 27.0 + 6.0*(pd_t0019*pd_t0036)));
+  D2[0] = -(pd_t0027*(9.0 + 18.0*(pd_t0016*pd_t0028) - pd_t0006 - 6.0*((pd_t0030 - pd_t0038)*(p[0]*pd_t0022) + pd_t0039)));
+  D2[1] = -(pd_t0032*(9.0*pd_t0039 + 18.0*(pd_t0011*pd_t0028) - p[0]*(2.0*(pd_t0019*(q1[3]*pd_t0004 - pd_t0033)) + 9.0*(pd_t0022*pd_t0038)) - 2.0*(pd_t0017*pd_t0007)));
+  D2[2] = pd_t0027*(3.0*pd_t0026 + 6.0*(pd_t0016*pd_t0036) - p[0]*(6.0*(pd_t0018 + pd_t0022*(pd_t0021 + pd_t0035))));
+  D2[3] = -(pd_t0032*(6.0*(pd_t0005 - pd_t0011*pd_t0036) - (27.0 + p[0]*(2.0*(pd_t0019*(pd_t0037 - pd_t0017)) + 9.0*(pd_t0021*pd_t0022)))));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
 }
 
 // ---- gauss2 (consistency order 4)
@@ -1153,6 +1255,128 @@ extern "C" double interp_fuel_gauss2_action(double h, double t0, double t1, cons
   return h*0.00019290123456790122*(36.0*(pd_t0013*pd_t0013 + pd_t0020*pd_t0020) + (pd_t0026*pd_t0026 + pd_t0027*pd_t0027 + (p[0]*(pd_t0033*pd_t0033 + pd_t0036*pd_t0036*9.0) + p[0]*(pd_t0038*pd_t0038 + 9.0*(pd_t0040*pd_t0040)))*4.0));
 }
 
+// grad_extended: the grad kernel in pd_quad, 462 operations; outputs as double-double pairs
+extern "C" void interp_fuel_gauss2_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  const pd_quad h = h_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[4], D2[4];
+  const pd_quad pd_t0001 = q0[0] - q1[0];
+  const pd_quad pd_t0002 = 1.0/h;
+  const pd_quad pd_t0003 = pd_t0001*pd_t0002;
+  const pd_quad pd_t0004 = (q1[2] - q0[2])*((pd_quad(0.28867513459481287) + 1.6725140369678172e-17 - 1.3000027124613842e-33));
+  const pd_quad pd_t0005 = pd_t0003 + pd_t0004;
+  const pd_quad pd_t0006 = h*q0[3];
+  const pd_quad pd_t0007 = h*((pd_quad(0.2679491924311227) + 1.0671460244446628e-17 - 4.8148248609680896e-35));
+  const pd_quad pd_t0008 = (q0[1] + q1[1]*((pd_quad(0.13007096530426773) - 9.518857921496074e-18 - 9.6296497219361793e-35)) + (pd_t0006 - q1[3]*pd_t0007)*((pd_quad(0.14854314511050556) + 1.3101237109124354e-17 - 7.7037197775489434e-34)))*((pd_quad(0.88490017945975052) - 1.4707246994600991e-17 + 1.3481509610710651e-33));
+  const pd_quad pd_t0009 = h*q0[2];
+  const pd_quad pd_t0010 = pd_t0009 - q1[2]*pd_t0007;
+  const pd_quad pd_t0011 = q0[0] + q1[0]*((pd_quad(0.13007096530426773) - 9.518857921496074e-18 - 9.6296497219361793e-35));
+  const pd_quad pd_t0012 = 6.0 + pd_t0008 - pd_t0010*((pd_quad(0.26289171153160429) + 5.5750467898927236e-18 + 9.6296497219361793e-35)) - pd_t0011*((pd_quad(1.769800358919501) - 2.9414493989201983e-17 + 2.6963019221421302e-33));
+  const pd_quad pd_t0013 = cosq(pd_t0012);
+  const pd_quad pd_t0014 = 6.0*(pd_t0005 + pd_t0013);
+  const pd_quad pd_t0015 = pd_t0003 - pd_t0004;
+  const pd_quad pd_t0016 = h*((pd_quad(3.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33));
+  const pd_quad pd_t0017 = (q0[1] + q1[1]*((pd_quad(7.6881108528775508) - 3.4625715678792908e-16 - 7.7037197775489434e-33)) + (pd_t0006 - q1[3]*pd_t0016)*((pd_quad(0.30600230943494899) - 2.5717407843501131e-17 - 1.1555579666323415e-33)))*((pd_quad(0.11509982054024949) + 8.2945918678653317e-19 - 3.6111186457260672e-35));
+  const pd_quad pd_t0018 = pd_t0009 - q1[2]*pd_t0016;
+  const pd_quad pd_t0019 = q0[0] + q1[0]*((pd_quad(7.6881108528775508) - 3.4625715678792908e-16 - 7.7037197775489434e-33));
+  const pd_quad pd_t0020 = 6.0 + pd_t0017 - pd_t0018*((pd_quad(0.07044162180172904) - 9.4911752062123809e-19 - 2.4074124304840448e-35)) - pd_t0019*((pd_quad(0.23019964108049898) + 1.6589183735730663e-18 - 7.2222372914521344e-35));
+  const pd_quad pd_t0021 = cosq(pd_t0020);
+  const pd_quad pd_t0022 = 6.0*(pd_t0015 + pd_t0021);
+  const pd_quad pd_t0023 = q0[3] - q1[3];
+  const pd_quad pd_t0024 = pd_t0023*((pd_quad(10.392304845413264) - 2.8607336639171109e-16 + 1.5407439555097887e-32));
+  const pd_quad pd_t0025 = sinq(pd_t0008);
+  const pd_quad pd_t0026 = q0[1] - q1[1];
+  const pd_quad pd_t0027 = pd_t0026*pd_t0002;
+  const pd_quad pd_t0028 = pd_t0027*36.0;
+  const pd_quad pd_t0029 = 108.0 + pd_t0024 - pd_t0010*((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32)) - pd_t0025*24.0 - pd_t0011*((pd_quad(31.856406460551018) + 8.0280673774455222e-16 - 1.2325951644078309e-32)) - pd_t0028;
+  const pd_quad pd_t0030 = sinq(pd_t0017);
+  const pd_quad pd_t0031 = 24.0*pd_t0030 + (pd_t0019*((pd_quad(4.1435935394489816) + 8.537168195557302e-17)) + (pd_t0018*((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33)) + (pd_t0024 + pd_t0028))) - 108.0;
+  const pd_quad pd_t0032 = 1.0/(h*h);
+  const pd_quad pd_t0033 = pd_t0026*pd_t0032*((pd_quad(62.353829072479584) - 1.7164401983502665e-15 + 9.2444637330587321e-32));
+  const pd_quad pd_t0034 = pd_t0023*((pd_quad(1.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33));
+  const pd_quad pd_t0035 = 6.0*pd_t0027;
+  const pd_quad pd_t0036 = pd_t0034 + pd_t0035;
+  const pd_quad pd_t0037 = cosq(pd_t0017);
+  const pd_quad pd_t0038 = pd_t0033 + (2.0*(pd_t0036*pd_t0037) + (pd_t0015 + (q0[3]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q1[3]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0002)*18.0);
+  const pd_quad pd_t0039 = sinq(pd_t0020);
+  const pd_quad pd_t0040 = 6.0*pd_t0015;
+  const pd_quad pd_t0041 = pd_t0001*pd_t0032*((pd_quad(20.784609690826528) - 5.7214673278342218e-16 + 3.0814879110195774e-32));
+  const pd_quad pd_t0042 = pd_t0039*pd_t0036 - pd_t0039*pd_t0040*2.0 - 6.0*((q0[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q1[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0002) - pd_t0041;
+  const pd_quad pd_t0043 = cosq(pd_t0008);
+  const pd_quad pd_t0044 = pd_t0034 - pd_t0035;
+  const pd_quad pd_t0045 = 18.0*((q1[3]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q0[3]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0002 - pd_t0005) + (pd_t0033 + 2.0*(pd_t0043*pd_t0044));
+  const pd_quad pd_t0046 = sinq(pd_t0012);
+  const pd_quad pd_t0047 = pd_t0005*6.0;
+  const pd_quad pd_t0048 = pd_t0041 + 6.0*((q1[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q0[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0002) - pd_t0044*pd_t0046 - 2.0*(pd_t0046*pd_t0047);
+  const pd_quad pd_t0049 = h*((pd_quad(0.0007716049382716049) + 4.283267841918042e-20 + 2.350988701644575e-36));
+  const pd_quad pd_t0050 = 9.0*pd_t0002;
+  const pd_quad pd_t0051 = pd_t0040*pd_t0021 - pd_t0036*pd_t0021*0.5;
+  const pd_quad pd_t0052 = ((pd_quad(4.1435935394489816) + 8.537168195557302e-17))*pd_t0051;
+  const pd_quad pd_t0053 = pd_t0032*((pd_quad(1.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33));
+  const pd_quad pd_t0054 = pd_t0039*pd_t0002;
+  const pd_quad pd_t0055 = 108.0*(pd_t0053 + pd_t0054);
+  const pd_quad pd_t0056 = 18.0*(pd_t0038*pd_t0002);
+  const pd_quad pd_t0057 = 18.0*(pd_t0045*pd_t0002);
+  const pd_quad pd_t0058 = pd_t0013*pd_t0044 + 2.0*(pd_t0013*pd_t0047);
+  const pd_quad pd_t0059 = ((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))*pd_t0058;
+  const pd_quad pd_t0060 = pd_t0046*pd_t0002;
+  const pd_quad pd_t0061 = 108.0*(pd_t0053 - pd_t0060);
+  const pd_quad pd_t0062 = h*((pd_quad(8.573388203017832e-05) + 6.2650228416943589e-21 - 3.1738347472201763e-37));
+  const pd_quad pd_t0063 = pd_t0032*((pd_quad(5.196152422706632) - 1.4303668319585554e-16 + 8.4740917553038378e-33));
+  const pd_quad pd_t0064 = 108.0*(pd_t0063 + pd_t0037*pd_t0002);
+  const pd_quad pd_t0065 = pd_t0036*pd_t0030;
+  const pd_quad pd_t0066 = 108.0*pd_t0054;
+  const pd_quad pd_t0067 = pd_t0025*pd_t0044;
+  const pd_quad pd_t0068 = 108.0*(pd_t0043*pd_t0002 - pd_t0063);
+  const pd_quad pd_t0069 = 108.0*pd_t0060;
+  const pd_quad pd_t0070 = pd_t0002*27.0;
+  const pd_quad pd_t0071 = pd_t0039*pd_t0022;
+  const pd_quad pd_t0072 = pd_t0014*pd_t0046;
+  const pd_quad pd_t0073 = h*((pd_quad(0.00038580246913580245) + 2.141633920959021e-20 + 1.1754943508222875e-36));
+  const pd_quad pd_t0074 = h*((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33));
+  const pd_quad pd_t0075 = h*((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32));
+  const pd_quad pd_t0076 = h*pd_t0013;
+  const pd_quad pd_t0077 = pd_t0047*pd_t0076 + 0.5*(pd_t0044*pd_t0076);
+  const pd_quad pd_t0078 = (pd_t0077 + pd_t0046*((pd_quad(6.5884572681198961) - 4.2911004958756663e-16 + 2.311115933264683e-32)))*((pd_quad(9.4641016151377553) - 6.8747673526398715e-16 - 2.7733391199176196e-32));
+  const pd_quad pd_t0079 = pd_t0002*((pd_quad(295.06148721743875) - 5.1493205950507992e-15 - 9.8607613152626476e-32));
+  const pd_quad pd_t0080 = ((pd_quad(10.392304845413264) - 2.8607336639171109e-16 + 1.5407439555097887e-32))*pd_t0045;
+  const pd_quad pd_t0081 = h*pd_t0021;
+  const pd_quad pd_t0082 = pd_t0036*pd_t0081 - 2.0*(pd_t0040*pd_t0081);
+  const pd_quad pd_t0083 = ((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*(pd_t0082 + pd_t0039*((pd_quad(49.176914536239792) - 8.5822009917513327e-16 + 4.3140830754274083e-32)));
+  const pd_quad pd_t0084 = pd_t0002*((pd_quad(79.061487217438753) - 5.1493205950507992e-15 - 1.1093356479670479e-31));
+  const pd_quad pd_t0085 = pd_t0038*((pd_quad(10.392304845413264) - 2.8607336639171109e-16 + 1.5407439555097887e-32));
+  const pd_quad pd_t0086 = h*((pd_quad(4.286694101508916e-05) + 3.1325114208471795e-21 - 1.5869173736100881e-37));
+  const pd_quad pd_t0087 = pd_t0022*(h*pd_t0039);
+  const pd_quad pd_t0088 = pd_t0037*((pd_quad(62.353829072479584) - 1.7164401983502665e-15 + 9.2444637330587321e-32));
+  const pd_quad pd_t0089 = pd_t0002*((pd_quad(237.18446165231623) + 1.2973747645251609e-14 + 4.4373425918681914e-31));
+  const pd_quad pd_t0090 = ((pd_quad(62.353829072479584) - 1.7164401983502665e-15 + 9.2444637330587321e-32))*pd_t0043;
+  const pd_quad pd_t0091 = pd_t0002*((pd_quad(885.18446165231626) - 1.5447961785152398e-14 + 4.9303806576313238e-31));
+  const pd_quad pd_t0092 = ((pd_quad(31.856406460551018) + 8.0280673774455222e-16 - 1.2325951644078309e-32))*pd_t0051;
+  const pd_quad pd_t0093 = ((pd_quad(2.0717967697244908) + 4.268584097778651e-17))*pd_t0058;
+  const pd_quad pd_t0094 = (pd_t0077 + pd_t0046*((pd_quad(24.588457268119896) - 4.2911004958756663e-16 + 2.1570415377137042e-32)))*((pd_quad(2.5358983848622456) - 2.0070168443613806e-16 + 3.0814879110195774e-33));
+  const pd_quad pd_t0095 = ((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*(pd_t0082 + pd_t0039*((pd_quad(13.176914536239792) - 8.5822009917513327e-16 + 4.622231866529366e-32)));
+  Ld[0] = h*((pd_quad(0.00019290123456790122) + 1.0708169604795105e-20 + 5.8774717541114375e-37))*(36.0*(pd_t0014*pd_t0014 + pd_t0022*pd_t0022) + (pd_t0029*pd_t0029 + pd_t0031*pd_t0031 + (p[0]*(pd_t0038*pd_t0038 + pd_t0042*pd_t0042*9.0) + p[0]*(pd_t0045*pd_t0045 + 9.0*(pd_t0048*pd_t0048)))*4.0));
+  D1[0] = pd_t0049*((pd_t0014*(pd_t0050 + pd_t0046*((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))) + pd_t0022*(pd_t0050 + pd_t0039*((pd_quad(2.0717967697244908) + 4.268584097778651e-17))))*12.0 + (2.0*(p[0]*(pd_t0042*(pd_t0052 - pd_t0055) + pd_t0056) - p[0]*(pd_t0057 - pd_t0048*(pd_t0059 + pd_t0061))) + pd_t0031*((pd_quad(2.0717967697244908) + 4.268584097778651e-17))) - pd_t0029*((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33)));
+  D1[1] = pd_t0062*(p[0]*(2.0*(pd_t0038*(pd_t0064 - ((pd_quad(2.0717967697244908) + 4.268584097778651e-17))*pd_t0065)) - 9.0*(pd_t0042*(pd_t0052 - pd_t0066))) - p[0]*(2.0*(pd_t0045*(((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))*pd_t0067 + pd_t0068)) + 9.0*(pd_t0048*(pd_t0059 - pd_t0069))) + 6.0*(pd_t0031*(pd_t0070 + pd_t0037*((pd_quad(2.0717967697244908) + 4.268584097778651e-17))) - pd_t0029*(pd_t0043*((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33)) + pd_t0070)) - pd_t0071*((pd_quad(111.87702556512251) - 3.9122135251004053e-15 + 2.2186712959340957e-31)) - pd_t0072*((pd_quad(860.12297443487751) - 1.0298641190101598e-14 - 1.9721522630525295e-31)));
+  D1[2] = pd_t0073*(12.0*(pd_t0022*(((pd_quad(5.196152422706632) - 1.4303668319585554e-16 + 8.4740917553038378e-33)) + pd_t0039*pd_t0074) - pd_t0014*(((pd_quad(5.196152422706632) - 1.4303668319585554e-16 + 8.4740917553038378e-33)) - pd_t0046*pd_t0075)) + (pd_t0031*pd_t0074 + 2.0*(p[0]*(pd_t0048*(pd_t0078 + pd_t0079) + pd_t0080) - p[0]*(pd_t0042*(pd_t0083 + pd_t0084) - pd_t0085))) - pd_t0029*pd_t0075);
+  D1[3] = -(pd_t0086*(pd_t0072*(h*((pd_quad(255.53074360871938) - 2.5746602975253996e-15 - 4.9303806576313238e-32))) + (6.0*(pd_t0029*(pd_t0043*pd_t0075 - ((pd_quad(15.588457268119896) - 4.2911004958756663e-16 + 2.311115933264683e-32))) - pd_t0031*(((pd_quad(15.588457268119896) - 4.2911004958756663e-16 + 2.311115933264683e-32)) + pd_t0037*pd_t0074)) + pd_t0087*((pd_quad(68.469256391280624) + 2.5746602975253996e-15 + 6.1629758220391547e-32))) - (p[0]*(2.0*(pd_t0038*(pd_t0088 + pd_t0089 - pd_t0065*pd_t0074)) + 9.0*(pd_t0042*pd_t0083)) + p[0]*(2.0*(pd_t0045*(pd_t0090 + pd_t0091 - pd_t0067*pd_t0075)) - 9.0*(pd_t0048*pd_t0078)))));
+  D2[0] = -(pd_t0049*(12.0*(pd_t0014*(pd_t0050 - pd_t0046*((pd_quad(2.0717967697244908) + 4.268584097778651e-17))) + pd_t0022*(pd_t0050 - pd_t0039*((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33)))) + (2.0*(p[0]*(pd_t0056 - pd_t0042*(pd_t0055 + pd_t0092)) - p[0]*(pd_t0057 + pd_t0048*(pd_t0093 - pd_t0061))) + pd_t0029*((pd_quad(2.0717967697244908) + 4.268584097778651e-17))) - pd_t0031*((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))));
+  D2[1] = -(pd_t0062*(pd_t0071*((pd_quad(860.12297443487751) - 1.0298641190101598e-14 - 1.9721522630525295e-31)) + (pd_t0072*((pd_quad(111.87702556512251) - 3.9122135251004053e-15 + 2.2186712959340957e-31)) + (p[0]*(2.0*(pd_t0038*(pd_t0064 + ((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))*pd_t0065)) + 9.0*(pd_t0042*(pd_t0066 + pd_t0092))) + p[0]*(2.0*(pd_t0045*(((pd_quad(2.0717967697244908) + 4.268584097778651e-17))*pd_t0067 - pd_t0068)) + 9.0*(pd_t0048*(pd_t0069 + pd_t0093))) + 6.0*(pd_t0031*(pd_t0070 - pd_t0037*((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))) - pd_t0029*(pd_t0070 - pd_t0043*((pd_quad(2.0717967697244908) + 4.268584097778651e-17))))))));
+  D2[2] = pd_t0073*(pd_t0029*pd_t0074 + 12.0*(pd_t0014*(((pd_quad(5.196152422706632) - 1.4303668319585554e-16 + 8.4740917553038378e-33)) - pd_t0046*pd_t0074) - pd_t0022*(((pd_quad(5.196152422706632) - 1.4303668319585554e-16 + 8.4740917553038378e-33)) + pd_t0039*pd_t0075)) - 2.0*(p[0]*(pd_t0080 - pd_t0048*(pd_t0084 - pd_t0094)) + p[0]*(pd_t0085 + pd_t0042*(pd_t0079 - pd_t0095))) - pd_t0031*pd_t0075);
+  D2[3] = pd_t0086*(pd_t0087*((pd_quad(255.53074360871938) - 2.5746602975253996e-15 - 4.9303806576313238e-32)) + (pd_t0072*(h*((pd_quad(68.469256391280624) + 2.5746602975253996e-15 + 6.1629758220391547e-32))) + (p[0]*(2.0*(pd_t0045*(pd_t0089 + pd_t0067*pd_t0074 - pd_t0090)) + 9.0*(pd_t0048*pd_t0094)) + p[0]*(2.0*(pd_t0038*(pd_t0091 + pd_t0065*pd_t0075 - pd_t0088)) - 9.0*(pd_t0042*pd_t0095)) + 6.0*(pd_t0029*(pd_t0043*pd_t0074 - ((pd_quad(15.588457268119896) - 4.2911004958756663e-16 + 2.311115933264683e-32))) - pd_t0031*(((pd_quad(15.588457268119896) - 4.2911004958756663e-16 + 2.311115933264683e-32)) + pd_t0037*pd_t0075)))));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
+}
+
 static const char* const interp_fuel_coords[] = {
     "x",
     "y",
@@ -1164,8 +1388,8 @@ static const double interp_fuel_param_defaults[] = {
     50.0,
 };
 static const pardel_discretization interp_fuel_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, interp_fuel_trapezoid_alpha_1_full, interp_fuel_trapezoid_alpha_1_sweep, interp_fuel_trapezoid_alpha_1_grad, interp_fuel_trapezoid_alpha_1_action},
-    {"gauss2", 4, interp_fuel_gauss2_full, interp_fuel_gauss2_sweep, interp_fuel_gauss2_grad, interp_fuel_gauss2_action},
+    {"trapezoid(alpha=1)", 2, interp_fuel_trapezoid_alpha_1_full, interp_fuel_trapezoid_alpha_1_sweep, interp_fuel_trapezoid_alpha_1_grad, interp_fuel_trapezoid_alpha_1_action, interp_fuel_trapezoid_alpha_1_grad_extended},
+    {"gauss2", 4, interp_fuel_gauss2_full, interp_fuel_gauss2_sweep, interp_fuel_gauss2_grad, interp_fuel_gauss2_action, interp_fuel_gauss2_grad_extended},
 };
 
 extern "C" const pardel_model interp_fuel_model = {

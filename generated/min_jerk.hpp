@@ -20,6 +20,8 @@ void min_jerk_hermite_gauss_s_3_sweep(double h, double t0, double t1, const doub
 void min_jerk_hermite_gauss_s_3_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double min_jerk_hermite_gauss_s_3_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void min_jerk_hermite_gauss_s_3_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 #ifdef __cplusplus
 }

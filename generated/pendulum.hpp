@@ -20,6 +20,8 @@ void pendulum_trapezoid_sweep(double h, double t0, double t1, const double* q0, 
 void pendulum_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double pendulum_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void pendulum_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* midpoint */
 void pendulum_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -29,6 +31,8 @@ void pendulum_midpoint_sweep(double h, double t0, double t1, const double* q0, c
 void pendulum_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double pendulum_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void pendulum_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* galerkin_lobatto(s=2) */
 void pendulum_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,

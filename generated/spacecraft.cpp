@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 // ---- trapezoid(alpha=1) (consistency order 2)
 
 // full: 561 operations (37843 before CSE)
@@ -498,6 +534,99 @@ extern "C" double spacecraft_trapezoid_alpha_1_action(double h, double t0, doubl
   const double pd_t0029 = q0[1]*pd_t0024 + q0[1]*pd_t0026 - q0[1] - pd_t0018*pd_t0020 + 2.0*(q0[2] - (h*(q1[3] + q0[3]*2.0) + pd_t0028)*pd_t0014);
   const double pd_t0030 = q1[1]*pd_t0010 + q1[1]*pd_t0012 - q1[1] - pd_t0004*pd_t0006 + 2.0*((pd_t0028 + h*(q0[3] + q1[3]*2.0))*pd_t0014 + q1[2]);
   return h*0.5*(pd_t0015*pd_t0015 + (pd_t0027*pd_t0027 + (pd_t0029*pd_t0029 + pd_t0030*pd_t0030)));
+}
+
+// grad_extended: the grad kernel in pd_quad, 282 operations; outputs as double-double pairs
+extern "C" void spacecraft_trapezoid_alpha_1_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  const pd_quad h = h_in;
+  const pd_quad t0 = t0_in;
+  const pd_quad t1 = t1_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad p[6];
+  for (int i = 0; i < 6; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[4], D2[4];
+  const pd_quad pd_t0001 = 3.0*(q0[1] - q1[1]);
+  const pd_quad pd_t0002 = 1.0/(h*h);
+  const pd_quad pd_t0003 = q1[1]*q1[1];
+  const pd_quad pd_t0004 = q1[0] + 1.0;
+  const pd_quad pd_t0005 = pd_t0004*pd_t0004;
+  const pd_quad pd_t0006 = sqrtq(pd_t0003 + pd_t0005);
+  const pd_quad pd_t0007 = pd_t0006*pd_t0006;
+  const pd_quad pd_t0008 = 1.0/p[0];
+  const pd_quad pd_t0009 = 1.0/(pd_t0006*pd_t0007*pd_t0008);
+  const pd_quad pd_t0010 = p[5] + t1*p[4];
+  const pd_quad pd_t0011 = p[3]*sinq(pd_t0010) - q1[1];
+  const pd_quad pd_t0012 = cosq(pd_t0010)*p[3] - q1[0];
+  const pd_quad pd_t0013 = pd_t0012*pd_t0012;
+  const pd_quad pd_t0014 = pd_t0011*pd_t0011;
+  const pd_quad pd_t0015 = sqrtq(pd_t0013 + pd_t0014);
+  const pd_quad pd_t0016 = pd_t0015*pd_t0015;
+  const pd_quad pd_t0017 = 1.0/p[2];
+  const pd_quad pd_t0018 = 1.0/(pd_t0015*pd_t0016*pd_t0017);
+  const pd_quad pd_t0019 = 2.0*q1[2];
+  const pd_quad pd_t0020 = q1[0]*q1[0];
+  const pd_quad pd_t0021 = sqrtq(pd_t0020 + pd_t0003);
+  const pd_quad pd_t0022 = pd_t0021*pd_t0021;
+  const pd_quad pd_t0023 = 1.0/p[1];
+  const pd_quad pd_t0024 = 1.0/(pd_t0021*pd_t0022*pd_t0023);
+  const pd_quad pd_t0025 = (pd_t0001 + h*(q0[3] + q1[3]*2.0))*pd_t0002 - 0.5*q1[1] + 0.5*(q1[1]*pd_t0009 - pd_t0011*pd_t0018) + 0.5*(pd_t0019 + q1[1]*pd_t0024);
+  const pd_quad pd_t0026 = 2.0*pd_t0025;
+  const pd_quad pd_t0027 = q0[1]*q0[1];
+  const pd_quad pd_t0028 = q0[0]*q0[0];
+  const pd_quad pd_t0029 = sqrtq(pd_t0027 + pd_t0028);
+  const pd_quad pd_t0030 = pd_t0029*pd_t0029;
+  const pd_quad pd_t0031 = 1.0/(pd_t0029*pd_t0030*pd_t0023);
+  const pd_quad pd_t0032 = p[5] + p[4]*t0;
+  const pd_quad pd_t0033 = q0[0] - p[3]*cosq(pd_t0032);
+  const pd_quad pd_t0034 = pd_t0033*pd_t0033;
+  const pd_quad pd_t0035 = p[3]*sinq(pd_t0032) - q0[1];
+  const pd_quad pd_t0036 = pd_t0035*pd_t0035;
+  const pd_quad pd_t0037 = sqrtq(pd_t0034 + pd_t0036);
+  const pd_quad pd_t0038 = pd_t0037*pd_t0037;
+  const pd_quad pd_t0039 = p[2]/(pd_t0037*pd_t0038);
+  const pd_quad pd_t0040 = (q0[0] - q1[0])*3.0;
+  const pd_quad pd_t0041 = 1.0 + q0[0];
+  const pd_quad pd_t0042 = pd_t0041*pd_t0041;
+  const pd_quad pd_t0043 = sqrtq(pd_t0027 + pd_t0042);
+  const pd_quad pd_t0044 = pd_t0043*pd_t0043;
+  const pd_quad pd_t0045 = p[0]/(pd_t0043*pd_t0044);
+  const pd_quad pd_t0046 = 1.0 + (q0[0] - q0[0]*pd_t0031 - (pd_t0033*pd_t0039 - 2.0*((pd_t0040 + h*(q1[2] + 2.0*q0[2]))*pd_t0002) - 2.0*(q0[3] - 0.5*(pd_t0041*pd_t0045))));
+  const pd_quad pd_t0047 = pd_t0012*pd_t0018 - q1[0]*pd_t0024 + (q1[3] - 0.5*(pd_t0004*pd_t0009))*2.0 + (q1[0] - 2.0*((h*(q0[2] + pd_t0019) + pd_t0040)*pd_t0002));
+  const pd_quad pd_t0048 = 1.0 + pd_t0047;
+  const pd_quad pd_t0049 = q0[1]*pd_t0045 + q0[1]*pd_t0031 + 2.0*(q0[2] - 0.5*(pd_t0035*pd_t0039)) - 2.0*((h*(q1[3] + 2.0*q0[3]) + pd_t0001)*pd_t0002 + 0.5*q0[1]);
+  const pd_quad pd_t0050 = pd_t0002*6.0;
+  const pd_quad pd_t0051 = pd_t0039 - pd_t0050 + (pd_t0045 + pd_t0031) - 1.0;
+  const pd_quad pd_t0052 = p[2]/(pd_t0037*(pd_t0038*pd_t0038));
+  const pd_quad pd_t0053 = p[0]/(pd_t0043*(pd_t0044*pd_t0044));
+  const pd_quad pd_t0054 = 1.0/(pd_t0029*(pd_t0030*pd_t0030)*pd_t0023);
+  const pd_quad pd_t0055 = q0[0]*q0[1]*pd_t0054 + pd_t0053*(q0[1]*pd_t0041) - pd_t0052*(pd_t0033*pd_t0035);
+  const pd_quad pd_t0056 = h*2.0;
+  const pd_quad pd_t0057 = 1.0/h;
+  const pd_quad pd_t0058 = pd_t0048*pd_t0057;
+  const pd_quad pd_t0059 = pd_t0046*pd_t0057;
+  const pd_quad pd_t0060 = pd_t0049*pd_t0057;
+  const pd_quad pd_t0061 = pd_t0026*pd_t0057;
+  const pd_quad pd_t0062 = 1.0/(pd_t0015*(pd_t0016*pd_t0016)*pd_t0017);
+  const pd_quad pd_t0063 = 1.0/(pd_t0021*(pd_t0022*pd_t0022)*pd_t0023);
+  const pd_quad pd_t0064 = 1.0/(pd_t0006*(pd_t0007*pd_t0007)*pd_t0008);
+  const pd_quad pd_t0065 = pd_t0012*pd_t0011*pd_t0062 + (q1[0]*q1[1]*pd_t0063 + q1[1]*pd_t0004*pd_t0064);
+  const pd_quad pd_t0066 = 1.0 - (pd_t0009 - pd_t0050 + (pd_t0018 + pd_t0024));
+  Ld[0] = h*0.5*(pd_t0026*pd_t0026 + (pd_t0046*pd_t0046 + (pd_t0048*pd_t0048 + pd_t0049*pd_t0049)));
+  D1[0] = -(h*(pd_t0048*pd_t0002*6.0 + (pd_t0046*(pd_t0051 - 3.0*(pd_t0034*pd_t0052 + (pd_t0042*pd_t0053 + pd_t0028*pd_t0054))) + 3.0*(pd_t0049*pd_t0055))));
+  D1[1] = h*(6.0*(pd_t0026*pd_t0002) + (pd_t0049*(pd_t0051 - 3.0*(pd_t0027*pd_t0053 + (pd_t0027*pd_t0054 + pd_t0036*pd_t0052))) + 3.0*(pd_t0046*pd_t0055)));
+  D1[2] = pd_t0056*(pd_t0049 - pd_t0058 + 2.0*pd_t0059);
+  D1[3] = -(pd_t0056*(2.0*pd_t0060 - (pd_t0046 + pd_t0061)));
+  D2[0] = -(h*(3.0*(pd_t0026*pd_t0065) + 6.0*(pd_t0046*pd_t0002) - pd_t0048*(pd_t0066 + 3.0*(pd_t0020*pd_t0063 + (pd_t0005*pd_t0064 + pd_t0013*pd_t0062)))));
+  D2[1] = h*(3.0*(pd_t0048*pd_t0065) + 6.0*(pd_t0049*pd_t0002) - pd_t0026*(pd_t0066 + 3.0*(pd_t0003*pd_t0063 + (pd_t0003*pd_t0064 + pd_t0014*pd_t0062))));
+  D2[2] = pd_t0056*(pd_t0059 + 2.0*(pd_t0025 - pd_t0058));
+  D2[3] = -(pd_t0056*(pd_t0060 - 1.0 - pd_t0047 - 2.0*pd_t0061));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
 }
 
 // ---- gauss2 (consistency order 4)
@@ -1517,6 +1646,162 @@ extern "C" double spacecraft_gauss2_action(double h, double t0, double t1, const
   return h*0.00038580246913580245*(pd_t0027*pd_t0027 + (pd_t0041*pd_t0041 + (pd_t0044*pd_t0044 + pd_t0045*pd_t0045)));
 }
 
+// grad_extended: the grad kernel in pd_quad, 479 operations; outputs as double-double pairs
+extern "C" void spacecraft_gauss2_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  const pd_quad h = h_in;
+  const pd_quad t0 = t0_in;
+  const pd_quad t1 = t1_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad p[6];
+  for (int i = 0; i < 6; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[4], D2[4];
+  const pd_quad pd_t0001 = 1.0/h;
+  const pd_quad pd_t0002 = q0[1] - q1[1];
+  const pd_quad pd_t0003 = 1.0/(h*h);
+  const pd_quad pd_t0004 = (pd_t0002*pd_t0003 + q1[2]*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34)) - q0[2]*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34)))*((pd_quad(124.70765814495917) - 3.4328803967005331e-15 + 1.8488927466117464e-31));
+  const pd_quad pd_t0005 = h*q0[3];
+  const pd_quad pd_t0006 = (q0[1] + q1[1]*((pd_quad(7.6881108528775508) - 3.4625715678792908e-16 - 8.4740917553038378e-33)) + (pd_t0005 - q1[3]*(h*((pd_quad(3.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))))*((pd_quad(0.30600230943494899) - 2.5717407843501131e-17 - 1.2037062152420224e-33)))*((pd_quad(4.1435935394489816) + 8.537168195557302e-17));
+  const pd_quad pd_t0007 = h*q1[2];
+  const pd_quad pd_t0008 = h*q0[2];
+  const pd_quad pd_t0009 = (pd_t0007 - q1[0]*((pd_quad(6.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32)) - (pd_t0008 + q0[0]*((pd_quad(3.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33)))*((pd_quad(0.2679491924311227) + 1.0671460244446628e-17 - 4.8148248609680896e-35)))*((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32));
+  const pd_quad pd_t0010 = 36.0 - pd_t0009;
+  const pd_quad pd_t0011 = pd_t0010*pd_t0010;
+  const pd_quad pd_t0012 = pd_t0006*pd_t0006;
+  const pd_quad pd_t0013 = sqrtq((pd_t0011 + pd_t0012)*((pd_quad(0.0007716049382716049) + 4.283267841918042e-20 + 2.350988701644575e-36)));
+  const pd_quad pd_t0014 = pd_t0013*pd_t0013;
+  const pd_quad pd_t0015 = pd_t0013*pd_t0014;
+  const pd_quad pd_t0016 = 1.0/p[0];
+  const pd_quad pd_t0017 = 1.0/(pd_t0015*pd_t0016);
+  const pd_quad pd_t0018 = pd_t0009*pd_t0009;
+  const pd_quad pd_t0019 = sqrtq(((pd_quad(0.0007716049382716049) + 4.283267841918042e-20 + 2.350988701644575e-36))*(pd_t0012 + pd_t0018));
+  const pd_quad pd_t0020 = pd_t0019*pd_t0019;
+  const pd_quad pd_t0021 = 1.0/(pd_t0019*pd_t0020);
+  const pd_quad pd_t0022 = p[1]*pd_t0021;
+  const pd_quad pd_t0023 = 36.0*p[3];
+  const pd_quad pd_t0024 = t1 - t0;
+  const pd_quad pd_t0025 = t0*6.0;
+  const pd_quad pd_t0026 = p[4]*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34));
+  const pd_quad pd_t0027 = p[5] + (((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*pd_t0024 + pd_t0025)*pd_t0026;
+  const pd_quad pd_t0028 = pd_t0023*sinq(pd_t0027) - pd_t0006;
+  const pd_quad pd_t0029 = pd_t0009 + cosq(pd_t0027)*pd_t0023;
+  const pd_quad pd_t0030 = pd_t0029*pd_t0029;
+  const pd_quad pd_t0031 = pd_t0028*pd_t0028;
+  const pd_quad pd_t0032 = sqrtq(((pd_quad(0.0007716049382716049) + 4.283267841918042e-20 + 2.350988701644575e-36))*(pd_t0030 + pd_t0031));
+  const pd_quad pd_t0033 = pd_t0032*pd_t0032;
+  const pd_quad pd_t0034 = 1.0/(pd_t0032*pd_t0033);
+  const pd_quad pd_t0035 = p[2]*pd_t0034;
+  const pd_quad pd_t0036 = q0[0] - q1[0];
+  const pd_quad pd_t0037 = 72.0*(pd_t0036*pd_t0001);
+  const pd_quad pd_t0038 = 36.0*((q0[3]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q1[3]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0001) + (pd_t0004 + (pd_t0006*pd_t0017 + pd_t0006*pd_t0022 - pd_t0028*pd_t0035)) - pd_t0006 - pd_t0037;
+  const pd_quad pd_t0039 = (q0[1] + q1[1]*((pd_quad(0.13007096530426773) - 9.518857921496074e-18 - 9.6296497219361793e-35)) + (pd_t0005 - q1[3]*(h*((pd_quad(0.2679491924311227) + 1.0671460244446628e-17 - 4.8148248609680896e-35))))*((pd_quad(0.14854314511050556) + 1.3101237109124354e-17 - 7.7037197775489434e-34)))*((pd_quad(31.856406460551018) + 8.0280673774455222e-16 - 1.2325951644078309e-32));
+  const pd_quad pd_t0040 = p[5] + pd_t0026*(pd_t0025 + pd_t0024*((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33)));
+  const pd_quad pd_t0041 = pd_t0039 - pd_t0023*sinq(pd_t0040);
+  const pd_quad pd_t0042 = ((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*(pd_t0007 - q1[0]*((pd_quad(3.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33)) - ((pd_quad(3.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*(pd_t0008 + ((pd_quad(6.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*q0[0]));
+  const pd_quad pd_t0043 = pd_t0042 + pd_t0023*cosq(pd_t0040);
+  const pd_quad pd_t0044 = pd_t0043*pd_t0043;
+  const pd_quad pd_t0045 = pd_t0041*pd_t0041;
+  const pd_quad pd_t0046 = sqrtq(((pd_quad(0.0007716049382716049) + 4.283267841918042e-20 + 2.350988701644575e-36))*(pd_t0044 + pd_t0045));
+  const pd_quad pd_t0047 = pd_t0046*pd_t0046;
+  const pd_quad pd_t0048 = 1.0/(pd_t0046*pd_t0047);
+  const pd_quad pd_t0049 = p[2]*pd_t0048;
+  const pd_quad pd_t0050 = pd_t0042*pd_t0042;
+  const pd_quad pd_t0051 = pd_t0039*pd_t0039;
+  const pd_quad pd_t0052 = sqrtq(((pd_quad(0.0007716049382716049) + 4.283267841918042e-20 + 2.350988701644575e-36))*(pd_t0050 + pd_t0051));
+  const pd_quad pd_t0053 = pd_t0052*pd_t0052;
+  const pd_quad pd_t0054 = pd_t0052*pd_t0053;
+  const pd_quad pd_t0055 = 1.0/p[1];
+  const pd_quad pd_t0056 = 1.0/(pd_t0054*pd_t0055);
+  const pd_quad pd_t0057 = 36.0 - pd_t0042;
+  const pd_quad pd_t0058 = pd_t0057*pd_t0057;
+  const pd_quad pd_t0059 = sqrtq(((pd_quad(0.0007716049382716049) + 4.283267841918042e-20 + 2.350988701644575e-36))*(pd_t0051 + pd_t0058));
+  const pd_quad pd_t0060 = pd_t0059*pd_t0059;
+  const pd_quad pd_t0061 = 1.0/(pd_t0059*pd_t0060);
+  const pd_quad pd_t0062 = p[0]*pd_t0061;
+  const pd_quad pd_t0063 = pd_t0004 + (pd_t0037 + (pd_t0039 + 36.0*((q1[3]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q0[3]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0001))) - (pd_t0041*pd_t0049 + (pd_t0039*pd_t0056 + pd_t0039*pd_t0062));
+  const pd_quad pd_t0064 = pd_t0002*pd_t0001*72.0;
+  const pd_quad pd_t0065 = (q0[3] + 6.0*(pd_t0036*pd_t0003) - q1[3])*((pd_quad(20.784609690826528) - 5.7214673278342218e-16 + 3.0814879110195774e-32));
+  const pd_quad pd_t0066 = pd_t0064 + (36.0*((q0[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q1[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0001) + (pd_t0065 + (pd_t0009 + (pd_t0010*pd_t0017 - 36.0 - pd_t0009*pd_t0022 - pd_t0029*pd_t0035))));
+  const pd_quad pd_t0067 = 36.0*((q1[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q0[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0001) + (pd_t0065 + (pd_t0042*pd_t0056 + (36.0 + pd_t0043*pd_t0049) - pd_t0057*pd_t0062)) - pd_t0064 - pd_t0042;
+  const pd_quad pd_t0068 = h*((pd_quad(3.5722450845907635e-06) + 1.1987046052821488e-22 + 2.2040519077917891e-39));
+  const pd_quad pd_t0069 = pd_t0003*((pd_quad(26936.85415931118) - 7.4150216568731507e-13 - 2.8398992587956425e-29));
+  const pd_quad pd_t0070 = pd_t0069 + ((pd_quad(6880.98379547902) - 8.2389129520812787e-14 - 1.5777218104420236e-30));
+  const pd_quad pd_t0071 = pd_t0049 + pd_t0062;
+  const pd_quad pd_t0072 = 1.0/(pd_t0046*(pd_t0047*pd_t0047));
+  const pd_quad pd_t0073 = p[2]*pd_t0072;
+  const pd_quad pd_t0074 = 1.0/(pd_t0059*(pd_t0060*pd_t0060));
+  const pd_quad pd_t0075 = p[0]*pd_t0074;
+  const pd_quad pd_t0076 = pd_t0052*(pd_t0053*pd_t0053);
+  const pd_quad pd_t0077 = 1.0/(pd_t0076*pd_t0055);
+  const pd_quad pd_t0078 = pd_t0071 - ((pd_quad(0.0023148148148148147) + 1.2849803525754126e-19 + 7.5231638452626401e-36))*(pd_t0044*pd_t0073 + pd_t0058*pd_t0075) - ((pd_quad(0.0023148148148148147) + 1.2849803525754126e-19 + 7.5231638452626401e-36))*(pd_t0050*pd_t0077 - ((pd_quad(432.0) - 4.9303806576313238e-32))*pd_t0056);
+  const pd_quad pd_t0079 = pd_t0001*15552.0;
+  const pd_quad pd_t0080 = pd_t0042*pd_t0039;
+  const pd_quad pd_t0081 = pd_t0043*pd_t0041;
+  const pd_quad pd_t0082 = pd_t0039*pd_t0057;
+  const pd_quad pd_t0083 = pd_t0080*pd_t0077 + (pd_t0081*pd_t0073 - pd_t0075*pd_t0082);
+  const pd_quad pd_t0084 = pd_t0083*((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33));
+  const pd_quad pd_t0085 = pd_t0069 - ((pd_quad(895.01620452098007) - 3.1297708200803242e-14 + 1.7749370367472766e-30));
+  const pd_quad pd_t0086 = pd_t0013*(pd_t0014*pd_t0014);
+  const pd_quad pd_t0087 = 1.0/(pd_t0086*pd_t0016);
+  const pd_quad pd_t0088 = 1.0/(pd_t0032*(pd_t0033*pd_t0033));
+  const pd_quad pd_t0089 = p[2]*pd_t0088;
+  const pd_quad pd_t0090 = pd_t0022 + pd_t0017;
+  const pd_quad pd_t0091 = 1.0/(pd_t0019*(pd_t0020*pd_t0020));
+  const pd_quad pd_t0092 = p[1]*pd_t0091;
+  const pd_quad pd_t0093 = pd_t0011*pd_t0087 + pd_t0030*pd_t0089 - (pd_t0090 + (pd_t0035 - pd_t0018*pd_t0092*((pd_quad(0.0023148148148148147) + 1.2849803525754126e-19 + 7.5231638452626401e-36))))*((pd_quad(432.0) - 4.9303806576313238e-32));
+  const pd_quad pd_t0094 = pd_t0010*pd_t0006;
+  const pd_quad pd_t0095 = pd_t0029*pd_t0028;
+  const pd_quad pd_t0096 = pd_t0009*pd_t0006;
+  const pd_quad pd_t0097 = pd_t0094*pd_t0087 + (pd_t0089*pd_t0095 - pd_t0092*pd_t0096);
+  const pd_quad pd_t0098 = ((pd_quad(2.0717967697244908) + 4.268584097778651e-17))*pd_t0097;
+  const pd_quad pd_t0099 = ((pd_quad(895.01620452098007) - 3.1297708200803242e-14 + 1.7749370367472766e-30)) - pd_t0069;
+  const pd_quad pd_t0100 = pd_t0090 - ((pd_quad(0.0023148148148148147) + 1.2849803525754126e-19 + 7.5231638452626401e-36))*(pd_t0031*pd_t0089 - p[2]*((pd_quad(432.0) - 4.9303806576313238e-32))*pd_t0034 + (pd_t0012*pd_t0092 + pd_t0012*pd_t0087));
+  const pd_quad pd_t0101 = pd_t0051*pd_t0075 + pd_t0045*pd_t0073 - ((pd_quad(432.0) - 4.9303806576313238e-32))*(pd_t0071 + (pd_t0056 - ((pd_quad(0.0023148148148148147) + 1.2849803525754126e-19 + 7.5231638452626401e-36))*(pd_t0051*pd_t0077)));
+  const pd_quad pd_t0102 = h*((pd_quad(1.7861225422953817e-06) + 5.9935230264107442e-23 + 1.1020259538958945e-39));
+  const pd_quad pd_t0103 = h*p[0];
+  const pd_quad pd_t0104 = 1.0/(pd_t0086/pd_t0103);
+  const pd_quad pd_t0105 = h*p[2];
+  const pd_quad pd_t0106 = pd_t0105*pd_t0088;
+  const pd_quad pd_t0107 = h*p[1];
+  const pd_quad pd_t0108 = pd_t0107*pd_t0091;
+  const pd_quad pd_t0109 = pd_t0094*pd_t0104 + pd_t0095*pd_t0106 - pd_t0096*pd_t0108;
+  const pd_quad pd_t0110 = ((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*pd_t0109;
+  const pd_quad pd_t0111 = pd_t0011*pd_t0104 + (pd_t0030*pd_t0106 + pd_t0018*pd_t0108);
+  const pd_quad pd_t0112 = pd_t0107*pd_t0021 + pd_t0103/pd_t0015 + pd_t0105*pd_t0034;
+  const pd_quad pd_t0113 = (pd_t0112 + ((pd_quad(20.784609690826528) - 5.7214673278342218e-16 + 3.0814879110195774e-32))*(pd_t0001 - h*((pd_quad(0.048112522432468816) - 1.8384058743251239e-18 + 1.7453740121009325e-34))))*((pd_quad(547.75405113024499) + 2.0597282380203197e-14 + 4.9303806576313238e-31));
+  const pd_quad pd_t0114 = pd_t0103*pd_t0074;
+  const pd_quad pd_t0115 = 1.0/(pd_t0076/pd_t0107);
+  const pd_quad pd_t0116 = pd_t0105*pd_t0072;
+  const pd_quad pd_t0117 = pd_t0082*pd_t0114 - pd_t0080*pd_t0115 - pd_t0081*pd_t0116;
+  const pd_quad pd_t0118 = ((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*pd_t0117;
+  const pd_quad pd_t0119 = pd_t0050*pd_t0115 + pd_t0044*pd_t0116 + pd_t0058*pd_t0114;
+  const pd_quad pd_t0120 = pd_t0107/pd_t0054 - h + (pd_t0105*pd_t0048 + pd_t0103*pd_t0061);
+  const pd_quad pd_t0121 = (pd_t0001 - pd_t0120*((pd_quad(0.048112522432468816) - 1.8384058743251239e-18 + 1.7453740121009325e-34)))*((pd_quad(42488.85415931118) - 7.4150216568731507e-13 - 3.1554436208840472e-29));
+  const pd_quad pd_t0122 = pd_t0012*pd_t0108 + (pd_t0012*pd_t0104 + pd_t0031*pd_t0106);
+  const pd_quad pd_t0123 = pd_t0051*pd_t0114 + (pd_t0051*pd_t0115 + pd_t0045*pd_t0116);
+  const pd_quad pd_t0124 = ((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))*pd_t0097;
+  const pd_quad pd_t0125 = pd_t0083*((pd_quad(2.0717967697244908) + 4.268584097778651e-17));
+  const pd_quad pd_t0126 = ((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*pd_t0117;
+  const pd_quad pd_t0127 = ((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*pd_t0109;
+  const pd_quad pd_t0128 = ((pd_quad(42488.85415931118) - 7.4150216568731507e-13 - 3.1554436208840472e-29))*(pd_t0001 + h*((pd_quad(0.048112522432468816) - 1.8384058743251239e-18 + 1.7453740121009325e-34)) - pd_t0112*((pd_quad(0.048112522432468816) - 1.8384058743251239e-18 + 1.7453740121009325e-34)));
+  const pd_quad pd_t0129 = (pd_t0001 + ((pd_quad(0.048112522432468816) - 1.8384058743251239e-18 + 1.7453740121009325e-34))*pd_t0120)*((pd_quad(11384.85415931118) - 7.4150216568731507e-13 - 2.8398992587956425e-29));
+  Ld[0] = h*((pd_quad(0.00038580246913580245) + 2.141633920959021e-20 + 1.1754943508222875e-36))*(pd_t0038*pd_t0038 + (pd_t0063*pd_t0063 + (pd_t0066*pd_t0066 + pd_t0067*pd_t0067)));
+  D1[0] = pd_t0068*(pd_t0067*(pd_t0070 - pd_t0078*((pd_quad(6880.98379547902) - 8.2389129520812787e-14 - 1.5777218104420236e-30))) + (pd_t0063*(pd_t0079 - pd_t0084) + pd_t0066*(pd_t0085 - pd_t0093*((pd_quad(2.0717967697244908) + 4.268584097778651e-17)))) - pd_t0038*(pd_t0079 + pd_t0098));
+  D1[1] = -(pd_t0068*(pd_t0067*(pd_t0084 + pd_t0079) + pd_t0038*(pd_t0099 - ((pd_quad(895.01620452098007) - 3.1297708200803242e-14 + 1.7749370367472766e-30))*pd_t0100) - pd_t0063*(pd_t0070 + ((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))*pd_t0101) - pd_t0066*(pd_t0079 - pd_t0098)));
+  D1[2] = -(pd_t0102*(pd_t0038*(((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30)) + pd_t0110) + pd_t0066*(((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*pd_t0111 - pd_t0113) - pd_t0063*(pd_t0118 - ((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30))) - pd_t0067*(((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*pd_t0119 + pd_t0121)));
+  D1[3] = pd_t0102*(pd_t0038*(pd_t0113 - ((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*pd_t0122) + (pd_t0067*(((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30)) + pd_t0118) + pd_t0063*(pd_t0121 + ((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*pd_t0123)) - pd_t0066*(pd_t0110 - ((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30))));
+  D2[0] = pd_t0068*(pd_t0038*(pd_t0079 - pd_t0124) + pd_t0067*(pd_t0099 - ((pd_quad(895.01620452098007) - 3.1297708200803242e-14 + 1.7749370367472766e-30))*pd_t0078) - pd_t0063*(pd_t0079 + pd_t0125) - pd_t0066*(pd_t0070 + ((pd_quad(15.928203230275509) + 4.0140336887227611e-16 - 6.1629758220391547e-33))*pd_t0093));
+  D2[1] = -(pd_t0068*(pd_t0038*(pd_t0070 - ((pd_quad(6880.98379547902) - 8.2389129520812787e-14 - 1.5777218104420236e-30))*pd_t0100) + (pd_t0066*(pd_t0079 + pd_t0124) + pd_t0063*(pd_t0085 - ((pd_quad(2.0717967697244908) + 4.268584097778651e-17))*pd_t0101)) - pd_t0067*(pd_t0079 - pd_t0125)));
+  D2[2] = -(pd_t0102*(pd_t0063*(pd_t0126 - ((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30))) - pd_t0038*(((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30)) + pd_t0127) - pd_t0066*(((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*pd_t0111 + pd_t0128) - pd_t0067*(pd_t0129 - ((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*pd_t0119)));
+  D2[3] = pd_t0102*(pd_t0066*(pd_t0127 - ((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30))) + (pd_t0038*(pd_t0128 + ((pd_quad(4.7320508075688776) - 3.4373836763199358e-16 - 1.3866695599588098e-32))*pd_t0122) + pd_t0063*(pd_t0129 - ((pd_quad(1.2679491924311228) - 1.0035084221806903e-16 + 1.5407439555097887e-33))*pd_t0123)) - pd_t0067*(((pd_quad(8978.9513864370601) - 2.4716738856243837e-13 + 7.8886090522101181e-30)) + pd_t0126));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
+}
+
 // ---- clock: h * dt/ds at the left end of the interval
 // 21 operations (61 before CSE)
 extern "C" double spacecraft_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
@@ -1550,8 +1835,8 @@ static const double spacecraft_param_defaults[] = {
     0.0,
 };
 static const pardel_discretization spacecraft_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action},
-    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action},
+    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action, spacecraft_trapezoid_alpha_1_grad_extended},
+    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action, spacecraft_gauss2_grad_extended},
 };
 
 extern "C" const pardel_model spacecraft_model = {

@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 #include "pardel/condensation.hpp"
 
 // ---- trapezoid (consistency order 2)
@@ -144,6 +180,42 @@ extern "C" double sphere_geodesic_trapezoid_action(double h, double t0, double t
   return h*0.25*(pd_t0001*pd_t0001*pd_t0003 + pd_t0004*pd_t0004*pd_t0003 + pd_t0005*pd_t0005/(h*h)*2.0);
 }
 
+// grad_extended: the grad kernel in pd_quad, 42 operations; outputs as double-double pairs
+extern "C" void sphere_geodesic_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = sinq(q0[0]);
+  const pd_quad pd_t0002 = pd_t0001*pd_t0001;
+  const pd_quad pd_t0003 = 1.0/(q0[1] - q1[1]);
+  const pd_quad pd_t0004 = h*pd_t0003;
+  const pd_quad pd_t0005 = 1.0/(pd_t0004*pd_t0004);
+  const pd_quad pd_t0006 = sinq(q1[0]);
+  const pd_quad pd_t0007 = pd_t0006*pd_t0006;
+  const pd_quad pd_t0008 = q0[0] - q1[0];
+  const pd_quad pd_t0009 = h*h;
+  const pd_quad pd_t0010 = 1.0/pd_t0009;
+  const pd_quad pd_t0011 = h*0.5;
+  const pd_quad pd_t0012 = 2.0*(pd_t0008*pd_t0010);
+  const pd_quad pd_t0013 = 1.0/(pd_t0009*pd_t0003);
+  const pd_quad pd_t0014 = pd_t0011*(pd_t0002*pd_t0013 + pd_t0007*pd_t0013);
+  Ld[0] = h*0.25*(pd_t0002*pd_t0005 + pd_t0007*pd_t0005 + pd_t0008*pd_t0008*pd_t0010*2.0);
+  D1[0] = pd_t0011*(pd_t0001*cosq(q0[0])*pd_t0005 + pd_t0012);
+  D1[1] = pd_t0014;
+  D2[0] = -(pd_t0011*(pd_t0012 - pd_t0006*cosq(q1[0])*pd_t0005));
+  D2[1] = -pd_t0014;
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 // ---- midpoint (consistency order 2)
 
 // full: 44 operations (272 before CSE)
@@ -265,6 +337,39 @@ extern "C" double sphere_geodesic_midpoint_action(double h, double t0, double t1
   const double pd_t0003 = 1.0/(h*h);
   const double pd_t0004 = q0[0] - q1[0];
   return h*0.5*(pd_t0001*pd_t0001*(pd_t0002*pd_t0002)*pd_t0003 + pd_t0004*pd_t0004*pd_t0003);
+}
+
+// grad_extended: the grad kernel in pd_quad, 28 operations; outputs as double-double pairs
+extern "C" void sphere_geodesic_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = h*0.5;
+  const pd_quad pd_t0002 = q0[0] - q1[0];
+  const pd_quad pd_t0003 = 1.0/(h*h);
+  const pd_quad pd_t0004 = 0.5*(q0[0] + q1[0]);
+  const pd_quad pd_t0005 = sinq(pd_t0004);
+  const pd_quad pd_t0006 = pd_t0005*pd_t0005;
+  const pd_quad pd_t0007 = h/(q0[1] - q1[1]);
+  const pd_quad pd_t0008 = 1.0/(pd_t0007*pd_t0007);
+  const pd_quad pd_t0009 = pd_t0005*cosq(pd_t0004)*pd_t0008;
+  const pd_quad pd_t0010 = pd_t0002*pd_t0003*2.0;
+  const pd_quad pd_t0011 = pd_t0006/pd_t0007;
+  Ld[0] = pd_t0001*(pd_t0002*pd_t0002*pd_t0003 + pd_t0006*pd_t0008);
+  D1[0] = pd_t0001*(pd_t0009 + pd_t0010);
+  D1[1] = pd_t0011;
+  D2[0] = pd_t0001*(pd_t0009 - pd_t0010);
+  D2[1] = -pd_t0011;
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
 }
 
 // ---- galerkin_lobatto(s=2) (consistency order 4)
@@ -991,10 +1096,10 @@ static const char* const sphere_geodesic_coords[] = {
     "phi",
 };
 static const pardel_discretization sphere_geodesic_discretizations[] = {
-    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action},
-    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action},
-    {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action},
-    {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action},
+    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action, sphere_geodesic_trapezoid_grad_extended},
+    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action, sphere_geodesic_midpoint_grad_extended},
+    {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action, nullptr},
+    {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action, nullptr},
 };
 
 extern "C" const pardel_model sphere_geodesic_model = {

@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 // ---- trapezoid(alpha=1) (consistency order 2)
 
 // full: 73 operations (334 before CSE)
@@ -216,6 +252,49 @@ extern "C" double spline_trapezoid_alpha_1_action(double h, double t0, double t1
   return h*(pd_t0002*pd_t0002*pd_t0004 + (pd_t0005*pd_t0005*pd_t0004 + (pd_t0007*pd_t0007*pd_t0004 + pd_t0008*pd_t0008*pd_t0004)));
 }
 
+// grad_extended: the grad kernel in pd_quad, 65 operations; outputs as double-double pairs
+extern "C" void spline_trapezoid_alpha_1_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[4], D2[4];
+  const pd_quad pd_t0001 = 3.0*(q0[0] - q1[0]);
+  const pd_quad pd_t0002 = pd_t0001 + h*(q0[2] + 2.0*q1[2]);
+  const pd_quad pd_t0003 = h*h;
+  const pd_quad pd_t0004 = 1.0/(pd_t0003*pd_t0003);
+  const pd_quad pd_t0005 = h*(q1[2] + 2.0*q0[2]) + pd_t0001;
+  const pd_quad pd_t0006 = (q0[1] - q1[1])*3.0;
+  const pd_quad pd_t0007 = h*(q1[3] + q0[3]*2.0) + pd_t0006;
+  const pd_quad pd_t0008 = pd_t0006 + h*(q0[3] + q1[3]*2.0);
+  const pd_quad pd_t0009 = h*6.0;
+  const pd_quad pd_t0010 = pd_t0009*(pd_t0005*pd_t0004 + pd_t0002*pd_t0004);
+  const pd_quad pd_t0011 = pd_t0009*(pd_t0008*pd_t0004 + pd_t0007*pd_t0004);
+  const pd_quad pd_t0012 = h*2.0;
+  const pd_quad pd_t0013 = 1.0/(h*pd_t0003);
+  const pd_quad pd_t0014 = pd_t0002*pd_t0013;
+  const pd_quad pd_t0015 = pd_t0005*pd_t0013;
+  const pd_quad pd_t0016 = pd_t0008*pd_t0013;
+  const pd_quad pd_t0017 = pd_t0007*pd_t0013;
+  Ld[0] = h*(pd_t0002*pd_t0002*pd_t0004 + (pd_t0005*pd_t0005*pd_t0004 + (pd_t0007*pd_t0007*pd_t0004 + pd_t0008*pd_t0008*pd_t0004)));
+  D1[0] = pd_t0010;
+  D1[1] = pd_t0011;
+  D1[2] = pd_t0012*(pd_t0014 + 2.0*pd_t0015);
+  D1[3] = pd_t0012*(pd_t0016 + 2.0*pd_t0017);
+  D2[0] = -pd_t0010;
+  D2[1] = -pd_t0011;
+  D2[2] = pd_t0012*(pd_t0015 + 2.0*pd_t0014);
+  D2[3] = pd_t0012*(pd_t0017 + 2.0*pd_t0016);
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
+}
+
 // ---- gauss2 (consistency order 4)
 
 // full: 78 operations (363 before CSE)
@@ -425,13 +504,55 @@ extern "C" double spline_gauss2_action(double h, double t0, double t1, const dou
   return h*0.25*(pd_t0004*pd_t0004 + (pd_t0006*pd_t0006 + (pd_t0007*pd_t0007 + pd_t0008*pd_t0008)));
 }
 
+// grad_extended: the grad kernel in pd_quad, 70 operations; outputs as double-double pairs
+extern "C" void spline_gauss2_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[4], D2[4];
+  const pd_quad pd_t0001 = 1.0/(h*h);
+  const pd_quad pd_t0002 = ((pd_quad(3.4641016151377544) + 2.0070168443613806e-16 - 3.0814879110195774e-33))*((q0[1] - q1[1])*pd_t0001);
+  const pd_quad pd_t0003 = 1.0/h;
+  const pd_quad pd_t0004 = pd_t0002 + (((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*q1[3] + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*q0[3])*pd_t0003;
+  const pd_quad pd_t0005 = (q0[0] - q1[0])*pd_t0001*((pd_quad(3.4641016151377544) + 2.0070168443613806e-16 - 3.0814879110195774e-33));
+  const pd_quad pd_t0006 = pd_t0005 + (q1[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q0[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0003;
+  const pd_quad pd_t0007 = (q0[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q1[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0003 + pd_t0005;
+  const pd_quad pd_t0008 = (((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*q0[3] + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*q1[3])*pd_t0003 + pd_t0002;
+  const pd_quad pd_t0009 = h*((pd_quad(1.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33));
+  const pd_quad pd_t0010 = pd_t0009*(pd_t0007*pd_t0001 + pd_t0006*pd_t0001);
+  const pd_quad pd_t0011 = pd_t0009*(pd_t0004*pd_t0001 + pd_t0008*pd_t0001);
+  const pd_quad pd_t0012 = h*0.5;
+  const pd_quad pd_t0013 = pd_t0007*pd_t0003;
+  const pd_quad pd_t0014 = pd_t0006*pd_t0003;
+  const pd_quad pd_t0015 = pd_t0008*pd_t0003;
+  const pd_quad pd_t0016 = pd_t0004*pd_t0003;
+  Ld[0] = h*0.25*(pd_t0004*pd_t0004 + (pd_t0006*pd_t0006 + (pd_t0007*pd_t0007 + pd_t0008*pd_t0008)));
+  D1[0] = pd_t0010;
+  D1[1] = pd_t0011;
+  D1[2] = pd_t0012*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0013 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0014);
+  D1[3] = pd_t0012*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0015 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0016);
+  D2[0] = -pd_t0010;
+  D2[1] = -pd_t0011;
+  D2[2] = pd_t0012*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0014 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0013);
+  D2[3] = pd_t0012*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0016 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0015);
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
+}
+
 static const char* const spline_coords[] = {
     "x",
     "y",
 };
 static const pardel_discretization spline_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action},
-    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action},
+    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action, spline_trapezoid_alpha_1_grad_extended},
+    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action, spline_gauss2_grad_extended},
 };
 
 extern "C" const pardel_model spline_model = {

@@ -20,6 +20,8 @@ void spline_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double
 void spline_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double spline_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void spline_trapezoid_alpha_1_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* gauss2 */
 void spline_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -29,6 +31,8 @@ void spline_gauss2_sweep(double h, double t0, double t1, const double* q0, const
 void spline_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double spline_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void spline_gauss2_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 #ifdef __cplusplus
 }

@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 // ---- trapezoid (consistency order 2)
 
 // full: 1202 operations (571596 before CSE)
@@ -813,6 +849,143 @@ extern "C" double zermelo_trapezoid_action(double h, double t0, double t1, const
   return h*0.5*(pd_t0025*pd_t0025 + pd_t0042*pd_t0042);
 }
 
+// grad_extended: the grad kernel in pd_quad, 391 operations; outputs as double-double pairs
+extern "C" void zermelo_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = p[0]*p[0];
+  const pd_quad pd_t0002 = q0[0] - 4.0;
+  const pd_quad pd_t0003 = q0[1] - 4.0;
+  const pd_quad pd_t0004 = 1.0 + 3.0*(pd_t0002*pd_t0002 + pd_t0003*pd_t0003);
+  const pd_quad pd_t0005 = pd_t0004/pd_t0002;
+  const pd_quad pd_t0006 = q0[0] - 2.0;
+  const pd_quad pd_t0007 = pd_t0006*pd_t0006;
+  const pd_quad pd_t0008 = q0[1] - 5.0;
+  const pd_quad pd_t0009 = 1.0 + (pd_t0007 + pd_t0008*pd_t0008)*3.0;
+  const pd_quad pd_t0010 = 1.0/pd_t0009;
+  const pd_quad pd_t0011 = pd_t0006*pd_t0010;
+  const pd_quad pd_t0012 = q0[1] - 2.0;
+  const pd_quad pd_t0013 = 1.0 + 3.0*(pd_t0007 + pd_t0012*pd_t0012);
+  const pd_quad pd_t0014 = 1.0/pd_t0013;
+  const pd_quad pd_t0015 = pd_t0006*pd_t0014;
+  const pd_quad pd_t0016 = q0[0] - 5.0;
+  const pd_quad pd_t0017 = q0[1] - 1.0;
+  const pd_quad pd_t0018 = 1.0 + 3.0*(pd_t0016*pd_t0016 + pd_t0017*pd_t0017);
+  const pd_quad pd_t0019 = pd_t0018/pd_t0016;
+  const pd_quad pd_t0020 = 1.0/pd_t0005 + (pd_t0011 + pd_t0015) - 1.0/pd_t0019;
+  const pd_quad pd_t0021 = pd_t0004/pd_t0003;
+  const pd_quad pd_t0022 = pd_t0012*pd_t0014;
+  const pd_quad pd_t0023 = pd_t0008*pd_t0010;
+  const pd_quad pd_t0024 = pd_t0018/pd_t0017;
+  const pd_quad pd_t0025 = 1.0/pd_t0021 + (pd_t0022 + pd_t0023) - 1.0/pd_t0024;
+  const pd_quad pd_t0026 = pd_t0001*(pd_t0020*pd_t0020) + pd_t0001*(pd_t0025*pd_t0025) - 1.0;
+  const pd_quad pd_t0027 = p[0]/h;
+  const pd_quad pd_t0028 = q0[1] - q1[1];
+  const pd_quad pd_t0029 = pd_t0027*pd_t0028;
+  const pd_quad pd_t0030 = q0[0] - q1[0];
+  const pd_quad pd_t0031 = pd_t0030*pd_t0027;
+  const pd_quad pd_t0032 = pd_t0020*pd_t0029 - pd_t0025*pd_t0031;
+  const pd_quad pd_t0033 = 1.0/pd_t0032;
+  const pd_quad pd_t0034 = pd_t0026*pd_t0033;
+  const pd_quad pd_t0035 = h*h;
+  const pd_quad pd_t0036 = 1.0/pd_t0035;
+  const pd_quad pd_t0037 = pd_t0028*pd_t0028*pd_t0036 + pd_t0030*pd_t0030*pd_t0036;
+  const pd_quad pd_t0038 = 1.0/pd_t0026;
+  const pd_quad pd_t0039 = sqrtq(-(pd_t0037*pd_t0038 - 1.0/(pd_t0034*pd_t0034)));
+  const pd_quad pd_t0040 = 1.0/pd_t0034 + pd_t0039;
+  const pd_quad pd_t0041 = q1[0] - 5.0;
+  const pd_quad pd_t0042 = q1[1] - 1.0;
+  const pd_quad pd_t0043 = 1.0 + 3.0*(pd_t0041*pd_t0041 + pd_t0042*pd_t0042);
+  const pd_quad pd_t0044 = 1.0/pd_t0043;
+  const pd_quad pd_t0045 = pd_t0041*pd_t0044;
+  const pd_quad pd_t0046 = q1[0] - 2.0;
+  const pd_quad pd_t0047 = pd_t0046*pd_t0046;
+  const pd_quad pd_t0048 = q1[1] - 2.0;
+  const pd_quad pd_t0049 = 1.0 + 3.0*(pd_t0047 + pd_t0048*pd_t0048);
+  const pd_quad pd_t0050 = 1.0/pd_t0049;
+  const pd_quad pd_t0051 = pd_t0046*pd_t0050;
+  const pd_quad pd_t0052 = q1[1] - 4.0;
+  const pd_quad pd_t0053 = q1[0] - 4.0;
+  const pd_quad pd_t0054 = 1.0 + 3.0*(pd_t0052*pd_t0052 + pd_t0053*pd_t0053);
+  const pd_quad pd_t0055 = pd_t0054/pd_t0053;
+  const pd_quad pd_t0056 = q1[1] - 5.0;
+  const pd_quad pd_t0057 = 1.0 + 3.0*(pd_t0047 + pd_t0056*pd_t0056);
+  const pd_quad pd_t0058 = 1.0/pd_t0057;
+  const pd_quad pd_t0059 = pd_t0046*pd_t0058;
+  const pd_quad pd_t0060 = pd_t0045 - pd_t0051 - 1.0/pd_t0055 - pd_t0059;
+  const pd_quad pd_t0061 = pd_t0056*pd_t0058;
+  const pd_quad pd_t0062 = 1.0/pd_t0054;
+  const pd_quad pd_t0063 = pd_t0052*pd_t0062;
+  const pd_quad pd_t0064 = pd_t0048*pd_t0050;
+  const pd_quad pd_t0065 = pd_t0043/pd_t0042;
+  const pd_quad pd_t0066 = pd_t0061 + (pd_t0063 + pd_t0064) - 1.0/pd_t0065;
+  const pd_quad pd_t0067 = pd_t0001*(pd_t0060*pd_t0060) + pd_t0001*(pd_t0066*pd_t0066) - 1.0;
+  const pd_quad pd_t0068 = 1.0/pd_t0067;
+  const pd_quad pd_t0069 = pd_t0031*pd_t0066 + pd_t0029*pd_t0060;
+  const pd_quad pd_t0070 = 1.0/pd_t0069;
+  const pd_quad pd_t0071 = pd_t0067*pd_t0070;
+  const pd_quad pd_t0072 = sqrtq(-(pd_t0037*pd_t0068 - 1.0/(pd_t0071*pd_t0071)));
+  const pd_quad pd_t0073 = pd_t0072 - 1.0/pd_t0071;
+  const pd_quad pd_t0074 = 1.0/pd_t0004 - 1.0/pd_t0018 + (pd_t0014 + pd_t0010);
+  const pd_quad pd_t0075 = pd_t0074 + (1.0/(pd_t0019*pd_t0019) - 1.0/(pd_t0005*pd_t0005) - pd_t0015*pd_t0015 - pd_t0011*pd_t0011)*6.0;
+  const pd_quad pd_t0076 = pd_t0025*pd_t0027;
+  const pd_quad pd_t0077 = pd_t0006*pd_t0008/(pd_t0009*pd_t0009) + (pd_t0002*pd_t0003/(pd_t0004*pd_t0004) + pd_t0006*pd_t0012/(pd_t0013*pd_t0013)) - pd_t0016*pd_t0017/(pd_t0018*pd_t0018);
+  const pd_quad pd_t0078 = pd_t0029*pd_t0075 - pd_t0076 + 6.0*(pd_t0031*pd_t0077);
+  const pd_quad pd_t0079 = pd_t0026*pd_t0026;
+  const pd_quad pd_t0080 = 1.0/(pd_t0079*pd_t0033);
+  const pd_quad pd_t0081 = pd_t0001*pd_t0020;
+  const pd_quad pd_t0082 = pd_t0001*pd_t0025;
+  const pd_quad pd_t0083 = pd_t0075*pd_t0081 - 6.0*(pd_t0077*pd_t0082);
+  const pd_quad pd_t0084 = 1.0/pd_t0037;
+  const pd_quad pd_t0085 = 1.0/(pd_t0079*pd_t0084);
+  const pd_quad pd_t0086 = pd_t0030*pd_t0036;
+  const pd_quad pd_t0087 = pd_t0086*pd_t0038;
+  const pd_quad pd_t0088 = 1.0/(pd_t0026*pd_t0079/(pd_t0032*pd_t0032));
+  const pd_quad pd_t0089 = 1.0/pd_t0039;
+  const pd_quad pd_t0090 = pd_t0027*pd_t0066;
+  const pd_quad pd_t0091 = pd_t0086*pd_t0068;
+  const pd_quad pd_t0092 = pd_t0067*pd_t0067;
+  const pd_quad pd_t0093 = 1.0/(pd_t0092*pd_t0070);
+  const pd_quad pd_t0094 = 1.0/pd_t0072;
+  const pd_quad pd_t0095 = pd_t0027*pd_t0060;
+  const pd_quad pd_t0096 = pd_t0035/pd_t0028;
+  const pd_quad pd_t0097 = 1.0/(pd_t0067*pd_t0096);
+  const pd_quad pd_t0098 = pd_t0074 + 6.0*(1.0/(pd_t0024*pd_t0024) - pd_t0023*pd_t0023 - 1.0/(pd_t0021*pd_t0021) - pd_t0022*pd_t0022);
+  const pd_quad pd_t0099 = pd_t0020*pd_t0027;
+  const pd_quad pd_t0100 = pd_t0031*pd_t0098 - pd_t0099 + 6.0*(pd_t0029*pd_t0077);
+  const pd_quad pd_t0101 = 1.0/(pd_t0026*pd_t0096);
+  const pd_quad pd_t0102 = pd_t0082*pd_t0098 - 6.0*(pd_t0081*pd_t0077);
+  const pd_quad pd_t0103 = pd_t0058 + pd_t0062 + (pd_t0050 - pd_t0044);
+  const pd_quad pd_t0104 = 6.0*(pd_t0059*pd_t0059 + (1.0/(pd_t0055*pd_t0055) + pd_t0051*pd_t0051) - pd_t0045*pd_t0045) - pd_t0103;
+  const pd_quad pd_t0105 = pd_t0052*pd_t0053/(pd_t0054*pd_t0054) + (pd_t0046*pd_t0048/(pd_t0049*pd_t0049) + pd_t0046*pd_t0056/(pd_t0057*pd_t0057)) - pd_t0041*pd_t0042/(pd_t0043*pd_t0043);
+  const pd_quad pd_t0106 = pd_t0090 - pd_t0029*pd_t0104 + 6.0*(pd_t0031*pd_t0105);
+  const pd_quad pd_t0107 = pd_t0001*pd_t0066;
+  const pd_quad pd_t0108 = pd_t0001*pd_t0060;
+  const pd_quad pd_t0109 = 6.0*(pd_t0105*pd_t0107) - pd_t0104*pd_t0108;
+  const pd_quad pd_t0110 = 1.0/(pd_t0092*pd_t0084);
+  const pd_quad pd_t0111 = 1.0/(pd_t0067*pd_t0092/(pd_t0069*pd_t0069));
+  const pd_quad pd_t0112 = pd_t0103 + 6.0*(1.0/(pd_t0065*pd_t0065) - pd_t0064*pd_t0064 - pd_t0063*pd_t0063 - pd_t0061*pd_t0061);
+  const pd_quad pd_t0113 = pd_t0107*pd_t0112 + 6.0*(pd_t0105*pd_t0108);
+  const pd_quad pd_t0114 = pd_t0031*pd_t0112 - pd_t0095 + 6.0*(pd_t0029*pd_t0105);
+  Ld[0] = h*0.5*(pd_t0040*pd_t0040 + pd_t0073*pd_t0073);
+  D1[0] = h*(pd_t0040*((pd_t0078*pd_t0080 + pd_t0083*pd_t0085 - pd_t0087 - 2.0*(pd_t0083*pd_t0088))*pd_t0089 + pd_t0078*pd_t0038 - 2.0*(pd_t0083*pd_t0080)) - pd_t0073*(pd_t0090*pd_t0068 + (pd_t0091 - pd_t0090*pd_t0093)*pd_t0094));
+  D1[1] = h*(pd_t0073*((pd_t0095*pd_t0093 - pd_t0097)*pd_t0094 - pd_t0095*pd_t0068) - pd_t0040*(pd_t0100*pd_t0038 + (pd_t0100*pd_t0080 + pd_t0101 - pd_t0102*pd_t0085 + 2.0*(pd_t0102*pd_t0088))*pd_t0089 + 2.0*(pd_t0102*pd_t0080)));
+  D2[0] = h*(pd_t0040*(pd_t0076*pd_t0038 + (pd_t0087 + pd_t0076*pd_t0080)*pd_t0089) + pd_t0073*(pd_t0106*pd_t0068 + (pd_t0091 - pd_t0109*pd_t0110 - pd_t0106*pd_t0093 + 2.0*(pd_t0109*pd_t0111))*pd_t0094 - 2.0*(pd_t0109*pd_t0093)));
+  D2[1] = h*(pd_t0073*((pd_t0113*pd_t0110 + (pd_t0097 + pd_t0114*pd_t0093) - 2.0*(pd_t0113*pd_t0111))*pd_t0094 - pd_t0114*pd_t0068 + 2.0*(pd_t0113*pd_t0093)) - pd_t0040*(pd_t0099*pd_t0038 - (pd_t0101 - pd_t0099*pd_t0080)*pd_t0089));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 // ---- midpoint (consistency order 2)
 
 // full: 702 operations (665508 before CSE)
@@ -1337,6 +1510,101 @@ extern "C" double zermelo_midpoint_action(double h, double t0, double t1, const 
   return h*(pd_t0021*pd_t0021);
 }
 
+// grad_extended: the grad kernel in pd_quad, 224 operations; outputs as double-double pairs
+extern "C" void zermelo_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  (void)t0_in;
+  (void)t1_in;
+  const pd_quad h = h_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = q0[1] + q1[1];
+  const pd_quad pd_t0002 = pd_t0001 - 4.0;
+  const pd_quad pd_t0003 = q0[0] + q1[0];
+  const pd_quad pd_t0004 = pd_t0003 - 4.0;
+  const pd_quad pd_t0005 = pd_t0004*pd_t0004;
+  const pd_quad pd_t0006 = 4.0 + 3.0*(pd_t0005 + pd_t0002*pd_t0002);
+  const pd_quad pd_t0007 = 1.0/pd_t0006;
+  const pd_quad pd_t0008 = pd_t0002*pd_t0007;
+  const pd_quad pd_t0009 = pd_t0001 - 8.0;
+  const pd_quad pd_t0010 = pd_t0003 - 8.0;
+  const pd_quad pd_t0011 = 4.0 + 3.0*(pd_t0009*pd_t0009 + pd_t0010*pd_t0010);
+  const pd_quad pd_t0012 = 1.0/pd_t0011;
+  const pd_quad pd_t0013 = pd_t0009*pd_t0012;
+  const pd_quad pd_t0014 = pd_t0001 - 10.0;
+  const pd_quad pd_t0015 = 4.0 + 3.0*(pd_t0014*pd_t0014 + pd_t0005);
+  const pd_quad pd_t0016 = pd_t0015/pd_t0014;
+  const pd_quad pd_t0017 = pd_t0003 - 10.0;
+  const pd_quad pd_t0018 = pd_t0001 - 2.0;
+  const pd_quad pd_t0019 = 4.0 + (pd_t0017*pd_t0017 + pd_t0018*pd_t0018)*3.0;
+  const pd_quad pd_t0020 = pd_t0019/pd_t0018;
+  const pd_quad pd_t0021 = pd_t0008 + (pd_t0013 + 1.0/pd_t0016) - 1.0/pd_t0020;
+  const pd_quad pd_t0022 = p[0]*p[0];
+  const pd_quad pd_t0023 = pd_t0019/pd_t0017;
+  const pd_quad pd_t0024 = 1.0/pd_t0015;
+  const pd_quad pd_t0025 = pd_t0004*pd_t0024;
+  const pd_quad pd_t0026 = pd_t0004*pd_t0007;
+  const pd_quad pd_t0027 = pd_t0011/pd_t0010;
+  const pd_quad pd_t0028 = 1.0/pd_t0023 - pd_t0025 - pd_t0026 - 1.0/pd_t0027;
+  const pd_quad pd_t0029 = 4.0*(pd_t0021*pd_t0021*pd_t0022 + pd_t0022*(pd_t0028*pd_t0028)) - 1.0;
+  const pd_quad pd_t0030 = q0[0] - q1[0];
+  const pd_quad pd_t0031 = p[0]/h;
+  const pd_quad pd_t0032 = pd_t0030*pd_t0031;
+  const pd_quad pd_t0033 = q0[1] - q1[1];
+  const pd_quad pd_t0034 = pd_t0033*pd_t0031;
+  const pd_quad pd_t0035 = pd_t0021*pd_t0032 + pd_t0028*pd_t0034;
+  const pd_quad pd_t0036 = 1.0/pd_t0035;
+  const pd_quad pd_t0037 = pd_t0029*pd_t0036;
+  const pd_quad pd_t0038 = h*h;
+  const pd_quad pd_t0039 = 1.0/pd_t0038;
+  const pd_quad pd_t0040 = pd_t0033*pd_t0033*pd_t0039 + pd_t0030*pd_t0030*pd_t0039;
+  const pd_quad pd_t0041 = 1.0/pd_t0029;
+  const pd_quad pd_t0042 = sqrtq(4.0*(1.0/(pd_t0037*pd_t0037)) - pd_t0040*pd_t0041);
+  const pd_quad pd_t0043 = 2.0*(1.0/pd_t0037) - pd_t0042;
+  const pd_quad pd_t0044 = pd_t0007 + pd_t0012 - (1.0/pd_t0019 - pd_t0024);
+  const pd_quad pd_t0045 = pd_t0044 + (1.0/(pd_t0023*pd_t0023) - pd_t0026*pd_t0026 - 1.0/(pd_t0027*pd_t0027) - pd_t0025*pd_t0025)*6.0;
+  const pd_quad pd_t0046 = pd_t0022*pd_t0028;
+  const pd_quad pd_t0047 = pd_t0017*pd_t0018/(pd_t0019*pd_t0019) - pd_t0009*pd_t0010/(pd_t0011*pd_t0011) - pd_t0004*pd_t0002/(pd_t0006*pd_t0006) - pd_t0014*pd_t0004/(pd_t0015*pd_t0015);
+  const pd_quad pd_t0048 = pd_t0021*pd_t0022;
+  const pd_quad pd_t0049 = pd_t0045*pd_t0046 - 6.0*(pd_t0047*pd_t0048);
+  const pd_quad pd_t0050 = pd_t0029*pd_t0029;
+  const pd_quad pd_t0051 = 1.0/(pd_t0050*pd_t0036);
+  const pd_quad pd_t0052 = pd_t0049*pd_t0051*16.0;
+  const pd_quad pd_t0053 = 1.0/(pd_t0029*pd_t0038);
+  const pd_quad pd_t0054 = pd_t0030*pd_t0053;
+  const pd_quad pd_t0055 = pd_t0021*pd_t0031;
+  const pd_quad pd_t0056 = pd_t0034*pd_t0045 - 6.0*(pd_t0032*pd_t0047);
+  const pd_quad pd_t0057 = pd_t0055 - pd_t0056;
+  const pd_quad pd_t0058 = 1.0/(pd_t0029*pd_t0050/(pd_t0035*pd_t0035));
+  const pd_quad pd_t0059 = 1.0/(pd_t0050/pd_t0040);
+  const pd_quad pd_t0060 = (pd_t0049*pd_t0058 - pd_t0049*pd_t0059*0.125)*32.0;
+  const pd_quad pd_t0061 = 1.0/pd_t0042;
+  const pd_quad pd_t0062 = h*pd_t0043;
+  const pd_quad pd_t0063 = pd_t0028*pd_t0031;
+  const pd_quad pd_t0064 = pd_t0044 + 6.0*(1.0/(pd_t0020*pd_t0020) - pd_t0008*pd_t0008 - 1.0/(pd_t0016*pd_t0016) - pd_t0013*pd_t0013);
+  const pd_quad pd_t0065 = pd_t0032*pd_t0064 - 6.0*(pd_t0034*pd_t0047);
+  const pd_quad pd_t0066 = pd_t0063 + pd_t0065;
+  const pd_quad pd_t0067 = pd_t0033*pd_t0053;
+  const pd_quad pd_t0068 = pd_t0048*pd_t0064 - 6.0*(pd_t0047*pd_t0046);
+  const pd_quad pd_t0069 = 32.0*(pd_t0068*pd_t0058 - 0.125*(pd_t0068*pd_t0059));
+  const pd_quad pd_t0070 = 16.0*(pd_t0068*pd_t0051);
+  const pd_quad pd_t0071 = pd_t0055 + pd_t0056;
+  const pd_quad pd_t0072 = pd_t0065 - pd_t0063;
+  Ld[0] = h*(pd_t0043*pd_t0043);
+  D1[0] = 2.0*((pd_t0052 + ((pd_t0054 - 4.0*(pd_t0057*pd_t0051) - pd_t0060)*pd_t0061 + 2.0*(pd_t0057*pd_t0041)))*pd_t0062);
+  D1[1] = 2.0*(pd_t0062*(2.0*(pd_t0066*pd_t0041) - (4.0*(pd_t0066*pd_t0051) - pd_t0067 - pd_t0069)*pd_t0061 - pd_t0070));
+  D2[0] = 2.0*(pd_t0062*(pd_t0052 - (pd_t0054 + pd_t0060 - 4.0*(pd_t0071*pd_t0051))*pd_t0061 - 2.0*(pd_t0071*pd_t0041)));
+  D2[1] = 2.0*(pd_t0062*((pd_t0069 - pd_t0067 - 4.0*(pd_t0072*pd_t0051))*pd_t0061 + 2.0*(pd_t0072*pd_t0041) - pd_t0070));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 // ---- clock: h * dt/ds at the left end of the interval
 // 71 operations (1114 before CSE)
 extern "C" double zermelo_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
@@ -1373,8 +1641,8 @@ static const double zermelo_param_defaults[] = {
     1.7,
 };
 static const pardel_discretization zermelo_discretizations[] = {
-    {"trapezoid", 2, zermelo_trapezoid_full, zermelo_trapezoid_sweep, zermelo_trapezoid_grad, zermelo_trapezoid_action},
-    {"midpoint", 2, zermelo_midpoint_full, zermelo_midpoint_sweep, zermelo_midpoint_grad, zermelo_midpoint_action},
+    {"trapezoid", 2, zermelo_trapezoid_full, zermelo_trapezoid_sweep, zermelo_trapezoid_grad, zermelo_trapezoid_action, zermelo_trapezoid_grad_extended},
+    {"midpoint", 2, zermelo_midpoint_full, zermelo_midpoint_sweep, zermelo_midpoint_grad, zermelo_midpoint_action, zermelo_midpoint_grad_extended},
 };
 
 extern "C" const pardel_model zermelo_model = {

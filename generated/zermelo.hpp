@@ -20,6 +20,8 @@ void zermelo_trapezoid_sweep(double h, double t0, double t1, const double* q0, c
 void zermelo_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double zermelo_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void zermelo_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* midpoint */
 void zermelo_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -29,6 +31,8 @@ void zermelo_midpoint_sweep(double h, double t0, double t1, const double* q0, co
 void zermelo_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double zermelo_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void zermelo_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
 
 /* h * clock on one interval */
 double zermelo_clock(double h, double t0, const double* q0, const double* q1, const double* p);

@@ -5,6 +5,42 @@
 
 #include <cmath>
 
+// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+#if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
+#if __has_include(<quadmath.h>)
+#define PD_HAVE_QUADMATH 1
+#endif
+#endif
+#if defined(PD_HAVE_QUADMATH)
+#include <quadmath.h>
+typedef __float128 pd_quad;
+#else
+typedef long double pd_quad;
+static inline pd_quad sinq(pd_quad x) { return std::sin(x); }
+static inline pd_quad cosq(pd_quad x) { return std::cos(x); }
+static inline pd_quad tanq(pd_quad x) { return std::tan(x); }
+static inline pd_quad expq(pd_quad x) { return std::exp(x); }
+static inline pd_quad logq(pd_quad x) { return std::log(x); }
+static inline pd_quad sqrtq(pd_quad x) { return std::sqrt(x); }
+static inline pd_quad sinhq(pd_quad x) { return std::sinh(x); }
+static inline pd_quad coshq(pd_quad x) { return std::cosh(x); }
+static inline pd_quad tanhq(pd_quad x) { return std::tanh(x); }
+static inline pd_quad asinq(pd_quad x) { return std::asin(x); }
+static inline pd_quad acosq(pd_quad x) { return std::acos(x); }
+static inline pd_quad atanq(pd_quad x) { return std::atan(x); }
+static inline pd_quad atan2q(pd_quad y, pd_quad x) { return std::atan2(y, x); }
+static inline pd_quad powq(pd_quad x, pd_quad y) { return std::pow(x, y); }
+#endif
+
+/** Writes n extended values as double-double pairs out[2i] + out[2i+1]. */
+static inline void pd_split(const pd_quad* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
+  }
+}
+
 // ---- trapezoid (consistency order 2)
 
 // full: 687 operations (90283 before CSE)
@@ -495,6 +531,105 @@ extern "C" double zermelo_tv_trapezoid_action(double h, double t0, double t1, co
   return h*0.5*(pd_t0016*pd_t0016 + pd_t0023*pd_t0023);
 }
 
+// grad_extended: the grad kernel in pd_quad, 213 operations; outputs as double-double pairs
+extern "C" void zermelo_tv_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  const pd_quad h = h_in;
+  const pd_quad t0 = t0_in;
+  const pd_quad t1 = t1_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = p[0]/h;
+  const pd_quad pd_t0002 = q0[1] - q1[1];
+  const pd_quad pd_t0003 = pd_t0001*pd_t0002;
+  const pd_quad pd_t0004 = q0[1] + q0[0]*2.0;
+  const pd_quad pd_t0005 = sinq(pd_t0004);
+  const pd_quad pd_t0006 = 0.5*t0;
+  const pd_quad pd_t0007 = sinq(pd_t0006);
+  const pd_quad pd_t0008 = pd_t0005*pd_t0007;
+  const pd_quad pd_t0009 = cosq(pd_t0006);
+  const pd_quad pd_t0010 = pd_t0005*pd_t0009;
+  const pd_quad pd_t0011 = q0[0] - q1[0];
+  const pd_quad pd_t0012 = pd_t0001*pd_t0011;
+  const pd_quad pd_t0013 = pd_t0003*pd_t0008 + pd_t0010*pd_t0012;
+  const pd_quad pd_t0014 = p[0]*pd_t0005;
+  const pd_quad pd_t0015 = pd_t0014*pd_t0014;
+  const pd_quad pd_t0016 = pd_t0007*pd_t0007;
+  const pd_quad pd_t0017 = pd_t0009*pd_t0009;
+  const pd_quad pd_t0018 = pd_t0015*pd_t0016 + pd_t0015*pd_t0017 - 1.0;
+  const pd_quad pd_t0019 = 1.0/pd_t0018;
+  const pd_quad pd_t0020 = pd_t0013*pd_t0019;
+  const pd_quad pd_t0021 = h*h;
+  const pd_quad pd_t0022 = 1.0/pd_t0021;
+  const pd_quad pd_t0023 = pd_t0002*pd_t0002*pd_t0022 + pd_t0011*pd_t0011*pd_t0022;
+  const pd_quad pd_t0024 = sqrtq(pd_t0020*pd_t0020 - pd_t0023*pd_t0019);
+  const pd_quad pd_t0025 = pd_t0020 - pd_t0024;
+  const pd_quad pd_t0026 = q1[1] + 2.0*q1[0];
+  const pd_quad pd_t0027 = sinq(pd_t0026);
+  const pd_quad pd_t0028 = p[0]*pd_t0027;
+  const pd_quad pd_t0029 = pd_t0028*pd_t0028;
+  const pd_quad pd_t0030 = 0.5*t1;
+  const pd_quad pd_t0031 = sinq(pd_t0030);
+  const pd_quad pd_t0032 = pd_t0031*pd_t0031;
+  const pd_quad pd_t0033 = cosq(pd_t0030);
+  const pd_quad pd_t0034 = pd_t0033*pd_t0033;
+  const pd_quad pd_t0035 = pd_t0029*pd_t0032 + pd_t0029*pd_t0034 - 1.0;
+  const pd_quad pd_t0036 = pd_t0027*pd_t0033;
+  const pd_quad pd_t0037 = pd_t0001*(pd_t0027*pd_t0031);
+  const pd_quad pd_t0038 = pd_t0012*pd_t0036 + pd_t0002*pd_t0037;
+  const pd_quad pd_t0039 = 1.0/pd_t0038;
+  const pd_quad pd_t0040 = pd_t0035*pd_t0039;
+  const pd_quad pd_t0041 = 1.0/pd_t0035;
+  const pd_quad pd_t0042 = sqrtq(-(pd_t0023*pd_t0041 - 1.0/(pd_t0040*pd_t0040)));
+  const pd_quad pd_t0043 = 1.0/pd_t0040 - pd_t0042;
+  const pd_quad pd_t0044 = pd_t0001*pd_t0010;
+  const pd_quad pd_t0045 = cosq(pd_t0004);
+  const pd_quad pd_t0046 = pd_t0045*(pd_t0003*pd_t0007) + pd_t0045*(pd_t0009*pd_t0012);
+  const pd_quad pd_t0047 = pd_t0044 + 2.0*pd_t0046;
+  const pd_quad pd_t0048 = pd_t0018*pd_t0018;
+  const pd_quad pd_t0049 = 1.0/pd_t0048;
+  const pd_quad pd_t0050 = pd_t0013*pd_t0049;
+  const pd_quad pd_t0051 = pd_t0011*pd_t0022;
+  const pd_quad pd_t0052 = pd_t0051*pd_t0019;
+  const pd_quad pd_t0053 = p[0]*p[0];
+  const pd_quad pd_t0054 = pd_t0045*(pd_t0005*pd_t0053);
+  const pd_quad pd_t0055 = pd_t0016*pd_t0054 + pd_t0017*pd_t0054;
+  const pd_quad pd_t0056 = pd_t0023*pd_t0055*pd_t0049 - 2.0*(pd_t0055*(pd_t0013*pd_t0013)/(pd_t0018*pd_t0048));
+  const pd_quad pd_t0057 = 1.0/pd_t0024;
+  const pd_quad pd_t0058 = pd_t0050*pd_t0055;
+  const pd_quad pd_t0059 = pd_t0051*pd_t0041;
+  const pd_quad pd_t0060 = pd_t0001*pd_t0036;
+  const pd_quad pd_t0061 = pd_t0035*pd_t0035;
+  const pd_quad pd_t0062 = 1.0/(pd_t0061*pd_t0039);
+  const pd_quad pd_t0063 = 1.0/pd_t0042;
+  const pd_quad pd_t0064 = pd_t0001*pd_t0008;
+  const pd_quad pd_t0065 = pd_t0046 + pd_t0064;
+  const pd_quad pd_t0066 = pd_t0021/pd_t0002;
+  const pd_quad pd_t0067 = 1.0/(pd_t0018*pd_t0066);
+  const pd_quad pd_t0068 = 1.0/(pd_t0035*pd_t0066);
+  const pd_quad pd_t0069 = cosq(pd_t0026);
+  const pd_quad pd_t0070 = pd_t0069*(pd_t0027*pd_t0053);
+  const pd_quad pd_t0071 = pd_t0032*pd_t0070 + pd_t0034*pd_t0070;
+  const pd_quad pd_t0072 = pd_t0038*pd_t0038*pd_t0071/(pd_t0035*pd_t0061) - 0.5*(pd_t0023*pd_t0071/pd_t0061);
+  const pd_quad pd_t0073 = pd_t0069*(pd_t0012*pd_t0033) + pd_t0069*(pd_t0003*pd_t0031);
+  const pd_quad pd_t0074 = 2.0*pd_t0073 - pd_t0060;
+  const pd_quad pd_t0075 = pd_t0071*pd_t0062;
+  const pd_quad pd_t0076 = pd_t0073 - pd_t0037;
+  Ld[0] = h*0.5*(pd_t0025*pd_t0025 + pd_t0043*pd_t0043);
+  D1[0] = h*(pd_t0025*(pd_t0047*pd_t0019 - (pd_t0047*pd_t0050 - pd_t0052 + 2.0*pd_t0056)*pd_t0057 - pd_t0058*4.0) + pd_t0043*((pd_t0059 - pd_t0060*pd_t0062)*pd_t0063 + pd_t0060*pd_t0041));
+  D1[1] = -(h*(pd_t0025*((pd_t0056 + pd_t0050*pd_t0065 - pd_t0067)*pd_t0057 - pd_t0065*pd_t0019 + 2.0*pd_t0058) - pd_t0043*(pd_t0037*pd_t0041 - (pd_t0037*pd_t0062 - pd_t0068)*pd_t0063)));
+  D2[0] = -(h*(pd_t0025*(pd_t0044*pd_t0019 - (pd_t0044*pd_t0050 - pd_t0052)*pd_t0057) - pd_t0043*((4.0*pd_t0072 - (pd_t0059 + pd_t0074*pd_t0062))*pd_t0063 + pd_t0074*pd_t0041 - 4.0*pd_t0075)));
+  D2[1] = h*(pd_t0043*((2.0*pd_t0072 - (pd_t0068 + pd_t0076*pd_t0062))*pd_t0063 + pd_t0076*pd_t0041 - 2.0*pd_t0075) - pd_t0025*(pd_t0064*pd_t0019 - (pd_t0050*pd_t0064 - pd_t0067)*pd_t0057));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 // ---- midpoint (consistency order 2)
 
 // full: 406 operations (92040 before CSE)
@@ -828,6 +963,72 @@ extern "C" double zermelo_tv_midpoint_action(double h, double t0, double t1, con
   return h*(pd_t0009*pd_t0009);
 }
 
+// grad_extended: the grad kernel in pd_quad, 120 operations; outputs as double-double pairs
+extern "C" void zermelo_tv_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
+  const pd_quad h = h_in;
+  const pd_quad t0 = t0_in;
+  const pd_quad t1 = t1_in;
+  pd_quad q0[2];
+  for (int i = 0; i < 2; ++i) q0[i] = q0_in[i];
+  pd_quad q1[2];
+  for (int i = 0; i < 2; ++i) q1[i] = q1_in[i];
+  pd_quad p[1];
+  for (int i = 0; i < 1; ++i) p[i] = p_in[i];
+  pd_quad Ld[1], D1[2], D2[2];
+  const pd_quad pd_t0001 = (q0[1] + q1[1])*0.5 + (q0[0] + q1[0]);
+  const pd_quad pd_t0002 = sinq(pd_t0001);
+  const pd_quad pd_t0003 = pd_t0002*p[0];
+  const pd_quad pd_t0004 = (t1 + t0)*0.25;
+  const pd_quad pd_t0005 = cosq(pd_t0004);
+  const pd_quad pd_t0006 = pd_t0003*pd_t0005;
+  const pd_quad pd_t0007 = q0[0] - q1[0];
+  const pd_quad pd_t0008 = 1.0/h;
+  const pd_quad pd_t0009 = pd_t0007*pd_t0008;
+  const pd_quad pd_t0010 = sinq(pd_t0004);
+  const pd_quad pd_t0011 = pd_t0003*(pd_t0010*pd_t0008);
+  const pd_quad pd_t0012 = q0[1] - q1[1];
+  const pd_quad pd_t0013 = pd_t0006*pd_t0009 + pd_t0011*pd_t0012;
+  const pd_quad pd_t0014 = pd_t0010*pd_t0010;
+  const pd_quad pd_t0015 = pd_t0014*(pd_t0003*pd_t0003) + pd_t0006*pd_t0006 - 1.0;
+  const pd_quad pd_t0016 = 1.0/pd_t0015;
+  const pd_quad pd_t0017 = pd_t0013*pd_t0016;
+  const pd_quad pd_t0018 = h*h;
+  const pd_quad pd_t0019 = pd_t0012*pd_t0012/pd_t0018 + pd_t0009*pd_t0009;
+  const pd_quad pd_t0020 = sqrtq(pd_t0017*pd_t0017 - pd_t0019*pd_t0016);
+  const pd_quad pd_t0021 = pd_t0017 - pd_t0020;
+  const pd_quad pd_t0022 = pd_t0015*pd_t0015;
+  const pd_quad pd_t0023 = 1.0/pd_t0022;
+  const pd_quad pd_t0024 = pd_t0013*pd_t0023;
+  const pd_quad pd_t0025 = cosq(pd_t0001);
+  const pd_quad pd_t0026 = pd_t0025*(p[0]*pd_t0008);
+  const pd_quad pd_t0027 = pd_t0026*(pd_t0005*pd_t0007) + pd_t0026*(pd_t0010*pd_t0012);
+  const pd_quad pd_t0028 = pd_t0006*pd_t0008;
+  const pd_quad pd_t0029 = pd_t0027 + pd_t0028;
+  const pd_quad pd_t0030 = 1.0/(pd_t0015*pd_t0018);
+  const pd_quad pd_t0031 = pd_t0007*pd_t0030;
+  const pd_quad pd_t0032 = p[0]*p[0]*(pd_t0002*pd_t0025);
+  const pd_quad pd_t0033 = pd_t0014*pd_t0032 + pd_t0032*(pd_t0005*pd_t0005);
+  const pd_quad pd_t0034 = pd_t0013*pd_t0013*pd_t0033/(pd_t0015*pd_t0022) - 0.5*(pd_t0019*pd_t0033*pd_t0023);
+  const pd_quad pd_t0035 = pd_t0034*2.0;
+  const pd_quad pd_t0036 = 1.0/pd_t0020;
+  const pd_quad pd_t0037 = 2.0*(pd_t0033*pd_t0024);
+  const pd_quad pd_t0038 = h*pd_t0021;
+  const pd_quad pd_t0039 = pd_t0011*2.0;
+  const pd_quad pd_t0040 = pd_t0027 + pd_t0039;
+  const pd_quad pd_t0041 = pd_t0012*pd_t0030;
+  const pd_quad pd_t0042 = pd_t0027 - pd_t0028;
+  const pd_quad pd_t0043 = pd_t0039 - pd_t0027;
+  Ld[0] = h*(pd_t0021*pd_t0021);
+  D1[0] = -(2.0*(((pd_t0024*pd_t0029 - pd_t0031 - pd_t0035)*pd_t0036 - pd_t0029*pd_t0016 + pd_t0037)*pd_t0038));
+  D1[1] = pd_t0038*(pd_t0040*pd_t0016 - (pd_t0024*pd_t0040 - 2.0*(pd_t0034 + pd_t0041))*pd_t0036 - pd_t0037);
+  D2[0] = -(2.0*(pd_t0038*(pd_t0037 + ((pd_t0031 + pd_t0024*pd_t0042 - pd_t0035)*pd_t0036 - pd_t0042*pd_t0016))));
+  D2[1] = -(pd_t0038*(pd_t0037 + (pd_t0043*pd_t0016 + (2.0*(pd_t0041 - pd_t0034) - pd_t0024*pd_t0043)*pd_t0036)));
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 2);
+  pd_split(D2, D2_out, 2);
+}
+
 // ---- clock: h * dt/ds at the left end of the interval
 // 33 operations (212 before CSE)
 extern "C" double zermelo_tv_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
@@ -853,8 +1054,8 @@ static const double zermelo_tv_param_defaults[] = {
     0.80000000000000004,
 };
 static const pardel_discretization zermelo_tv_discretizations[] = {
-    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action},
-    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action},
+    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, zermelo_tv_trapezoid_grad_extended},
+    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, zermelo_tv_midpoint_grad_extended},
 };
 
 extern "C" const pardel_model zermelo_tv_model = {

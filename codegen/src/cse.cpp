@@ -28,6 +28,21 @@ std::string c_double_literal(double value) {
   return s;
 }
 
+std::string c_extended_literal(ExtendedFloat value) {
+  double parts[3] = {0, 0, 0};
+  ExtendedFloat rest = value;
+  int n = 0;
+  for (; n < 3; ++n) {
+    parts[n] = static_cast<double>(rest);
+    if (parts[n] == 0) break;
+    rest -= parts[n];
+  }
+  if (n <= 1) return c_double_literal(parts[0]);
+  std::string s = "(pd_quad(" + c_double_literal(parts[0]) + ")";
+  for (int i = 1; i < n; ++i) s += (parts[i] < 0 ? " - " : " + ") + c_double_literal(std::fabs(parts[i]));
+  return s + ")";
+}
+
 namespace {
 
 std::string hex(double v) {
@@ -37,10 +52,29 @@ std::string hex(double v) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Constants: a double, which every decision of the CSE reads (so that the double kernels do not
+// depend on the extended-precision printing), with the same value in extended precision beside it,
+// carried through the same arithmetic, for the extended-precision kernels.
+
+struct Num {
+  double d = 0;
+  ExtendedFloat q = 0;
+  Num() = default;
+  Num(double v) : d(v), q(v) {}  // NOLINT: exact (integers, 1.0, a double's own value)
+  Num(double dv, ExtendedFloat qv) : d(dv), q(qv) {}
+};
+Num operator+(const Num& a, const Num& b) { return {a.d + b.d, a.q + b.q}; }
+Num operator/(const Num& a, const Num& b) { return {a.d / b.d, a.q / b.q}; }
+Num operator-(const Num& a) { return {-a.d, -a.q}; }
+Num& operator+=(Num& a, const Num& b) { return a = a + b; }
+Num abs_of(const Num& a) { return a.d < 0 ? -a : a; }
+
+// ---------------------------------------------------------------------------------------------
 // Functions the generator can emit.
 
 struct FunctionInfo {
   const char* c_name;
+  const char* quad_name;  ///< the libquadmath function of the extended-precision kernels
   int arity;
   int parity;  ///< 1: odd, f(-x) = -f(x); 2: even, f(-x) = f(x); 0: neither
   double (*fold1)(double);
@@ -49,20 +83,20 @@ struct FunctionInfo {
 
 const FunctionInfo* function_info(const std::string& name) {
   static const std::map<std::string, FunctionInfo> table = {
-      {"sin", {"std::sin", 1, 1, [](double x) { return std::sin(x); }, nullptr}},
-      {"cos", {"std::cos", 1, 2, [](double x) { return std::cos(x); }, nullptr}},
-      {"tan", {"std::tan", 1, 1, [](double x) { return std::tan(x); }, nullptr}},
-      {"exp", {"std::exp", 1, 0, [](double x) { return std::exp(x); }, nullptr}},
-      {"log", {"std::log", 1, 0, [](double x) { return std::log(x); }, nullptr}},
-      {"sqrt", {"std::sqrt", 1, 0, [](double x) { return std::sqrt(x); }, nullptr}},
-      {"sinh", {"std::sinh", 1, 1, [](double x) { return std::sinh(x); }, nullptr}},
-      {"cosh", {"std::cosh", 1, 2, [](double x) { return std::cosh(x); }, nullptr}},
-      {"tanh", {"std::tanh", 1, 1, [](double x) { return std::tanh(x); }, nullptr}},
-      {"asin", {"std::asin", 1, 1, [](double x) { return std::asin(x); }, nullptr}},
-      {"acos", {"std::acos", 1, 0, [](double x) { return std::acos(x); }, nullptr}},
-      {"atan", {"std::atan", 1, 1, [](double x) { return std::atan(x); }, nullptr}},
-      {"atan2", {"std::atan2", 2, 0, nullptr, [](double y, double x) { return std::atan2(y, x); }}},
-      {"pow", {"std::pow", 2, 0, nullptr, [](double x, double y) { return std::pow(x, y); }}},
+      {"sin", {"std::sin", "sinq", 1, 1, [](double x) { return std::sin(x); }, nullptr}},
+      {"cos", {"std::cos", "cosq", 1, 2, [](double x) { return std::cos(x); }, nullptr}},
+      {"tan", {"std::tan", "tanq", 1, 1, [](double x) { return std::tan(x); }, nullptr}},
+      {"exp", {"std::exp", "expq", 1, 0, [](double x) { return std::exp(x); }, nullptr}},
+      {"log", {"std::log", "logq", 1, 0, [](double x) { return std::log(x); }, nullptr}},
+      {"sqrt", {"std::sqrt", "sqrtq", 1, 0, [](double x) { return std::sqrt(x); }, nullptr}},
+      {"sinh", {"std::sinh", "sinhq", 1, 1, [](double x) { return std::sinh(x); }, nullptr}},
+      {"cosh", {"std::cosh", "coshq", 1, 2, [](double x) { return std::cosh(x); }, nullptr}},
+      {"tanh", {"std::tanh", "tanhq", 1, 1, [](double x) { return std::tanh(x); }, nullptr}},
+      {"asin", {"std::asin", "asinq", 1, 1, [](double x) { return std::asin(x); }, nullptr}},
+      {"acos", {"std::acos", "acosq", 1, 0, [](double x) { return std::acos(x); }, nullptr}},
+      {"atan", {"std::atan", "atanq", 1, 1, [](double x) { return std::atan(x); }, nullptr}},
+      {"atan2", {"std::atan2", "atan2q", 2, 0, nullptr, [](double y, double x) { return std::atan2(y, x); }}},
+      {"pow", {"std::pow", "powq", 2, 0, nullptr, [](double x, double y) { return std::pow(x, y); }}},
   };
   auto it = table.find(name);
   return it == table.end() ? nullptr : &it->second;
@@ -79,7 +113,7 @@ double checked(double v, const char* what) {
 enum class NKind { constant, input, sum, product, call };
 
 struct NTerm {
-  double coef;
+  Num coef;
   int node;
 };
 struct NFactor {
@@ -89,11 +123,11 @@ struct NFactor {
 
 struct NNode {
   NKind kind = NKind::constant;
-  double value = 0;            ///< constant
+  Num value = 0;               ///< constant
   std::string name;            ///< input: C name; call: function name
   std::string group;           ///< input: kernel argument
   std::vector<NTerm> terms;    ///< sum: sorted by node id
-  double constant = 0;         ///< sum: constant term
+  Num constant = 0;            ///< sum: constant term
   std::vector<NFactor> factors;///< product: sorted by node id
   std::vector<int> args;       ///< call
   /** A structural hash independent of node ids and of GiNaC's (address-seeded) term order;
@@ -103,7 +137,7 @@ struct NNode {
 
 /** value = coef * node, or just coef when node < 0. */
 struct Scaled {
-  double coef;
+  Num coef;
   int node;
 };
 
@@ -142,6 +176,37 @@ double value_of(const GiNaC::ex& c) {
   return checked(n.to_double(), "a constant");
 }
 
+/** A double as an exact rational. */
+GiNaC::numeric exact_double(double d) {
+  int e = 0;
+  const double m = std::frexp(d, &e);
+  return GiNaC::numeric(static_cast<long>(std::ldexp(m, 53))) * GiNaC::numeric(2).power(e - 53);
+}
+
+/** A constant expression rounded once to double, and to extended precision (the sum of up to three
+ *  doubles taken from an evaluation at 60 digits: a correctly rounded __float128 up to its last
+ *  bit). */
+Num num_of(const GiNaC::ex& c) {
+  const double d = value_of(c);
+  GiNaC::numeric rest;
+  if (GiNaC::is_a<GiNaC::numeric>(c) && GiNaC::ex_to<GiNaC::numeric>(c).is_rational()) {
+    rest = GiNaC::ex_to<GiNaC::numeric>(c);
+  } else {
+    const long saved = GiNaC::Digits;
+    GiNaC::Digits = 60;
+    rest = GiNaC::ex_to<GiNaC::numeric>(c.evalf());
+    GiNaC::Digits = saved;
+  }
+  ExtendedFloat q = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double part = rest.to_double();
+    if (part == 0 || !std::isfinite(part)) break;
+    q += part;
+    rest = rest - exact_double(part);
+  }
+  return {d, q};
+}
+
 std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
   h ^= h >> 31;
@@ -170,7 +235,7 @@ class NDag {
   void canonicalize(NNode& n) const {
     std::sort(n.terms.begin(), n.terms.end(), [&](const NTerm& x, const NTerm& y) {
       if (shash(x.node) != shash(y.node)) return shash(x.node) < shash(y.node);
-      return x.coef < y.coef;
+      return x.coef.d < y.coef.d;
     });
     std::sort(n.factors.begin(), n.factors.end(), [&](const NFactor& x, const NFactor& y) {
       if (shash(x.node) != shash(y.node)) return shash(x.node) < shash(y.node);
@@ -181,11 +246,11 @@ class NDag {
   std::uint64_t structural_hash(const NNode& n) const {
     std::uint64_t h = mix(0x5bd1e995u, static_cast<std::uint64_t>(n.kind));
     switch (n.kind) {
-      case NKind::constant: return mix(h, bits(n.value));
+      case NKind::constant: return mix(h, bits(n.value.d));
       case NKind::input: return mix(h, text_hash(n.name));
       case NKind::sum:
-        h = mix(h, bits(n.constant));
-        for (const NTerm& t : n.terms) h = mix(mix(h, shash(t.node)), bits(t.coef));
+        h = mix(h, bits(n.constant.d));
+        for (const NTerm& t : n.terms) h = mix(mix(h, shash(t.node)), bits(t.coef.d));
         return h;
       case NKind::product:
         for (const NFactor& f : n.factors) h = mix(mix(h, shash(f.node)), static_cast<std::uint64_t>(f.exp));
@@ -201,11 +266,11 @@ class NDag {
   static std::string key_of(const NNode& n) {
     std::string k;
     switch (n.kind) {
-      case NKind::constant: k = "c" + hex(n.value); break;
+      case NKind::constant: k = "c" + hex(n.value.d); break;
       case NKind::input: k = "i" + n.name; break;
       case NKind::sum:
-        k = "s" + hex(n.constant);
-        for (const NTerm& t : n.terms) k += "|" + std::to_string(t.node) + "*" + hex(t.coef);
+        k = "s" + hex(n.constant.d);
+        for (const NTerm& t : n.terms) k += "|" + std::to_string(t.node) + "*" + hex(t.coef.d);
         break;
       case NKind::product:
         k = "p";
@@ -242,7 +307,7 @@ class NDag {
     table_.emplace(key_of(nodes[static_cast<std::size_t>(id)]), id);
   }
 
-  int constant(double v) {
+  int constant(Num v) {
     NNode n;
     n.kind = NKind::constant;
     n.value = v;
@@ -251,7 +316,7 @@ class NDag {
 
   int materialize(Scaled s) {
     if (s.node < 0) return constant(s.coef);
-    if (s.coef == 1) return s.node;
+    if (s.coef.d == 1) return s.node;
     NNode n;
     n.kind = NKind::sum;
     n.terms.push_back(NTerm{s.coef, s.node});
@@ -283,8 +348,8 @@ class NDag {
     if (equal) scale = terms[0].first;
     NNode n;
     n.kind = NKind::sum;
-    for (const auto& [coef, node] : terms) n.terms.push_back(NTerm{value_of(coef / scale), node});
-    n.constant = value_of(constant_term / scale);
+    for (const auto& [coef, node] : terms) n.terms.push_back(NTerm{num_of(coef / scale), node});
+    n.constant = num_of(constant_term / scale);
     return {scale, intern(std::move(n))};
   }
 
@@ -353,8 +418,8 @@ class Converter {
 
   /** The node of a converted value (a constant node, the node itself, or a scaled node). */
   int materialize(const Exact& x) {
-    if (x.node < 0) return dag_.constant(value_of(x.coef));
-    return dag_.materialize({value_of(x.coef), x.node});
+    if (x.node < 0) return dag_.constant(num_of(x.coef));
+    return dag_.materialize({num_of(x.coef), x.node});
   }
 
  private:
@@ -540,13 +605,13 @@ void rebuild(NDag& dag, std::vector<Scaled>& roots) {
     if (m >= 0) return m;
     NNode n = dag.nodes[static_cast<std::size_t>(id)];
     // Children that were duplicates merge here, so terms and factors are gathered again.
-    std::map<int, double> terms;
+    std::map<int, Num> terms;
     for (const NTerm& t : n.terms) terms[copy(t.node)] += t.coef;
     std::map<int, int> factors;
     for (const NFactor& f : n.factors) factors[copy(f.node)] += f.exp;
     n.terms.clear();
     for (const auto& [node, coef] : terms) {
-      if (coef != 0) n.terms.push_back({coef, node});
+      if (coef.d != 0) n.terms.push_back({coef, node});
     }
     n.factors.clear();
     for (const auto& [node, e] : factors) {
@@ -558,7 +623,7 @@ void rebuild(NDag& dag, std::vector<Scaled>& roots) {
       m = fresh.constant(n.constant);
     } else if (n.kind == NKind::product && n.factors.empty()) {
       m = fresh.constant(1.0);
-    } else if (n.kind == NKind::sum && n.terms.size() == 1 && n.terms[0].coef == 1 && n.constant == 0) {
+    } else if (n.kind == NKind::sum && n.terms.size() == 1 && n.terms[0].coef.d == 1 && n.constant.d == 0) {
       m = n.terms[0].node;
     } else if (n.kind == NKind::product && n.factors.size() == 1 && n.factors[0].exp == 1) {
       m = n.factors[0].node;
@@ -589,7 +654,7 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
         for (std::size_t i = 0; i < n.terms.size(); ++i) {
           for (std::size_t j = i + 1; j < n.terms.size(); ++j) {
             if (n.terms[i].node == n.terms[j].node) continue;
-            PairKey k{n.terms[i].node, n.terms[j].node, n.terms[j].coef / n.terms[i].coef, 0, 0};
+            PairKey k{n.terms[i].node, n.terms[j].node, n.terms[j].coef.d / n.terms[i].coef.d, 0, 0};
             holders[k].push_back(static_cast<int>(id));
           }
         }
@@ -622,6 +687,7 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
     for (const auto& [key, ids] : candidates) {
       // The nodes that still hold the pair after this round's earlier rewrites.
       std::vector<std::pair<int, int>> hits;  // node id, position of key.a
+      Num ratio = key.r;  // the ratio with its extended-precision value, from the first holder
       for (int id : *ids) {
         const NNode& n = dag.nodes[static_cast<std::size_t>(id)];
         if (!products) {
@@ -631,7 +697,10 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
             if (t.node == key.a) ta = &t;
             if (t.node == key.b) tb = &t;
           }
-          if (ta && tb && tb->coef / ta->coef == key.r) hits.emplace_back(id, 0);
+          if (ta && tb && tb->coef.d / ta->coef.d == key.r) {
+            if (hits.empty()) ratio = tb->coef / ta->coef;
+            hits.emplace_back(id, 0);
+          }
         } else {
           const NFactor* fa = nullptr;
           const NFactor* fb = nullptr;
@@ -647,7 +716,7 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
       shared.kind = kind;
       if (!products) {
         shared.terms.push_back(NTerm{1.0, key.a});
-        shared.terms.push_back(NTerm{key.r, key.b});
+        shared.terms.push_back(NTerm{ratio, key.b});
       } else {
         shared.factors.push_back(NFactor{key.a, key.ea});
         shared.factors.push_back(NFactor{key.b, key.eb});
@@ -658,8 +727,8 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
         if (id == s) continue;
         NNode n = dag.nodes[static_cast<std::size_t>(id)];
         if (!products) {
-          double ca = 0;
-          std::map<int, double> acc;
+          Num ca = 0;
+          std::map<int, Num> acc;
           for (const NTerm& t : n.terms) {
             if (t.node == key.a) ca = t.coef;
             else if (t.node != key.b) acc[t.node] += t.coef;
@@ -667,7 +736,7 @@ int factor_pairs(NDag& dag, std::vector<Scaled>& roots, bool products, int max_r
           acc[s] += ca;
           n.terms.clear();
           for (const auto& [node, coef] : acc) {
-            if (coef != 0) n.terms.push_back({coef, node});
+            if (coef.d != 0) n.terms.push_back({coef, node});
           }
         } else {
           int k = 0;
@@ -698,7 +767,7 @@ enum class BOp { constant, input, add, sub, mul, div, neg, call };
 
 struct BNode {
   BOp op = BOp::constant;
-  double value = 0;
+  Num value = 0;
   std::string name;  ///< input: C name; call: C function name
   std::string group; ///< input: kernel argument
   std::vector<int> kids;
@@ -710,7 +779,7 @@ class BDag {
 
   int intern(BNode n) {
     if ((n.op == BOp::add || n.op == BOp::mul) && n.kids[0] > n.kids[1]) std::swap(n.kids[0], n.kids[1]);
-    std::string k = std::to_string(static_cast<int>(n.op)) + ":" + hex(n.value) + ":" + n.name;
+    std::string k = std::to_string(static_cast<int>(n.op)) + ":" + hex(n.value.d) + ":" + n.name;
     for (int c : n.kids) k += "," + std::to_string(c);
     auto it = table_.find(k);
     if (it != table_.end()) return it->second;
@@ -725,7 +794,7 @@ class BDag {
     n.kids = std::move(kids);
     return intern(std::move(n));
   }
-  int constant(double v) {
+  int constant(Num v) {
     BNode n;
     n.op = BOp::constant;
     n.value = v;
@@ -752,9 +821,9 @@ class Lowerer {
   /** The binary node of an output value coef * node (node < 0: a constant). */
   int lower_output(const Scaled& s) {
     if (s.node < 0) return b_.constant(s.coef);
-    const double magnitude = std::fabs(s.coef);
-    Signed l = magnitude == 1 ? lower(s.node) : lower_scaled(magnitude, s.node);
-    const int sign = (s.coef < 0 ? -1 : 1) * l.sign;
+    const Num magnitude = abs_of(s.coef);
+    Signed l = magnitude.d == 1 ? lower(s.node) : lower_scaled(magnitude, s.node);
+    const int sign = (s.coef.d < 0 ? -1 : 1) * l.sign;
     return sign > 0 ? l.node : b_.op(BOp::neg, {l.node});
   }
 
@@ -826,7 +895,7 @@ class Lowerer {
    * the constant multiplies that input (h*0.5), a node that the outputs sharing the same
    * coefficient then share; otherwise it multiplies the whole node. Same operation count.
    */
-  Signed lower_scaled(double magnitude, int id) {
+  Signed lower_scaled(Num magnitude, int id) {
     const NNode& n = n_.nodes[static_cast<std::size_t>(id)];
     if (n.kind == NKind::product) {
       int chosen = -1;
@@ -850,7 +919,7 @@ class Lowerer {
     const NNode& n = n_.nodes[static_cast<std::size_t>(id)];
     switch (n.kind) {
       case NKind::constant:
-        return {n.value < 0 ? -1 : 1, b_.constant(std::fabs(n.value))};
+        return {n.value.d < 0 ? -1 : 1, b_.constant(abs_of(n.value))};
       case NKind::input: {
         BNode b;
         b.op = BOp::input;
@@ -861,24 +930,29 @@ class Lowerer {
       case NKind::sum: {
         std::map<double, std::vector<Signed>> groups;
         std::map<double, std::vector<int>> sources;  // the n-ary nodes of each group
+        std::map<double, Num> magnitudes;            // each group's coefficient with its extended value
         for (const NTerm& t : n.terms) {
           Signed l = lower(t.node);
-          const double c = t.coef * l.sign;
-          groups[std::fabs(c)].push_back({c < 0 ? -1 : 1, l.node});
-          sources[std::fabs(c)].push_back(t.node);
+          const Num c = l.sign < 0 ? -t.coef : t.coef;
+          groups[std::fabs(c.d)].push_back({c.d < 0 ? -1 : 1, l.node});
+          sources[std::fabs(c.d)].push_back(t.node);
+          magnitudes.emplace(std::fabs(c.d), abs_of(c));
         }
-        if (n.constant != 0) groups[1.0].push_back({n.constant < 0 ? -1 : 1, b_.constant(std::fabs(n.constant))});
+        if (n.constant.d != 0)
+          groups[1.0].push_back({n.constant.d < 0 ? -1 : 1, b_.constant(abs_of(n.constant))});
+        magnitudes.emplace(1.0, Num(1.0));
         std::vector<Signed> parts;
-        for (auto& [magnitude, items] : groups) {
-          if (magnitude != 1 && items.size() == 1) {
+        for (auto& [key, items] : groups) {
+          const Num magnitude = magnitudes.at(key);
+          if (key != 1 && items.size() == 1) {
             // One scaled term: the coefficient may fold into one of its factors.
-            Signed g = lower_scaled(magnitude, sources[magnitude][0]);
-            const int sign = items[0].sign * lower(sources[magnitude][0]).sign * g.sign;
+            Signed g = lower_scaled(magnitude, sources[key][0]);
+            const int sign = items[0].sign * lower(sources[key][0]).sign * g.sign;
             parts.push_back({sign, g.node});
             continue;
           }
           Signed g = sum_chain(items);
-          if (magnitude != 1) g.node = b_.op(BOp::mul, {b_.constant(magnitude), g.node});
+          if (key != 1) g.node = b_.op(BOp::mul, {b_.constant(magnitude), g.node});
           parts.push_back(g);
         }
         return sum_chain(parts);
@@ -889,7 +963,7 @@ class Lowerer {
         const FunctionInfo* info = function_info(n.name);
         BNode b;
         b.op = BOp::call;
-        b.name = info->c_name;
+        b.name = n.name;  // printed as info's C or extended-precision function
         int sign = 1;
         if (n.args.size() == 1) {
           Signed a = lower(n.args[0]);
@@ -933,7 +1007,8 @@ long long tree_ops(const BDag& dag, const std::vector<int>& roots) {
 
 class Printer {
  public:
-  Printer(const BDag& dag, std::string prefix) : dag_(dag), prefix_(std::move(prefix)), name_(dag.nodes.size()) {}
+  Printer(const BDag& dag, std::string prefix, bool extended = false)
+      : dag_(dag), prefix_(std::move(prefix)), extended_(extended), name_(dag.nodes.size()) {}
 
   KernelCode emit(const std::vector<std::string>& targets, const std::vector<int>& roots) {
     KernelCode code;
@@ -1000,8 +1075,8 @@ class Printer {
     auto wrap = [](const std::pair<std::string, int>& p, bool paren) { return paren ? "(" + p.first + ")" : p.first; };
     switch (n.op) {
       case BOp::constant: {
-        std::string s = c_double_literal(n.value);
-        return {n.value < 0 ? "(" + s + ")" : s, 4};
+        std::string s = extended_ ? c_extended_literal(n.value.q) : c_double_literal(n.value.d);
+        return {n.value.d < 0 || s[0] == '(' ? "(" + s + ")" : s, 4};
       }
       case BOp::input: return {n.name, 4};
       case BOp::add:
@@ -1019,7 +1094,8 @@ class Printer {
         return {"-" + wrap(k, k.second < 4), 3};
       }
       case BOp::call: {
-        std::string s = n.name + "(";
+        const FunctionInfo* info = function_info(n.name);
+        std::string s = std::string(extended_ ? info->quad_name : info->c_name) + "(";
         for (std::size_t i = 0; i < n.kids.size(); ++i) s += (i ? ", " : "") + print(n.kids[i]).first;
         return {s + ")", 4};
       }
@@ -1029,6 +1105,7 @@ class Printer {
 
   const BDag& dag_;
   std::string prefix_;
+  bool extended_ = false;
   std::vector<std::string> name_;
   std::vector<int> uses_;
   std::vector<char> emitted_;
@@ -1075,7 +1152,7 @@ void share_reciprocals(BDag& dag, const std::vector<int>& roots) {
 }
 
 KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const std::vector<KernelInput>& inputs,
-                                const CseOptions& options) {
+                                const CseOptions& options, KernelCode* extended) {
   NDag ndag;
   std::vector<Scaled> roots;
   {
@@ -1087,7 +1164,7 @@ KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const 
     Converter converter(ndag, inputs);
     for (const KernelOutput& out : outputs) {
       Exact x = converter.convert(out.value);
-      roots.push_back({value_of(x.coef), x.node});
+      roots.push_back({num_of(x.coef), x.node});
     }
   }
   rebuild(ndag, roots);
@@ -1116,6 +1193,11 @@ KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const 
   Printer printer(bdag, options.temp_prefix);
   KernelCode code = printer.emit(targets, broots);
   code.ops_before = before;
+  if (extended) {
+    Printer wide(bdag, options.temp_prefix, true);
+    *extended = wide.emit(targets, broots);
+    extended->ops_before = before;
+  }
   return code;
 }
 

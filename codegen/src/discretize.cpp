@@ -50,20 +50,22 @@ void legendre(int s, const GiNaC::numeric& x, GiNaC::numeric* p, GiNaC::numeric*
 
 Quadrature gauss_legendre(int s) {
   using GiNaC::numeric;
-  // Nodes x and weights w on [-1, 1] for x >= 0 (mirrored below), then mapped to [0, 1].
+  // Nodes x and weights w on [-1, 1] for x >= 0 (mirrored below), then mapped to [0, 1]. Square
+  // roots of an ex stay exact (GiNaC's sqrt of a numeric is a float of the current Digits), so that
+  // the extended-precision kernels get the rule's exact constants.
   std::vector<ex> x, w;
   switch (s) {
     case 1: x = {0}; w = {2}; break;
     case 2: x = {GiNaC::sqrt(ex(3)) / 3}; w = {1}; break;
-    case 3: x = {0, GiNaC::sqrt(numeric(3, 5))}; w = {numeric(8, 9), numeric(5, 9)}; break;
+    case 3: x = {0, GiNaC::sqrt(ex(numeric(3, 5)))}; w = {numeric(8, 9), numeric(5, 9)}; break;
     case 4: {
-      const ex r = 2 * GiNaC::sqrt(numeric(6, 5)) / 7;
+      const ex r = 2 * GiNaC::sqrt(ex(numeric(6, 5))) / 7;
       x = {GiNaC::sqrt(numeric(3, 7) - r), GiNaC::sqrt(numeric(3, 7) + r)};
       w = {(18 + GiNaC::sqrt(ex(30))) / 36, (18 - GiNaC::sqrt(ex(30))) / 36};
       break;
     }
     case 5: {
-      const ex r = 2 * GiNaC::sqrt(numeric(10, 7));
+      const ex r = 2 * GiNaC::sqrt(ex(numeric(10, 7)));
       x = {0, GiNaC::sqrt(5 - r) / 3, GiNaC::sqrt(5 + r) / 3};
       w = {numeric(128, 225), (322 + 13 * GiNaC::sqrt(ex(70))) / 900, (322 - 13 * GiNaC::sqrt(ex(70))) / 900};
       break;

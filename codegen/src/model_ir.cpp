@@ -231,8 +231,15 @@ ModelIR build_ir(const LagModel& model, const std::string& source_name, const Cs
       KernelIR k;
       k.variant = variant;
       k.function = model.name + "_" + spec.ident + "_" + variant;
-      k.code = generate_kernel_code(outs, inputs, options);
+      KernelIR wide;
+      k.code = generate_kernel_code(outs, inputs, options, variant == "grad" ? &wide.code : nullptr);
       k.unused_inputs = unused(k.code, args);
+      if (variant == "grad") {
+        wide.variant = "grad_extended";
+        wide.function = k.function + "_extended";
+        wide.unused_inputs = k.unused_inputs;
+        dir.extended = std::move(wide);
+      }
       dir.kernels.push_back(std::move(k));
     }
     ir.discretizations.push_back(std::move(dir));
@@ -268,7 +275,7 @@ std::string ir_to_json(const ModelIR& ir) {
   j << "  \"format_version\": 1,\n";
   j << "  \"generator\": " << json_string(std::string("pardel-gen ") + generator_version()) << ",\n";
   j << "  \"generator_version\": " << json_string(generator_version()) << ",\n";
-  j << "  \"abi_version\": 2,\n";
+  j << "  \"abi_version\": 3,\n";
   j << "  \"model\": {\n";
   j << "    \"name\": " << json_string(m.name) << ",\n";
   j << "    \"source\": " << json_string(ir.source_name) << ",\n";
@@ -301,7 +308,14 @@ std::string ir_to_json(const ModelIR& ir) {
       write_kernel(j, d.kernels[k], "      ");
       j << (k + 1 < d.kernels.size() ? ",\n" : "\n");
     }
-    j << "     ],\n     \"interval_kernels\": [";
+    j << "     ],\n     \"extended_kernel\": ";
+    if (d.extended) {
+      j << "\n";
+      write_kernel(j, *d.extended, "      ");
+    } else {
+      j << "null";
+    }
+    j << ",\n     \"interval_kernels\": [";
     for (std::size_t k = 0; k < d.interval_kernels.size(); ++k) {
       j << (k ? ",\n" : "\n");
       write_kernel(j, d.interval_kernels[k], "      ");

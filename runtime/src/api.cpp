@@ -151,6 +151,8 @@ constexpr Named<LinearSolver> kLinearSolvers[] = {{LinearSolver::block_ldlt, "ld
                                                   {LinearSolver::cyclic_reduction, "cyclic-reduction"}};
 constexpr Named<NewtonShift> kNewtonShifts[] = {{NewtonShift::identity, "identity"},
                                                 {NewtonShift::difference, "difference"}};
+constexpr Named<Refinement> kRefinements[] = {
+    {Refinement::automatic, "auto"}, {Refinement::on, "on"}, {Refinement::off, "off"}};
 constexpr Named<ClockMode> kClockModes[] = {{ClockMode::none, "none"},
                                             {ClockMode::free_final_time, "free_final_time"},
                                             {ClockMode::fixed_total_time, "fixed_total_time"}};
@@ -200,6 +202,9 @@ std::vector<std::string> linear_solver_names() { return names_in(kLinearSolvers)
 const char* to_string(NewtonShift shift) { return name_in(kNewtonShifts, shift); }
 bool parse_newton_shift(std::string_view text, NewtonShift* shift) { return parse_in(kNewtonShifts, text, shift); }
 std::vector<std::string> newton_shift_names() { return names_in(kNewtonShifts); }
+const char* to_string(Refinement refinement) { return name_in(kRefinements, refinement); }
+bool parse_refinement(std::string_view text, Refinement* refinement) { return parse_in(kRefinements, text, refinement); }
+std::vector<std::string> refinement_names() { return names_in(kRefinements); }
 
 const char* to_string(ClockMode mode) { return name_in(kClockModes, mode); }
 bool parse_clock_mode(std::string_view text, ClockMode* mode) { return parse_in(kClockModes, text, mode); }
@@ -299,6 +304,9 @@ bool Options::is_valid(std::string* error) const {
     return bad("linear_solver", std::to_string(static_cast<int>(linear_solver)), "is not a known linear solver");
   if (!in_table(kNewtonShifts, newton_shift))
     return bad("newton_shift", std::to_string(static_cast<int>(newton_shift)), "is not a known shift");
+  if (!in_table(kRefinements, iterative_refinement))
+    return bad("iterative_refinement", std::to_string(static_cast<int>(iterative_refinement)),
+               "is not a known refinement mode");
   return true;
 }
 
@@ -396,6 +404,7 @@ std::string Summary::brief_report() const {
   }
   if (!message.empty()) out += "\n  " + message;
   if (!error_note.empty()) out += "\n  error estimate: " + error_note;
+  if (!refinement_note.empty()) out += "\n  iterative refinement: " + refinement_note;
   if (!grid_note.empty()) {
     std::string sizes;
     for (std::size_t i = 0; i < grid_sizes.size(); ++i) sizes += (i ? ", " : "") + std::to_string(grid_sizes[i]);

@@ -19,6 +19,7 @@
 #include "engine.hpp"
 #include "error_estimate.hpp"
 #include "iteration.hpp"
+#include "iterative_refinement.hpp"
 #include "levels.hpp"
 
 namespace pardel {
@@ -204,6 +205,7 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return summary;
   }
+  if (summary.converged()) detail::refine_solution(driver.context(), options, summary);
   driver.write_result(trajectory);
   if (summary.termination == Termination::interrupted) {
     driver.capture(summary.state, static_cast<int>(l));

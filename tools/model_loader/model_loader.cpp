@@ -359,7 +359,8 @@ void build_into(const fs::path& lag, const fs::path& dir, const LoaderToolchain&
   if (model.empty()) fail("the generator wrote no kernels for " + lag.string());
   const fs::path so = tmp / "model.so";
   if (run_program({tools.compiler, "-std=c++17", "-O2", "-fPIC", "-shared", "-Wl,-Bsymbolic",
-                   "-I" + tools.abi_include, (tmp / (model + ".cpp")).string(), "-o", so.string()},
+                   "-I" + tools.abi_include, (tmp / (model + ".cpp")).string(), "-o", so.string(),
+                   "-lquadmath"},  // the extended-precision kernels (grad_extended) call libquadmath
                   log) != 0)
     fail("compiling the kernels of " + lag.string() + " failed (" + tools.compiler + ")");
   try {

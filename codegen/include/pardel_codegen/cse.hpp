@@ -41,6 +41,14 @@ inline bool symbolic_arithmetic_error(const std::exception& error) {
           dynamic_cast<const std::domain_error*>(&error) != nullptr);
 }
 
+/** The extended precision of the kernels that evaluate the DEL residual past double precision:
+ *  GCC's __float128 (113-bit significand) where the compiler has it, else long double. */
+#if defined(__SIZEOF_FLOAT128__)
+using ExtendedFloat = __float128;
+#else
+using ExtendedFloat = long double;
+#endif
+
 /** A symbol the kernel reads: its C spelling and the kernel argument it belongs to. */
 struct KernelInput {
   GiNaC::symbol symbol;
@@ -79,13 +87,24 @@ struct CseOptions {
 
 /**
  * Generates the code computing every output. Deterministic: the same inputs give the same text.
+ * When `extended` is given it receives the same code printed for extended precision: temporaries
+ * of type pd_quad, constants by c_extended_literal (each the exact constant rounded once to
+ * extended precision, not the double's value widened), functions from libquadmath (sinq, ...).
+ * Every decision of the optimizer reads the double values, so the double code is the same either way.
  * @throws CodegenError when an expression cannot be printed as real double arithmetic.
  */
 KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const std::vector<KernelInput>& inputs,
-                                const CseOptions& options = CseOptions());
+                                const CseOptions& options = CseOptions(), KernelCode* extended = nullptr);
 
 /** A double as a C literal with 17 significant digits (always with '.' or an exponent). */
 std::string c_double_literal(double value);
+
+/** An extended-precision value as a C++ expression of type pd_quad that needs no compiler flag:
+ *  the sum of up to three doubles, `(pd_quad(0.33333333333333331) + 1.8503717077085941e-17 +
+ *  1.0271626370065257e-33)`, whose sum in pd_quad is the value (a value that is a double prints
+ *  as that double's literal). No Q-suffixed literal: ISO C++ (-std=c++17) reads the suffix as a
+ *  user-defined literal unless -fext-numeric-literals is given. */
+std::string c_extended_literal(ExtendedFloat value);
 
 }  // namespace pardel_codegen
 

@@ -40,6 +40,11 @@ struct DiscretizationIR {
   /** With interior values z: "start" (z's starting values), "interior" (dS/dz and d2S/dz2),
    *  "ext_grad" (S and its gradient in [q0, z, q1]) and "ext_full" (with the Hessian). */
   std::vector<KernelIR> interval_kernels;
+  /** Without interior values: the grad kernel's code printed for extended precision (variant
+   *  "grad_extended": Ld, D1, D2 in pd_quad from double inputs, written as double-double pairs;
+   *  kernel_abi.h, pardel_extended_grad_kernel). Absent for a discretization with interior values,
+   *  whose Newton solve for z is not straight-line code. */
+  std::optional<KernelIR> extended;
 };
 
 struct ModelIR {

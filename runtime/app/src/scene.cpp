@@ -474,7 +474,7 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   r.check_keys(*solver, "solver",
                {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift",
                 "linear_solver", "threads", "refine", "clock_update_every", "history_every", "divergence_factor",
-                "clock", "error_estimate", "extrapolate"});
+                "clock", "error_estimate", "extrapolate", "iterative_refinement"});
   if (const auto method = r.string(solver, "method", "solver.method")) {
     if (!parse_method(*method, &options.method)) {
       const std::string suggestion = nearest_name(*method, kMethodNames);
@@ -495,6 +495,13 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
     if (!parse_newton_shift(*shift, &options.newton_shift)) {
       r.fail(*solver->get("newton_shift"), "solver.newton_shift",
              fmt::format("unknown newton_shift '{}' (expected {})", *shift, quoted_alternatives(newton_shift_names())));
+    }
+  }
+  if (const auto mode = r.string(solver, "iterative_refinement", "solver.iterative_refinement")) {
+    if (!parse_refinement(*mode, &options.iterative_refinement)) {
+      r.fail(*solver->get("iterative_refinement"), "solver.iterative_refinement",
+             fmt::format("unknown iterative_refinement '{}' (expected {})", *mode,
+                         quoted_alternatives(refinement_names())));
     }
   }
   if (const auto ls = r.string(solver, "linear_solver", "solver.linear_solver")) {

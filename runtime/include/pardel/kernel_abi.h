@@ -19,7 +19,8 @@
 #ifndef PARDEL_KERNEL_ABI_H
 #define PARDEL_KERNEL_ABI_H
 
-#define PARDEL_KERNEL_ABI_VERSION 2
+/* 3: pardel_discretization gained grad_extended (its array's stride changed). */
+#define PARDEL_KERNEL_ABI_VERSION 3
 
 #ifdef __cplusplus
 extern "C" {
@@ -37,6 +38,18 @@ typedef void (*pardel_sweep_kernel)(double h, double t0, double t1, const double
 /** Ld, D1, D2: the action and its gradient, for line searches and residuals. */
 typedef void (*pardel_grad_kernel)(double h, double t0, double t1, const double* q0, const double* q1,
                                    const double* p, double* Ld, double* D1, double* D2);
+
+/**
+ * Ld, D1, D2 evaluated in extended precision (__float128 where the compiler has it, else long
+ * double) from the same double inputs, each written as a double-double pair hi + lo (|lo| at most
+ * half an ulp of hi): Ld[0], Ld[1]; D1[2i], D1[2i+1]; D2[2i], D2[2i+1] (so D1 and D2 have 2m
+ * entries). The constants are the discretization's exact ones rounded once to extended precision.
+ * The runtime sums the DEL residual D2(k-1) + D1(k) from these pairs and rounds it once to double
+ * (iterative refinement, docs/solvers.md): the cancellation of the terms, which costs double
+ * precision a factor of about h^(1-2 order) in the residual, happens in extended precision.
+ */
+typedef void (*pardel_extended_grad_kernel)(double h, double t0, double t1, const double* q0, const double* q1,
+                                            const double* p, double* Ld, double* D1, double* D2);
 
 /** Ld alone: the discrete action of one interval. */
 typedef double (*pardel_action_kernel)(double h, double t0, double t1, const double* q0, const double* q1,
@@ -58,6 +71,9 @@ typedef struct pardel_discretization {
   pardel_sweep_kernel sweep;
   pardel_grad_kernel grad;
   pardel_action_kernel action;
+  /** NULL when absent: discretizations with interior values (Galerkin with s > order), and
+   *  kernels compiled without an extended floating-point type. */
+  pardel_extended_grad_kernel grad_extended;
 } pardel_discretization;
 
 /** How a model's reported cost is computed from a solution (the .lag's `cost NAME = KIND`). */

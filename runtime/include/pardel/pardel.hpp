@@ -147,6 +147,21 @@ bool parse_newton_shift(std::string_view text, NewtonShift* shift);
 /** Every trust-region metric's name, in the order of the enum. */
 std::vector<std::string> newton_shift_names();
 
+/** Iterative refinement of a converged solution with the DEL residual evaluated in extended
+ *  precision (Options::iterative_refinement; docs/solvers.md, "Iterative refinement"). */
+enum class Refinement {
+  automatic,  ///< "auto": for models of order >= 2 whose discretization has the extended kernel,
+              ///< computes the first correction and refines only when it is above the rounding of
+              ///< the nodes (1000 eps max|q|): round-off of the double residual matters
+  on,         ///< refine wherever the extended kernel exists, whatever the first correction
+  off         ///< never
+};
+const char* to_string(Refinement refinement);
+/** Parses "auto", "on", "off"; false if unknown. */
+bool parse_refinement(std::string_view text, Refinement* refinement);
+/** Every refinement mode's name, in the order of the enum. */
+std::vector<std::string> refinement_names();
+
 enum class Termination {
   converged,
   max_iterations,
@@ -253,6 +268,11 @@ struct Options {
    *  problem's grid only. One process only (not over MPI ranks), no clock. */
   double accuracy = 0;
   int accuracy_max_N = 1 << 20;  ///< the largest N an adaptive solve may use
+  /** After a converged solve in one process: iterative refinement with the DEL residual evaluated
+   *  by the discretization's extended-precision kernel (pardel_discretization::grad_extended) and
+   *  the Hessian at the solution, which removes the round-off error that grows like eps N^(2 order)
+   *  (Summary::refinement_note says whether it ran and what it changed). Not over MPI ranks. */
+  Refinement iterative_refinement = Refinement::automatic;
   /** Checks the options against their bounds (option_bound); on failure writes a message naming
    *  the option, its value and the rule it breaks. */
   bool is_valid(std::string* error) const;
@@ -381,6 +401,13 @@ struct Summary {
    *  grids", or why not); both empty otherwise. The returned trajectory carries the grid's times. */
   std::vector<int> grid_sizes;
   std::string grid_note;
+  /** Iterative refinement (Options::iterative_refinement): corrections applied (0: none), the
+   *  largest change of a node value they made in all, and one line on what happened ("2
+   *  corrections, largest node change 3.1e-07, DEL residual in extended precision 2.0e-03 ->
+   *  4.1e-12", or why it did not run); the note is empty where refinement was off. */
+  int refinement_steps = 0;
+  double refinement_change = 0;
+  std::string refinement_note;
   std::vector<IterationRecord> history;
   SolverState state;  ///< filled (state.valid) when the solve ended `interrupted`
   bool converged() const { return termination == Termination::converged; }

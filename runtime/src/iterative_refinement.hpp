@@ -1,0 +1,39 @@
+/**
+ * @file iterative_refinement.hpp
+ * Internal: iterative refinement of a converged solution in one process. The DEL residual
+ * r_k = D2 Ld(q_{k-1}, q_k) + D1 Ld(q_k, q_{k+1}) is a sum of terms of size about |q| h^(1-2 order)
+ * that cancel; in double its rounding error is eps |q| h^(1-2 order), which the inverse Hessian
+ * maps to an error in q that grows like eps N^(2 order). Refinement evaluates r with the
+ * discretization's extended-precision kernel (grad_extended: D1 and D2 as double-double pairs,
+ * summed per node in double-double and rounded once), solves H delta = -r with the Hessian at the
+ * solution (factored once) and adds delta, while the corrections decrease.
+ */
+#ifndef PARDEL_RUNTIME_ITERATIVE_REFINEMENT_HPP
+#define PARDEL_RUNTIME_ITERATIVE_REFINEMENT_HPP
+
+#include <vector>
+
+#include "engine.hpp"
+
+namespace pardel::detail {
+
+/** At most this many corrections. */
+constexpr int kMaxRefinementSteps = 6;
+/** Refinement::automatic applies the corrections only when the first is above this many eps max|q|. */
+constexpr double kRefinementThreshold = 1000;
+
+/** The DEL residual at q from the extended kernel into res ((N+1) dim; 0 on fixed components and
+ *  at the ends), each node's two terms summed in double-double and rounded once; `pairs` is
+ *  scratch. Returns the first node with a non-finite value, or -1. The same bits for any thread
+ *  count. Needs ctx.disc->grad_extended. */
+int extended_residual(const Context& ctx, const std::vector<double>& q, std::vector<double>& pairs,
+                      std::vector<double>& res);
+
+/** Refines ctx.q (a converged solution) as Options::iterative_refinement says, re-evaluates the
+ *  context there (full kernel and residual) when it changed, and fills the summary's refinement_*
+ *  fields. */
+void refine_solution(Context& ctx, const Options& options, Summary& summary);
+
+}  // namespace pardel::detail
+
+#endif  // PARDEL_RUNTIME_ITERATIVE_REFINEMENT_HPP
