@@ -24,6 +24,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <new>
@@ -458,6 +459,39 @@ Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const
   return resample(problem, from, problem.N);
 }
 
+/** What pardel.Result is made of: summary.json's dictionary (as text), the trajectory, the
+ *  boundary momenta and the history as arrays. */
+py::dict result_dict(const Scene& scene, const Summary& summary, const Trajectory& trajectory, bool stopped_by_callback) {
+  py::dict result;
+  const std::string model_source = app::scene_model_source(scene);
+  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes, as in summary.json.
+  result["summary"] = app::summary_json(scene, summary, trajectory, Certificate{}, model_source)
+                          .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  result["stopped_by_callback"] = stopped_by_callback;
+  result["t"] = vector(trajectory.t);
+  result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
+  const BoundaryMomenta momenta = app::momenta_on_trajectory_grid(scene.problem, trajectory);
+  result["p0"] = vector(momenta.p0);
+  result["pN"] = vector(momenta.pN);
+  const std::size_t n = summary.history.size();
+  std::vector<double> it(n), N(n), res(n), act(n), sec(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    it[i] = static_cast<double>(summary.history[i].iteration);
+    N[i] = summary.history[i].N;
+    res[i] = summary.history[i].residual;
+    act[i] = summary.history[i].action;
+    sec[i] = summary.history[i].seconds;
+  }
+  py::dict history;
+  history["iteration"] = vector(it).attr("astype")("int64");
+  history["N"] = vector(N).attr("astype")("int64");
+  history["residual"] = vector(res);
+  history["action"] = vector(act);
+  history["seconds"] = vector(sec);
+  result["history"] = history;
+  return result;
+}
+
 /**
  * Solves a scene with the GIL released. Every recorded iteration calls `on_iteration` (with the
  * GIL) when given, and at most every 50 ms checks Python's signals; a pending exception
@@ -525,34 +559,131 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
   if (summary.termination == Termination::invalid_input)
     throw InputError(fmt::format("{}: error: {}", scene.path, summary.message));
 
-  py::dict result;
-  const std::string model_source = app::scene_model_source(scene);
-  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes, as in summary.json.
-  result["summary"] = app::summary_json(scene, summary, trajectory, Certificate{}, model_source)
-                          .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
-  result["stopped_by_callback"] = stopped_by_callback;
-  result["t"] = vector(trajectory.t);
-  result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
-  const BoundaryMomenta momenta = app::momenta_on_trajectory_grid(scene.problem, trajectory);
-  result["p0"] = vector(momenta.p0);
-  result["pN"] = vector(momenta.pN);
-  const std::size_t n = summary.history.size();
-  std::vector<double> it(n), N(n), res(n), act(n), sec(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    it[i] = static_cast<double>(summary.history[i].iteration);
-    N[i] = summary.history[i].N;
-    res[i] = summary.history[i].residual;
-    act[i] = summary.history[i].action;
-    sec[i] = summary.history[i].seconds;
+  return result_dict(scene, summary, trajectory, stopped_by_callback);
+}
+
+/**
+ * Runs `work` on a worker thread with the GIL released while this thread checks Python's signals
+ * every 50 ms; a pending exception (KeyboardInterrupt) sets `stop`, and is returned once the work
+ * has ended (nullptr when none). An exception of the work is rethrown here.
+ */
+std::unique_ptr<py::error_already_set> watching_signals(const std::function<void()>& work, std::atomic<bool>& stop) {
+  std::exception_ptr failure;
+  std::unique_ptr<py::error_already_set> pending;
+  {
+    py::gil_scoped_release release;
+    std::mutex mutex;
+    std::condition_variable finished;
+    bool done = false;
+    std::thread worker([&] {
+      try {
+        work();
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        done = true;
+      }
+      finished.notify_one();
+    });
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!finished.wait_for(lock, kSignalCheckPeriod, [&done] { return done; })) {
+      if (pending) continue;
+      lock.unlock();
+      {
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() != 0) {
+          pending = std::make_unique<py::error_already_set>();
+          stop.store(true);
+        }
+      }
+      lock.lock();
+    }
+    lock.unlock();
+    worker.join();
   }
-  py::dict history;
-  history["iteration"] = vector(it).attr("astype")("int64");
-  history["N"] = vector(N).attr("astype")("int64");
-  history["residual"] = vector(res);
-  history["action"] = vector(act);
-  history["seconds"] = vector(sec);
-  result["history"] = history;
-  return result;
+  if (failure) std::rethrow_exception(failure);
+  return pending;
+}
+
+/** A 2-D (rows x cols) or 3-D array argument of pardel.solve_batch as float64, its shape checked
+ *  against `expected` (-1: any), the message naming the argument. */
+py::array_t<double, py::array::c_style | py::array::forcecast> batch_array(const py::object& value, const char* name,
+                                                                          std::vector<py::ssize_t> expected,
+                                                                          const std::string& what) {
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+  bool fits = a && a.ndim() == static_cast<py::ssize_t>(expected.size());
+  for (std::size_t i = 0; fits && i < expected.size(); ++i) fits = expected[i] < 0 || a.shape(i) == expected[i];
+  if (!fits) {
+    const std::string shape = a ? fmt::format("({})", fmt::join(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()), ", "))
+                                : "no array";
+    throw InputError(fmt::format("{}: shape {} given; expected {}", name, shape, what));
+  }
+  return a;
+}
+
+/**
+ * pardel.solve_batch: B problems that differ from `scene` in q0, qN (B x dim), params (B x nparams,
+ * or None: the scene's) and guess (B x (M+1) x dim, resampled to N as solve_scene does; None: the
+ * scene's guess), solved by pardel::solve_batch with the GIL released while this thread watches for
+ * Ctrl-C (which stops the batch and is raised once it has stopped). `threads`: problems at once.
+ * A batch refused as a whole (memory) raises PardelError; each problem's result is solve_scene's,
+ * a problem never started (interrupted) holding its initial guess.
+ */
+py::dict solve_batch_scene(Scene scene, const py::object& q0, const py::object& qN, const py::object& params,
+                           const py::object& guess, const py::object& threads) {
+  if (!threads.is_none()) scene.options.threads = threads.cast<int>();
+  const pardel_model& model = *scene.model;
+  const py::ssize_t dim = model.dim, np = model.nparams;
+  const auto q0s = batch_array(q0, "q0", {-1, dim}, fmt::format("(B, {}) (model {} has dim {})", dim, model.name, dim));
+  const py::ssize_t B = q0s.shape(0);
+  const auto qNs = batch_array(qN, "qN", {B, dim}, fmt::format("({}, {}), as q0", B, dim));
+  std::vector<BatchProblem> problems(static_cast<std::size_t>(B));
+  std::vector<Scene> scenes(static_cast<std::size_t>(B), scene);
+  py::array_t<double, py::array::c_style | py::array::forcecast> ps;
+  if (!params.is_none()) ps = batch_array(params, "params", {B, np}, fmt::format("({}, {}) (model {} has {} params)", B, np, model.name, np));
+  py::array_t<double, py::array::c_style | py::array::forcecast> gs;
+  if (!guess.is_none()) gs = batch_array(guess, "guess", {B, -1, dim}, fmt::format("({}, M+1, {})", B, dim));
+  const bool have_params = !params.is_none(), have_guess = !guess.is_none();
+  if (have_guess && gs.shape(1) < 2) throw InputError("guess: at least 2 nodes per problem were expected");
+  for (py::ssize_t i = 0; i < B; ++i) {
+    Problem& problem = scenes[static_cast<std::size_t>(i)].problem;
+    problem.q0.assign(q0s.data(i, 0), q0s.data(i, 0) + dim);
+    problem.qN.assign(qNs.data(i, 0), qNs.data(i, 0) + dim);
+    if (have_params) problem.params.assign(ps.data(i, 0), ps.data(i, 0) + np);
+    BatchProblem& b = problems[static_cast<std::size_t>(i)];
+    b.q0 = problem.q0;
+    b.qN = problem.qN;
+    b.params = problem.params;
+    if (have_guess)
+      b.guess = initial_trajectory(scenes[static_cast<std::size_t>(i)], py::array(gs[py::int_(i)]), py::none());
+    else if (scene.guess.kind != app::GuessKind::linear)
+      b.guess = app::make_initial_guess(scenes[static_cast<std::size_t>(i)]);
+  }
+  std::atomic<bool> stop{false};
+  scene.options.on_iteration = nullptr;
+  scene.options.keep_going = [&stop] { return !stop.load(std::memory_order_relaxed); };
+  BatchSummary batch;
+  std::unique_ptr<py::error_already_set> pending =
+      watching_signals([&] { batch = pardel::solve_batch(scene.problem, scene.options, problems); }, stop);
+  if (pending) throw std::move(*pending);
+  if (!batch.refusal.empty()) throw InputError(fmt::format("{}: {}", scene.path, batch.refusal));
+  py::list results;
+  for (py::ssize_t i = 0; i < B; ++i) {
+    BatchEntry& e = batch.entries[static_cast<std::size_t>(i)];
+    const Scene& s = scenes[static_cast<std::size_t>(i)];
+    if (e.trajectory.N == 0) {  // never started: its initial guess
+      const BatchProblem& b = problems[static_cast<std::size_t>(i)];
+      e.trajectory = b.guess.N > 0 ? b.guess : linear_guess(s.problem);
+    }
+    results.append(result_dict(s, e.summary, e.trajectory, false));
+  }
+  py::dict out;
+  out["results"] = results;
+  out["threads"] = batch.threads;
+  out["wall_seconds"] = batch.wall_seconds;
+  return out;
 }
 
 /** `pardel check`: the certificate, residual and action at a trajectory (the scene's guess when
@@ -598,43 +729,9 @@ py::dict run_sweep(const std::string& path, const std::vector<std::string>& over
   const app::Sweep sweep = app::load_sweep(path, overrides, resolve_spec, bundled_model_names());
   std::atomic<bool> stop{false};
   std::vector<app::VariantResult> results;
-  std::exception_ptr failure;
-  std::unique_ptr<py::error_already_set> pending;
   const auto start = std::chrono::steady_clock::now();
-  {
-    py::gil_scoped_release release;
-    std::mutex mutex;
-    std::condition_variable finished;
-    bool done = false;
-    std::thread worker([&] {
-      try {
-        results = app::run_variants_over_ranks(sweep, threads, 0, 1, {}, &stop);
-      } catch (...) {
-        failure = std::current_exception();
-      }
-      {
-        const std::lock_guard<std::mutex> lock(mutex);
-        done = true;
-      }
-      finished.notify_one();
-    });
-    std::unique_lock<std::mutex> lock(mutex);
-    while (!finished.wait_for(lock, kSignalCheckPeriod, [&done] { return done; })) {
-      if (pending) continue;
-      lock.unlock();
-      {
-        py::gil_scoped_acquire gil;
-        if (PyErr_CheckSignals() != 0) {
-          pending = std::make_unique<py::error_already_set>();
-          stop.store(true);
-        }
-      }
-      lock.lock();
-    }
-    lock.unlock();
-    worker.join();
-  }
-  if (failure) std::rethrow_exception(failure);
+  std::unique_ptr<py::error_already_set> pending =
+      watching_signals([&] { results = app::run_variants_over_ranks(sweep, threads, 0, 1, {}, &stop); }, stop);
 
   app::SweepRunInfo info;
   info.ranks = 1;
@@ -885,6 +982,8 @@ PYBIND11_MODULE(_pardel, m) {
         return raising_interrupts([&] { return run_sweep(path, overrides, threads, out); });
       },
       py::arg("path"), py::arg("overrides"), py::arg("threads"), py::arg("out"));
+  m.def("solve_batch_scene", &solve_batch_scene, py::arg("scene"), py::arg("q0"), py::arg("qN"), py::arg("params"),
+        py::arg("guess"), py::arg("threads"));
   m.def("check_scene", &check_scene, py::arg("scene"), py::arg("q"), py::arg("t"));
   m.def("kernels", &kernels, py::arg("model"), py::arg("discretization"), py::arg("h"), py::arg("t0"), py::arg("t1"),
         py::arg("q0"), py::arg("q1"), py::arg("params"));

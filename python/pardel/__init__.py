@@ -48,7 +48,7 @@ if _INSTALLED_TOOLCHAIN:
 __all__ = [
     "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError", "ModelWarning",
     "model", "models", "solve", "load_scene", "solve_scene", "check", "kernels", "lag_cache_dir",
-    "sweep", "SweepResult", "SweepVariant", "SweepSolution",
+    "sweep", "SweepResult", "SweepVariant", "SweepSolution", "solve_batch", "BatchResult",
 ]
 
 
@@ -517,16 +517,145 @@ def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=N
     return solve_scene(scene, guess=guess, on_iteration=on_iteration)
 
 
+class BatchResult:
+    """What pardel.solve_batch returned: results (a Result per problem, in order; len() and
+    indexing reach them too), and over the batch: status (array of str), converged (array of
+    bool), iterations, residual, action and cost (arrays), t and q (arrays of shape (B, N+1) and
+    (B, N+1, dim); NaN rows for a problem whose trajectory is on another grid), threads (problems
+    solved at once) and wall_seconds."""
+
+    def __init__(self, raw, model_coords):
+        self.results = [Result(r, model_coords) for r in raw["results"]]
+        self.threads = raw["threads"]
+        self.wall_seconds = raw["wall_seconds"]
+        self.status = np.array([r.status for r in self.results], dtype=object)
+        self.converged = np.array([r.converged for r in self.results], dtype=bool)
+        self.iterations = np.array([r.iterations for r in self.results], dtype=np.int64)
+
+        def numbers(name):
+            return np.array([np.nan if getattr(r, name) is None else getattr(r, name) for r in self.results],
+                            dtype=float)
+
+        self.residual, self.action, self.cost = numbers("residual"), numbers("action"), numbers("cost")
+        shape = max((r.q.shape for r in self.results), key=lambda s: s[0], default=(0, 0))
+        self.q = np.full((len(self.results),) + shape, np.nan)
+        self.t = np.full((len(self.results), shape[0]), np.nan)
+        for i, r in enumerate(self.results):
+            if r.q.shape == shape:
+                self.q[i] = r.q
+                self.t[i] = r.t
+
+    def __len__(self):
+        return len(self.results)
+
+    def __getitem__(self, i):
+        return self.results[i]
+
+    def __iter__(self):
+        return iter(self.results)
+
+    def __repr__(self):
+        return "pardel.BatchResult(%d problems, %d converged, %d threads, %.3g s)" % (
+            len(self.results), int(self.converged.sum()), self.threads, self.wall_seconds)
+
+
+def _batched(where, name, value, ndim, what, sizes):
+    """A per-problem argument of solve_batch as a float array with a leading batch axis: `ndim`
+    dimensions for one problem (broadcast later), ndim + 1 with the batch axis; its batch size is
+    recorded in `sizes` by name."""
+    try:
+        given = np.ndim(value)
+    except ValueError:  # ragged: _check_array says so
+        given = ndim
+    array = _check_array(where, name, value, given if given in (ndim, ndim + 1) else ndim, what)
+    if array.ndim == ndim + 1:
+        sizes[name] = array.shape[0]
+    return array
+
+
+def solve_batch(model, q0=None, qN=None, T=None, N=None, *, params=None, guess=None, threads=None, **options):
+    """Solves B independent problems that differ in their boundary values, params and initial
+    guesses, several at once (pardel::solve_batch: one problem per thread, each solved as
+    pardel.solve solves it with threads=1, bit for bit, whatever the number of threads).
+
+    q0, qN: (B, dim) arrays, or one point (dim values) for every problem. params: a dict by name of
+    numbers or (B,) arrays, or a (B, nparams) array, or one list in declaration order. guess: None
+    (each problem's straight line, or the polyline option's), one (M+1, dim) array for all, or a
+    (B, M+1, dim) array. The batch size B is the leading size of the arguments that have one; they
+    must agree. threads: problems solved at once (default all cores). T, N and the other keyword
+    options are pardel.solve's and the same for every problem. Returns a BatchResult; a problem
+    that fails has its own status (invalid_input too). Ctrl-C stops the batch and raises
+    KeyboardInterrupt; a batch whose estimated memory does not fit the machine raises PardelError.
+    """
+    where = "pardel.solve_batch"
+    _check_model(where, "model", model)
+    if q0 is None or qN is None:
+        raise TypeError("%s: missing argument %s" % (where, "q0" if q0 is None else "qN"))
+    sizes = {}
+    q0 = _batched(where, "q0", q0, 1, "an array of numbers: (dim,) or (B, dim)", sizes)
+    qN = _batched(where, "qN", qN, 1, "an array of numbers: (dim,) or (B, dim)", sizes)
+    if guess is not None:
+        guess = _batched(where, "guess", guess, 2, "an array of numbers: (M+1, dim) or (B, M+1, dim)", sizes)
+    if threads is not None:
+        threads = _check_option(where, "threads", threads)
+    named = isinstance(params, dict)
+    if named:
+        params = {key: _batched(where, "params[%r]" % key, value, 0, "a number or a (B,) array", sizes)
+                  if not _is_real(value) else _check_number(where, "params[%r]" % key, value)
+                  for key, value in params.items()}
+    elif params is not None:
+        params = _batched(where, "params", params, 1, "an array of numbers: (nparams,) or (B, nparams)", sizes)
+    if len(set(sizes.values())) > 1:
+        raise PardelError("%s: the batch sizes of the arguments differ: %s" % (
+            where, ", ".join("%s has %d" % item for item in sizes.items())))
+    B = next(iter(sizes.values()), 1)
+
+    if B == 0:
+        raise PardelError("%s: an empty batch (B = 0)" % where)
+    m = model if isinstance(model, Model) else Model(model)
+    for name, array, size, has in (("q0", q0, m.dim, "dim %d"), ("qN", qN, m.dim, "dim %d"),
+                                    ("guess", guess, m.dim, "dim %d"), ("params", params, len(m.params), "%d params")):
+        if isinstance(array, np.ndarray) and array.shape[-1] != size:
+            raise PardelError("%s: %s must have %d values per %s (model %s has %s), got shape %s" % (
+                where, name, size, "node" if name == "guess" else "problem", m.name, has % size, array.shape))
+    if guess is not None and guess.shape[-2] < 2:
+        raise PardelError("%s: guess must have at least 2 nodes, got shape %s" % (where, guess.shape))
+
+    def batch_of(array, ndim):
+        """The array with the batch axis, a single value repeated over it."""
+        return np.ascontiguousarray(np.broadcast_to(array, (B,) + array.shape) if array.ndim == ndim else array)
+
+    q0, qN = batch_of(q0, 1), batch_of(qN, 1)
+    if named:
+        base_params = {key: float(np.asarray(v).flat[0]) for key, v in params.items()}
+    elif params is not None:
+        params = batch_of(params, 1)
+        base_params = params[0].tolist()
+    else:
+        base_params = None
+    arguments = _solve_arguments(m, q0[0], qN[0], T, N, None, None, dict(options, params=base_params, threads=threads), where)
+    scene = Scene(_pardel.scene_from_arguments(os.fsencode(m.spec), arguments))
+    if guess is not None:
+        guess = batch_of(guess, 2)
+    if named:  # the scene's params (defaults and scalars), with the per-problem columns given
+        names = list(m.params)
+        table = np.tile(np.array([scene.info["params"][n] for n in names], dtype=float), (B, 1))
+        for key, value in params.items():
+            table[:, names.index(key)] = value
+        params = table
+    raw = _pardel.solve_batch_scene(scene._core, q0, qN, params, guess, threads)
+    return BatchResult(raw, m.coords)
+
+
 # What each required argument of pardel.solve is, for the message when it is missing.
 _REQUIRED = (("q0", "the boundary point at t0"), ("qN", "the boundary point at t0 + T"),
              ("T", "the final time minus t0"), ("N", "the number of intervals"))
 
 
-def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options):
+def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options, where="pardel.solve"):
     """pardel.solve's arguments checked (types, NaN, the runtime's option bounds) and turned into
     plain values for the scene: floats, ints, strs and lists of them. Unknown option names are
     left to the core, which suggests the nearest valid name."""
-    where = "pardel.solve"
     _check_model(where, "model", model)
     given = {"q0": q0, "qN": qN, "T": T, "N": N}
     adaptive = options.get("accuracy") is not None  # N is then the first grid's, and optional
