@@ -37,7 +37,9 @@ std::string batch_refusal(const Problem& base, const Options& options, const Opt
   all.peak = std::min<double>(threads, static_cast<double>(count)) * per_solve + static_cast<double>(count) * result;
   all.largest = std::to_string(std::min<std::size_t>(static_cast<std::size_t>(threads), count)) +
                 " solves at once and " + std::to_string(count) + " results";
-  const std::string refusal = memory_refusal(base, inner, all, machine_memory());
+  Options at_once = inner;  // the address space each of the batch's threads reserves
+  at_once.threads = threads;
+  const std::string refusal = memory_refusal(base, at_once, all, machine_memory());
   if (refusal.empty()) return "";
   return "a batch of " + std::to_string(count) + " problems: " + refusal;
 }
@@ -65,7 +67,6 @@ Trajectory entry_guess(const Problem& problem, const BatchProblem& p) {
 BatchSummary solve_batch(const Problem& base, const Options& options, const std::vector<BatchProblem>& problems) {
   const auto start = std::chrono::steady_clock::now();
   BatchSummary batch;
-  batch.entries.resize(problems.size());
   const int threads = std::max(1, std::min(detail::resolve_threads(options.threads),
                                            static_cast<int>(std::max<std::size_t>(problems.size(), 1))));
   batch.threads = threads;
@@ -84,10 +85,8 @@ BatchSummary solve_batch(const Problem& base, const Options& options, const std:
   inner.keep_going = keep_going;
   inner.on_iteration = [&keep_going](const IterationRecord&) { return keep_going(); };
   batch.refusal = batch_refusal(base, options, inner, problems.size(), threads);
-  if (!batch.refusal.empty()) {
-    for (BatchEntry& e : batch.entries) e.summary.message = batch.refusal;  // termination: invalid_input
-    return batch;
-  }
+  if (!batch.refusal.empty()) return batch;
+  batch.entries.resize(problems.size());
   const long count = static_cast<long>(problems.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (long i = 0; i < count; ++i) {

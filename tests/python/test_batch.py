@@ -143,3 +143,9 @@ def test_sigint_stops_the_batch_and_other_threads_run_meanwhile():
     assert len(ticks) > 5
     after = pardel.solve_batch(model, q0=[0, 0], qN=[0.5, 0.5], T=T, N=20)
     assert after.converged.all()
+
+
+def test_a_batch_too_large_for_the_machine_is_refused_before_solving():
+    # 1000 trajectories of 50 million nodes: 1.2 TB for the results alone.
+    with pytest.raises(pardel.PardelError, match=r"a batch of 1000 problems: grid.N = 50000000 needs an estimated"):
+        pardel.solve_batch(MODEL, q0=np.zeros((1000, 2)), qN=[0.5, 0.5], T=T, N=50000000)

@@ -461,10 +461,10 @@ struct BatchEntry {
 };
 
 struct BatchSummary {
-  std::vector<BatchEntry> entries;  ///< one per problem, in the order given
-  /** Non-empty when the whole batch was refused before anything was solved (its estimated memory
-   *  does not fit the machine, or options solve_batch does not take); every entry then ends
-   *  invalid_input with this message. */
+  std::vector<BatchEntry> entries;  ///< one per problem, in the order given (none when refused)
+  /** Non-empty when the whole batch was refused before anything was allocated or solved (its
+   *  estimated memory does not fit the machine, or options solve_batch does not take); `entries`
+   *  is then empty. */
   std::string refusal;
   int threads = 1;          ///< problems solved at once
   double wall_seconds = 0;
