@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid (consistency order 2)
 
 // full: 31 operations (54 before CSE)
-extern "C" void bratu_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void bratu_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -64,7 +67,7 @@ extern "C" void bratu_trapezoid_full(double h, double t0, double t1, const doubl
 }
 
 // sweep: 23 operations (38 before CSE)
-extern "C" void bratu_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void bratu_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -81,7 +84,7 @@ extern "C" void bratu_trapezoid_sweep(double h, double t0, double t1, const doub
 }
 
 // grad: 22 operations (34 before CSE)
-extern "C" void bratu_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void bratu_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -97,7 +100,7 @@ extern "C" void bratu_trapezoid_grad(double h, double t0, double t1, const doubl
 }
 
 // action: 13 operations (14 before CSE)
-extern "C" double bratu_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double bratu_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -106,6 +109,7 @@ extern "C" double bratu_trapezoid_action(double h, double t0, double t1, const d
 }
 
 // grad_extended: the grad kernel in pd_quad, 22 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void bratu_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -131,11 +135,12 @@ extern "C" void bratu_trapezoid_grad_extended(double h_in, double t0_in, double 
   pd_split(D1, D1_out, 1);
   pd_split(D2, D2_out, 1);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 31 operations (71 before CSE)
-extern "C" void bratu_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void bratu_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -157,7 +162,7 @@ extern "C" void bratu_midpoint_full(double h, double t0, double t1, const double
 }
 
 // sweep: 21 operations (46 before CSE)
-extern "C" void bratu_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void bratu_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -173,7 +178,7 @@ extern "C" void bratu_midpoint_sweep(double h, double t0, double t1, const doubl
 }
 
 // grad: 23 operations (38 before CSE)
-extern "C" void bratu_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void bratu_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -189,7 +194,7 @@ extern "C" void bratu_midpoint_grad(double h, double t0, double t1, const double
 }
 
 // action: 13 operations (14 before CSE)
-extern "C" double bratu_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double bratu_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -198,6 +203,7 @@ extern "C" double bratu_midpoint_action(double h, double t0, double t1, const do
 }
 
 // grad_extended: the grad kernel in pd_quad, 23 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void bratu_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -223,6 +229,7 @@ extern "C" void bratu_midpoint_grad_extended(double h_in, double t0_in, double t
   pd_split(D1, D1_out, 1);
   pd_split(D2, D2_out, 1);
 }
+#endif
 
 static const char* const bratu_coords[] = {
     "u",
@@ -233,9 +240,14 @@ static const char* const bratu_param_names[] = {
 static const double bratu_param_defaults[] = {
     1.0,
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization bratu_discretizations[] = {
-    {"trapezoid", 2, bratu_trapezoid_full, bratu_trapezoid_sweep, bratu_trapezoid_grad, bratu_trapezoid_action, bratu_trapezoid_grad_extended},
-    {"midpoint", 2, bratu_midpoint_full, bratu_midpoint_sweep, bratu_midpoint_grad, bratu_midpoint_action, bratu_midpoint_grad_extended},
+    {"trapezoid", 2, bratu_trapezoid_full, bratu_trapezoid_sweep, bratu_trapezoid_grad, bratu_trapezoid_action, PD_EXTENDED(bratu_trapezoid_grad_extended)},
+    {"midpoint", 2, bratu_midpoint_full, bratu_midpoint_sweep, bratu_midpoint_grad, bratu_midpoint_action, PD_EXTENDED(bratu_midpoint_grad_extended)},
 };
 
 extern "C" const pardel_model bratu_model = {

@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid (consistency order 2)
 
 // full: 15 operations (31 before CSE)
-extern "C" void free_particle_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void free_particle_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -74,7 +77,7 @@ extern "C" void free_particle_trapezoid_full(double h, double t0, double t1, con
 }
 
 // sweep: 7 operations (14 before CSE)
-extern "C" void free_particle_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void free_particle_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -97,7 +100,7 @@ extern "C" void free_particle_trapezoid_sweep(double h, double t0, double t1, co
 }
 
 // grad: 13 operations (23 before CSE)
-extern "C" void free_particle_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void free_particle_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -113,7 +116,7 @@ extern "C" void free_particle_trapezoid_grad(double h, double t0, double t1, con
 }
 
 // action: 11 operations (13 before CSE)
-extern "C" double free_particle_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double free_particle_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -125,6 +128,7 @@ extern "C" double free_particle_trapezoid_action(double h, double t0, double t1,
 }
 
 // grad_extended: the grad kernel in pd_quad, 13 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void free_particle_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -148,11 +152,12 @@ extern "C" void free_particle_trapezoid_grad_extended(double h_in, double t0_in,
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 15 operations (31 before CSE)
-extern "C" void free_particle_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void free_particle_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -182,7 +187,7 @@ extern "C" void free_particle_midpoint_full(double h, double t0, double t1, cons
 }
 
 // sweep: 7 operations (14 before CSE)
-extern "C" void free_particle_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void free_particle_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -205,7 +210,7 @@ extern "C" void free_particle_midpoint_sweep(double h, double t0, double t1, con
 }
 
 // grad: 13 operations (23 before CSE)
-extern "C" void free_particle_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void free_particle_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -221,7 +226,7 @@ extern "C" void free_particle_midpoint_grad(double h, double t0, double t1, cons
 }
 
 // action: 11 operations (13 before CSE)
-extern "C" double free_particle_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double free_particle_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -233,6 +238,7 @@ extern "C" double free_particle_midpoint_action(double h, double t0, double t1, 
 }
 
 // grad_extended: the grad kernel in pd_quad, 13 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void free_particle_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -256,14 +262,20 @@ extern "C" void free_particle_midpoint_grad_extended(double h_in, double t0_in, 
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 static const char* const free_particle_coords[] = {
     "x",
     "y",
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization free_particle_discretizations[] = {
-    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action, free_particle_trapezoid_grad_extended},
-    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action, free_particle_midpoint_grad_extended},
+    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action, PD_EXTENDED(free_particle_trapezoid_grad_extended)},
+    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action, PD_EXTENDED(free_particle_midpoint_grad_extended)},
 };
 
 extern "C" const pardel_model free_particle_model = {

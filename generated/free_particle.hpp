@@ -13,26 +13,30 @@ extern "C" {
 extern const pardel_model free_particle_model;
 
 /* trapezoid */
-void free_particle_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void free_particle_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void free_particle_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void free_particle_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void free_particle_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void free_particle_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double free_particle_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double free_particle_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void free_particle_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* midpoint */
-void free_particle_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void free_particle_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void free_particle_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void free_particle_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void free_particle_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void free_particle_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double free_particle_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double free_particle_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void free_particle_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 #ifdef __cplusplus
 }

@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid (consistency order 2)
 
 // full: 154 operations (593 before CSE)
-extern "C" void fuel_nav_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void fuel_nav_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -101,7 +104,7 @@ extern "C" void fuel_nav_trapezoid_full(double h, double t0, double t1, const do
 }
 
 // sweep: 127 operations (468 before CSE)
-extern "C" void fuel_nav_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void fuel_nav_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -153,7 +156,7 @@ extern "C" void fuel_nav_trapezoid_sweep(double h, double t0, double t1, const d
 }
 
 // grad: 84 operations (223 before CSE)
-extern "C" void fuel_nav_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void fuel_nav_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -182,7 +185,7 @@ extern "C" void fuel_nav_trapezoid_grad(double h, double t0, double t1, const do
 }
 
 // action: 37 operations (70 before CSE)
-extern "C" double fuel_nav_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double fuel_nav_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -198,6 +201,7 @@ extern "C" double fuel_nav_trapezoid_action(double h, double t0, double t1, cons
 }
 
 // grad_extended: the grad kernel in pd_quad, 84 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void fuel_nav_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -234,11 +238,12 @@ extern "C" void fuel_nav_trapezoid_grad_extended(double h_in, double t0_in, doub
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 115 operations (756 before CSE)
-extern "C" void fuel_nav_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void fuel_nav_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -294,7 +299,7 @@ extern "C" void fuel_nav_midpoint_full(double h, double t0, double t1, const dou
 }
 
 // sweep: 90 operations (520 before CSE)
-extern "C" void fuel_nav_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void fuel_nav_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -341,7 +346,7 @@ extern "C" void fuel_nav_midpoint_sweep(double h, double t0, double t1, const do
 }
 
 // grad: 53 operations (195 before CSE)
-extern "C" void fuel_nav_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void fuel_nav_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -367,7 +372,7 @@ extern "C" void fuel_nav_midpoint_grad(double h, double t0, double t1, const dou
 }
 
 // action: 25 operations (48 before CSE)
-extern "C" double fuel_nav_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double fuel_nav_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -381,6 +386,7 @@ extern "C" double fuel_nav_midpoint_action(double h, double t0, double t1, const
 }
 
 // grad_extended: the grad kernel in pd_quad, 53 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void fuel_nav_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -414,14 +420,20 @@ extern "C" void fuel_nav_midpoint_grad_extended(double h_in, double t0_in, doubl
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 static const char* const fuel_nav_coords[] = {
     "x",
     "y",
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization fuel_nav_discretizations[] = {
-    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action, fuel_nav_trapezoid_grad_extended},
-    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action, fuel_nav_midpoint_grad_extended},
+    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action, PD_EXTENDED(fuel_nav_trapezoid_grad_extended)},
+    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action, PD_EXTENDED(fuel_nav_midpoint_grad_extended)},
 };
 
 extern "C" const pardel_model fuel_nav_model = {

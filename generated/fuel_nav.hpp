@@ -13,26 +13,30 @@ extern "C" {
 extern const pardel_model fuel_nav_model;
 
 /* trapezoid */
-void fuel_nav_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void fuel_nav_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void fuel_nav_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void fuel_nav_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void fuel_nav_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void fuel_nav_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double fuel_nav_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double fuel_nav_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void fuel_nav_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* midpoint */
-void fuel_nav_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void fuel_nav_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void fuel_nav_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void fuel_nav_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void fuel_nav_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void fuel_nav_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double fuel_nav_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double fuel_nav_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void fuel_nav_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 #ifdef __cplusplus
 }

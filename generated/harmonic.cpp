@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,13 +42,14 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 #include "pardel/condensation.hpp"
 
 // ---- trapezoid (consistency order 2)
 
 // full: 32 operations (54 before CSE)
-extern "C" void harmonic_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void harmonic_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -65,7 +68,7 @@ extern "C" void harmonic_trapezoid_full(double h, double t0, double t1, const do
 }
 
 // sweep: 18 operations (35 before CSE)
-extern "C" void harmonic_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void harmonic_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -81,7 +84,7 @@ extern "C" void harmonic_trapezoid_sweep(double h, double t0, double t1, const d
 }
 
 // grad: 26 operations (36 before CSE)
-extern "C" void harmonic_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void harmonic_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -96,7 +99,7 @@ extern "C" void harmonic_trapezoid_grad(double h, double t0, double t1, const do
 }
 
 // action: 15 operations (17 before CSE)
-extern "C" double harmonic_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double harmonic_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -106,6 +109,7 @@ extern "C" double harmonic_trapezoid_action(double h, double t0, double t1, cons
 }
 
 // grad_extended: the grad kernel in pd_quad, 26 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void harmonic_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -130,11 +134,12 @@ extern "C" void harmonic_trapezoid_grad_extended(double h_in, double t0_in, doub
   pd_split(D1, D1_out, 1);
   pd_split(D2, D2_out, 1);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 30 operations (60 before CSE)
-extern "C" void harmonic_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void harmonic_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -156,7 +161,7 @@ extern "C" void harmonic_midpoint_full(double h, double t0, double t1, const dou
 }
 
 // sweep: 18 operations (37 before CSE)
-extern "C" void harmonic_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void harmonic_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -173,7 +178,7 @@ extern "C" void harmonic_midpoint_sweep(double h, double t0, double t1, const do
 }
 
 // grad: 23 operations (36 before CSE)
-extern "C" void harmonic_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void harmonic_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -190,7 +195,7 @@ extern "C" void harmonic_midpoint_grad(double h, double t0, double t1, const dou
 }
 
 // action: 13 operations (15 before CSE)
-extern "C" double harmonic_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double harmonic_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -200,6 +205,7 @@ extern "C" double harmonic_midpoint_action(double h, double t0, double t1, const
 }
 
 // grad_extended: the grad kernel in pd_quad, 23 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void harmonic_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -226,6 +232,7 @@ extern "C" void harmonic_midpoint_grad_extended(double h_in, double t0_in, doubl
   pd_split(D1, D1_out, 1);
   pd_split(D2, D2_out, 1);
 }
+#endif
 
 // ---- galerkin_lobatto(s=2) (consistency order 4)
 // The interval's action S over its nodes and 1 interior values z, condensed by
@@ -565,9 +572,14 @@ static const char* const harmonic_param_names[] = {
 static const double harmonic_param_defaults[] = {
     1.0,
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization harmonic_discretizations[] = {
-    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, harmonic_trapezoid_grad_extended},
-    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, harmonic_midpoint_grad_extended},
+    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, PD_EXTENDED(harmonic_trapezoid_grad_extended)},
+    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, PD_EXTENDED(harmonic_midpoint_grad_extended)},
     {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, nullptr},
     {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, nullptr},
 };

@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid(alpha=1) (consistency order 2)
 
 // full: 508 operations (3362 before CSE)
-extern "C" void interp_fuel_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void interp_fuel_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -205,7 +208,7 @@ extern "C" void interp_fuel_trapezoid_alpha_1_full(double h, double t0, double t
 }
 
 // sweep: 420 operations (2843 before CSE)
-extern "C" void interp_fuel_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void interp_fuel_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -342,7 +345,7 @@ extern "C" void interp_fuel_trapezoid_alpha_1_sweep(double h, double t0, double 
 }
 
 // grad: 224 operations (908 before CSE)
-extern "C" void interp_fuel_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void interp_fuel_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -397,7 +400,7 @@ extern "C" void interp_fuel_trapezoid_alpha_1_grad(double h, double t0, double t
 }
 
 // action: 94 operations (210 before CSE)
-extern "C" double interp_fuel_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double interp_fuel_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -422,6 +425,7 @@ extern "C" double interp_fuel_trapezoid_alpha_1_action(double h, double t0, doub
 }
 
 // grad_extended: the grad kernel in pd_quad, 224 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void interp_fuel_trapezoid_alpha_1_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -486,11 +490,12 @@ extern "C" void interp_fuel_trapezoid_alpha_1_grad_extended(double h_in, double 
   pd_split(D1, D1_out, 4);
   pd_split(D2, D2_out, 4);
 }
+#endif
 
 // ---- gauss2 (consistency order 4)
 
 // full: 1578 operations (54775 before CSE)
-extern "C" void interp_fuel_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void interp_fuel_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -829,7 +834,7 @@ extern "C" void interp_fuel_gauss2_full(double h, double t0, double t1, const do
 }
 
 // sweep: 1118 operations (37712 before CSE)
-extern "C" void interp_fuel_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void interp_fuel_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -1097,7 +1102,7 @@ extern "C" void interp_fuel_gauss2_sweep(double h, double t0, double t1, const d
 }
 
 // grad: 462 operations (5558 before CSE)
-extern "C" void interp_fuel_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void interp_fuel_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -1208,7 +1213,7 @@ extern "C" void interp_fuel_gauss2_grad(double h, double t0, double t1, const do
 }
 
 // action: 153 operations (667 before CSE)
-extern "C" double interp_fuel_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double interp_fuel_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -1256,6 +1261,7 @@ extern "C" double interp_fuel_gauss2_action(double h, double t0, double t1, cons
 }
 
 // grad_extended: the grad kernel in pd_quad, 462 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void interp_fuel_gauss2_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -1376,6 +1382,7 @@ extern "C" void interp_fuel_gauss2_grad_extended(double h_in, double t0_in, doub
   pd_split(D1, D1_out, 4);
   pd_split(D2, D2_out, 4);
 }
+#endif
 
 static const char* const interp_fuel_coords[] = {
     "x",
@@ -1387,9 +1394,14 @@ static const char* const interp_fuel_param_names[] = {
 static const double interp_fuel_param_defaults[] = {
     50.0,
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization interp_fuel_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, interp_fuel_trapezoid_alpha_1_full, interp_fuel_trapezoid_alpha_1_sweep, interp_fuel_trapezoid_alpha_1_grad, interp_fuel_trapezoid_alpha_1_action, interp_fuel_trapezoid_alpha_1_grad_extended},
-    {"gauss2", 4, interp_fuel_gauss2_full, interp_fuel_gauss2_sweep, interp_fuel_gauss2_grad, interp_fuel_gauss2_action, interp_fuel_gauss2_grad_extended},
+    {"trapezoid(alpha=1)", 2, interp_fuel_trapezoid_alpha_1_full, interp_fuel_trapezoid_alpha_1_sweep, interp_fuel_trapezoid_alpha_1_grad, interp_fuel_trapezoid_alpha_1_action, PD_EXTENDED(interp_fuel_trapezoid_alpha_1_grad_extended)},
+    {"gauss2", 4, interp_fuel_gauss2_full, interp_fuel_gauss2_sweep, interp_fuel_gauss2_grad, interp_fuel_gauss2_action, PD_EXTENDED(interp_fuel_gauss2_grad_extended)},
 };
 
 extern "C" const pardel_model interp_fuel_model = {

@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- hermite_gauss(s=3) (consistency order 6)
 
 // full: 255 operations (1725 before CSE)
-extern "C" void min_jerk_hermite_gauss_s_3_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void min_jerk_hermite_gauss_s_3_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -372,7 +375,7 @@ extern "C" void min_jerk_hermite_gauss_s_3_full(double h, double t0, double t1, 
 }
 
 // sweep: 227 operations (1296 before CSE)
-extern "C" void min_jerk_hermite_gauss_s_3_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void min_jerk_hermite_gauss_s_3_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -612,7 +615,7 @@ extern "C" void min_jerk_hermite_gauss_s_3_sweep(double h, double t0, double t1,
 }
 
 // grad: 236 operations (1371 before CSE)
-extern "C" void min_jerk_hermite_gauss_s_3_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void min_jerk_hermite_gauss_s_3_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -682,7 +685,7 @@ extern "C" void min_jerk_hermite_gauss_s_3_grad(double h, double t0, double t1, 
 }
 
 // action: 125 operations (303 before CSE)
-extern "C" double min_jerk_hermite_gauss_s_3_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double min_jerk_hermite_gauss_s_3_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -710,6 +713,7 @@ extern "C" double min_jerk_hermite_gauss_s_3_action(double h, double t0, double 
 }
 
 // grad_extended: the grad kernel in pd_quad, 236 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void min_jerk_hermite_gauss_s_3_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -787,14 +791,20 @@ extern "C" void min_jerk_hermite_gauss_s_3_grad_extended(double h_in, double t0_
   pd_split(D1, D1_out, 9);
   pd_split(D2, D2_out, 9);
 }
+#endif
 
 static const char* const min_jerk_coords[] = {
     "x",
     "y",
     "z",
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization min_jerk_discretizations[] = {
-    {"hermite_gauss(s=3)", 6, min_jerk_hermite_gauss_s_3_full, min_jerk_hermite_gauss_s_3_sweep, min_jerk_hermite_gauss_s_3_grad, min_jerk_hermite_gauss_s_3_action, min_jerk_hermite_gauss_s_3_grad_extended},
+    {"hermite_gauss(s=3)", 6, min_jerk_hermite_gauss_s_3_full, min_jerk_hermite_gauss_s_3_sweep, min_jerk_hermite_gauss_s_3_grad, min_jerk_hermite_gauss_s_3_action, PD_EXTENDED(min_jerk_hermite_gauss_s_3_grad_extended)},
 };
 
 extern "C" const pardel_model min_jerk_model = {

@@ -13,15 +13,17 @@ extern "C" {
 extern const pardel_model min_jerk_model;
 
 /* hermite_gauss(s=3) */
-void min_jerk_hermite_gauss_s_3_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void min_jerk_hermite_gauss_s_3_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void min_jerk_hermite_gauss_s_3_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void min_jerk_hermite_gauss_s_3_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void min_jerk_hermite_gauss_s_3_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void min_jerk_hermite_gauss_s_3_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double min_jerk_hermite_gauss_s_3_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double min_jerk_hermite_gauss_s_3_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void min_jerk_hermite_gauss_s_3_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 #ifdef __cplusplus
 }

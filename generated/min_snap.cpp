@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- hermite_gauss(s=4) (consistency order 8)
 
 // full: 494 operations (4251 before CSE)
-extern "C" void min_snap_hermite_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void min_snap_hermite_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -605,7 +608,7 @@ extern "C" void min_snap_hermite_gauss_s_4_full(double h, double t0, double t1, 
 }
 
 // sweep: 456 operations (3360 before CSE)
-extern "C" void min_snap_hermite_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void min_snap_hermite_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -1011,7 +1014,7 @@ extern "C" void min_snap_hermite_gauss_s_4_sweep(double h, double t0, double t1,
 }
 
 // grad: 463 operations (3483 before CSE)
-extern "C" void min_snap_hermite_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void min_snap_hermite_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -1112,7 +1115,7 @@ extern "C" void min_snap_hermite_gauss_s_4_grad(double h, double t0, double t1, 
 }
 
 // action: 238 operations (627 before CSE)
-extern "C" double min_snap_hermite_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double min_snap_hermite_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -1147,6 +1150,7 @@ extern "C" double min_snap_hermite_gauss_s_4_action(double h, double t0, double 
 }
 
 // grad_extended: the grad kernel in pd_quad, 463 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void min_snap_hermite_gauss_s_4_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -1255,14 +1259,20 @@ extern "C" void min_snap_hermite_gauss_s_4_grad_extended(double h_in, double t0_
   pd_split(D1, D1_out, 12);
   pd_split(D2, D2_out, 12);
 }
+#endif
 
 static const char* const min_snap_coords[] = {
     "x",
     "y",
     "z",
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization min_snap_discretizations[] = {
-    {"hermite_gauss(s=4)", 8, min_snap_hermite_gauss_s_4_full, min_snap_hermite_gauss_s_4_sweep, min_snap_hermite_gauss_s_4_grad, min_snap_hermite_gauss_s_4_action, min_snap_hermite_gauss_s_4_grad_extended},
+    {"hermite_gauss(s=4)", 8, min_snap_hermite_gauss_s_4_full, min_snap_hermite_gauss_s_4_sweep, min_snap_hermite_gauss_s_4_grad, min_snap_hermite_gauss_s_4_action, PD_EXTENDED(min_snap_hermite_gauss_s_4_grad_extended)},
 };
 
 extern "C" const pardel_model min_snap_model = {

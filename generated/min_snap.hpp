@@ -13,15 +13,17 @@ extern "C" {
 extern const pardel_model min_snap_model;
 
 /* hermite_gauss(s=4) */
-void min_snap_hermite_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void min_snap_hermite_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void min_snap_hermite_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void min_snap_hermite_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void min_snap_hermite_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void min_snap_hermite_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double min_snap_hermite_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double min_snap_hermite_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void min_snap_hermite_gauss_s_4_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 #ifdef __cplusplus
 }

@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,13 +42,14 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 #include "pardel/condensation.hpp"
 
 // ---- trapezoid (consistency order 2)
 
 // full: 34 operations (58 before CSE)
-extern "C" void pendulum_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void pendulum_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -67,7 +70,7 @@ extern "C" void pendulum_trapezoid_full(double h, double t0, double t1, const do
 }
 
 // sweep: 27 operations (41 before CSE)
-extern "C" void pendulum_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void pendulum_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -83,7 +86,7 @@ extern "C" void pendulum_trapezoid_sweep(double h, double t0, double t1, const d
 }
 
 // grad: 25 operations (36 before CSE)
-extern "C" void pendulum_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void pendulum_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -98,7 +101,7 @@ extern "C" void pendulum_trapezoid_grad(double h, double t0, double t1, const do
 }
 
 // action: 13 operations (15 before CSE)
-extern "C" double pendulum_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double pendulum_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -108,6 +111,7 @@ extern "C" double pendulum_trapezoid_action(double h, double t0, double t1, cons
 }
 
 // grad_extended: the grad kernel in pd_quad, 25 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void pendulum_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -132,11 +136,12 @@ extern "C" void pendulum_trapezoid_grad_extended(double h_in, double t0_in, doub
   pd_split(D1, D1_out, 1);
   pd_split(D2, D2_out, 1);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 32 operations (76 before CSE)
-extern "C" void pendulum_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void pendulum_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -160,7 +165,7 @@ extern "C" void pendulum_midpoint_full(double h, double t0, double t1, const dou
 }
 
 // sweep: 24 operations (50 before CSE)
-extern "C" void pendulum_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void pendulum_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -178,7 +183,7 @@ extern "C" void pendulum_midpoint_sweep(double h, double t0, double t1, const do
 }
 
 // grad: 24 operations (40 before CSE)
-extern "C" void pendulum_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void pendulum_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -195,7 +200,7 @@ extern "C" void pendulum_midpoint_grad(double h, double t0, double t1, const dou
 }
 
 // action: 13 operations (14 before CSE)
-extern "C" double pendulum_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double pendulum_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -204,6 +209,7 @@ extern "C" double pendulum_midpoint_action(double h, double t0, double t1, const
 }
 
 // grad_extended: the grad kernel in pd_quad, 24 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void pendulum_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -230,6 +236,7 @@ extern "C" void pendulum_midpoint_grad_extended(double h_in, double t0_in, doubl
   pd_split(D1, D1_out, 1);
   pd_split(D2, D2_out, 1);
 }
+#endif
 
 // ---- galerkin_lobatto(s=2) (consistency order 4)
 // The interval's action S over its nodes and 1 interior values z, condensed by
@@ -568,9 +575,14 @@ static const double pendulum_param_defaults[] = {
     9.8100000000000005,
     1.0,
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization pendulum_discretizations[] = {
-    {"trapezoid", 2, pendulum_trapezoid_full, pendulum_trapezoid_sweep, pendulum_trapezoid_grad, pendulum_trapezoid_action, pendulum_trapezoid_grad_extended},
-    {"midpoint", 2, pendulum_midpoint_full, pendulum_midpoint_sweep, pendulum_midpoint_grad, pendulum_midpoint_action, pendulum_midpoint_grad_extended},
+    {"trapezoid", 2, pendulum_trapezoid_full, pendulum_trapezoid_sweep, pendulum_trapezoid_grad, pendulum_trapezoid_action, PD_EXTENDED(pendulum_trapezoid_grad_extended)},
+    {"midpoint", 2, pendulum_midpoint_full, pendulum_midpoint_sweep, pendulum_midpoint_grad, pendulum_midpoint_action, PD_EXTENDED(pendulum_midpoint_grad_extended)},
     {"galerkin_lobatto(s=2)", 4, pendulum_galerkin_lobatto_s_2_full, pendulum_galerkin_lobatto_s_2_sweep, pendulum_galerkin_lobatto_s_2_grad, pendulum_galerkin_lobatto_s_2_action, nullptr},
     {"galerkin_gauss(s=4)", 8, pendulum_galerkin_gauss_s_4_full, pendulum_galerkin_gauss_s_4_sweep, pendulum_galerkin_gauss_s_4_grad, pendulum_galerkin_gauss_s_4_action, nullptr},
 };

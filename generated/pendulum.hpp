@@ -13,28 +13,32 @@ extern "C" {
 extern const pardel_model pendulum_model;
 
 /* trapezoid */
-void pendulum_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void pendulum_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void pendulum_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void pendulum_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void pendulum_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void pendulum_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double pendulum_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double pendulum_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void pendulum_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* midpoint */
-void pendulum_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void pendulum_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void pendulum_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void pendulum_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void pendulum_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void pendulum_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double pendulum_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double pendulum_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void pendulum_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
-/* galerkin_lobatto(s=2) */
+/* galerkin_lobatto(s=2) (host functions: interior values) */
 void pendulum_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
 void pendulum_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -43,7 +47,7 @@ void pendulum_galerkin_lobatto_s_2_grad(double h, double t0, double t1, const do
     double* Ld, double* D1, double* D2);
 double pendulum_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
 
-/* galerkin_gauss(s=4) */
+/* galerkin_gauss(s=4) (host functions: interior values) */
 void pendulum_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
 void pendulum_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,

@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid(alpha=1) (consistency order 2)
 
 // full: 561 operations (37843 before CSE)
-extern "C" void spacecraft_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spacecraft_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   const double pd_t0001 = q0[1]*q0[1];
   const double pd_t0002 = q0[0]*q0[0];
@@ -247,7 +250,7 @@ extern "C" void spacecraft_trapezoid_alpha_1_full(double h, double t0, double t1
 }
 
 // sweep: 511 operations (32437 before CSE)
-extern "C" void spacecraft_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spacecraft_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   const double pd_t0001 = p[5] + t1*p[4];
   const double pd_t0002 = std::cos(pd_t0001)*p[3] - q1[0];
@@ -421,7 +424,7 @@ extern "C" void spacecraft_trapezoid_alpha_1_sweep(double h, double t0, double t
 }
 
 // grad: 282 operations (6473 before CSE)
-extern "C" void spacecraft_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spacecraft_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   const double pd_t0001 = 3.0*(q0[1] - q1[1]);
   const double pd_t0002 = 1.0/(h*h);
@@ -501,7 +504,7 @@ extern "C" void spacecraft_trapezoid_alpha_1_grad(double h, double t0, double t1
 }
 
 // action: 135 operations (1081 before CSE)
-extern "C" double spacecraft_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double spacecraft_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   const double pd_t0001 = 1.0 + q1[0];
   const double pd_t0002 = p[5] + p[4]*t1;
@@ -537,6 +540,7 @@ extern "C" double spacecraft_trapezoid_alpha_1_action(double h, double t0, doubl
 }
 
 // grad_extended: the grad kernel in pd_quad, 282 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void spacecraft_trapezoid_alpha_1_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   const pd_quad h = h_in;
@@ -628,11 +632,12 @@ extern "C" void spacecraft_trapezoid_alpha_1_grad_extended(double h_in, double t
   pd_split(D1, D1_out, 4);
   pd_split(D2, D2_out, 4);
 }
+#endif
 
 // ---- gauss2 (consistency order 4)
 
 // full: 1558 operations (1072032 before CSE)
-extern "C" void spacecraft_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spacecraft_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   const double pd_t0001 = 1.0/h;
   const double pd_t0002 = q0[1] - q1[1];
@@ -1077,7 +1082,7 @@ extern "C" void spacecraft_gauss2_full(double h, double t0, double t1, const dou
 }
 
 // sweep: 1216 operations (730769 before CSE)
-extern "C" void spacecraft_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spacecraft_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   const double pd_t0001 = h*3.5722450845907635e-06;
   const double pd_t0002 = h*h;
@@ -1453,7 +1458,7 @@ extern "C" void spacecraft_gauss2_sweep(double h, double t0, double t1, const do
 }
 
 // grad: 479 operations (62373 before CSE)
-extern "C" void spacecraft_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spacecraft_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   const double pd_t0001 = 1.0/h;
   const double pd_t0002 = q0[1] - q1[1];
@@ -1596,7 +1601,7 @@ extern "C" void spacecraft_gauss2_grad(double h, double t0, double t1, const dou
 }
 
 // action: 194 operations (4713 before CSE)
-extern "C" double spacecraft_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double spacecraft_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   const double pd_t0001 = 1.0/h;
   const double pd_t0002 = q0[1] - q1[1];
@@ -1647,6 +1652,7 @@ extern "C" double spacecraft_gauss2_action(double h, double t0, double t1, const
 }
 
 // grad_extended: the grad kernel in pd_quad, 479 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void spacecraft_gauss2_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   const pd_quad h = h_in;
@@ -1801,10 +1807,11 @@ extern "C" void spacecraft_gauss2_grad_extended(double h_in, double t0_in, doubl
   pd_split(D1, D1_out, 4);
   pd_split(D2, D2_out, 4);
 }
+#endif
 
 // ---- clock: h * dt/ds at the left end of the interval
 // 21 operations (61 before CSE)
-extern "C" double spacecraft_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
+extern "C" PARDEL_HD double spacecraft_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
   (void)q1;
   const double pd_t0001 = p[5] + t0*p[4];
   const double pd_t0002 = q0[0] - std::cos(pd_t0001)*p[3];
@@ -1834,9 +1841,14 @@ static const double spacecraft_param_defaults[] = {
     12.368746183829925,
     0.0,
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization spacecraft_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action, spacecraft_trapezoid_alpha_1_grad_extended},
-    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action, spacecraft_gauss2_grad_extended},
+    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action, PD_EXTENDED(spacecraft_trapezoid_alpha_1_grad_extended)},
+    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action, PD_EXTENDED(spacecraft_gauss2_grad_extended)},
 };
 
 extern "C" const pardel_model spacecraft_model = {

@@ -13,29 +13,33 @@ extern "C" {
 extern const pardel_model spacecraft_model;
 
 /* trapezoid(alpha=1) */
-void spacecraft_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void spacecraft_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void spacecraft_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void spacecraft_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void spacecraft_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void spacecraft_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double spacecraft_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double spacecraft_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void spacecraft_trapezoid_alpha_1_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* gauss2 */
-void spacecraft_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void spacecraft_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void spacecraft_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void spacecraft_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void spacecraft_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void spacecraft_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double spacecraft_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double spacecraft_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void spacecraft_gauss2_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* h * clock on one interval */
-double spacecraft_clock(double h, double t0, const double* q0, const double* q1, const double* p);
+PARDEL_HD double spacecraft_clock(double h, double t0, const double* q0, const double* q1, const double* p);
 
 #ifdef __cplusplus
 }

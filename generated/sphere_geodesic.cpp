@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,13 +42,14 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 #include "pardel/condensation.hpp"
 
 // ---- trapezoid (consistency order 2)
 
 // full: 65 operations (227 before CSE)
-extern "C" void sphere_geodesic_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void sphere_geodesic_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -98,7 +101,7 @@ extern "C" void sphere_geodesic_trapezoid_full(double h, double t0, double t1, c
 }
 
 // sweep: 54 operations (170 before CSE)
-extern "C" void sphere_geodesic_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void sphere_geodesic_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -140,7 +143,7 @@ extern "C" void sphere_geodesic_trapezoid_sweep(double h, double t0, double t1, 
 }
 
 // grad: 42 operations (96 before CSE)
-extern "C" void sphere_geodesic_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void sphere_geodesic_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -167,7 +170,7 @@ extern "C" void sphere_geodesic_trapezoid_grad(double h, double t0, double t1, c
 }
 
 // action: 19 operations (28 before CSE)
-extern "C" double sphere_geodesic_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double sphere_geodesic_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -181,6 +184,7 @@ extern "C" double sphere_geodesic_trapezoid_action(double h, double t0, double t
 }
 
 // grad_extended: the grad kernel in pd_quad, 42 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void sphere_geodesic_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -215,11 +219,12 @@ extern "C" void sphere_geodesic_trapezoid_grad_extended(double h_in, double t0_i
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 44 operations (272 before CSE)
-extern "C" void sphere_geodesic_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void sphere_geodesic_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -266,7 +271,7 @@ extern "C" void sphere_geodesic_midpoint_full(double h, double t0, double t1, co
 }
 
 // sweep: 36 operations (187 before CSE)
-extern "C" void sphere_geodesic_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void sphere_geodesic_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -303,7 +308,7 @@ extern "C" void sphere_geodesic_midpoint_sweep(double h, double t0, double t1, c
 }
 
 // grad: 28 operations (82 before CSE)
-extern "C" void sphere_geodesic_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void sphere_geodesic_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -327,7 +332,7 @@ extern "C" void sphere_geodesic_midpoint_grad(double h, double t0, double t1, co
 }
 
 // action: 16 operations (21 before CSE)
-extern "C" double sphere_geodesic_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double sphere_geodesic_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -340,6 +345,7 @@ extern "C" double sphere_geodesic_midpoint_action(double h, double t0, double t1
 }
 
 // grad_extended: the grad kernel in pd_quad, 28 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void sphere_geodesic_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -371,6 +377,7 @@ extern "C" void sphere_geodesic_midpoint_grad_extended(double h_in, double t0_in
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- galerkin_lobatto(s=2) (consistency order 4)
 // The interval's action S over its nodes and 2 interior values z, condensed by
@@ -1095,9 +1102,14 @@ static const char* const sphere_geodesic_coords[] = {
     "theta",
     "phi",
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization sphere_geodesic_discretizations[] = {
-    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action, sphere_geodesic_trapezoid_grad_extended},
-    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action, sphere_geodesic_midpoint_grad_extended},
+    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action, PD_EXTENDED(sphere_geodesic_trapezoid_grad_extended)},
+    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action, PD_EXTENDED(sphere_geodesic_midpoint_grad_extended)},
     {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action, nullptr},
     {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action, nullptr},
 };

@@ -13,28 +13,32 @@ extern "C" {
 extern const pardel_model sphere_geodesic_model;
 
 /* trapezoid */
-void sphere_geodesic_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void sphere_geodesic_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void sphere_geodesic_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void sphere_geodesic_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void sphere_geodesic_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void sphere_geodesic_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double sphere_geodesic_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double sphere_geodesic_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void sphere_geodesic_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* midpoint */
-void sphere_geodesic_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void sphere_geodesic_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void sphere_geodesic_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void sphere_geodesic_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void sphere_geodesic_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void sphere_geodesic_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double sphere_geodesic_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double sphere_geodesic_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void sphere_geodesic_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
-/* galerkin_lobatto(s=2) */
+/* galerkin_lobatto(s=2) (host functions: interior values) */
 void sphere_geodesic_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
 void sphere_geodesic_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -43,7 +47,7 @@ void sphere_geodesic_galerkin_lobatto_s_2_grad(double h, double t0, double t1, c
     double* Ld, double* D1, double* D2);
 double sphere_geodesic_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
 
-/* galerkin_gauss(s=4) */
+/* galerkin_gauss(s=4) (host functions: interior values) */
 void sphere_geodesic_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
 void sphere_geodesic_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,

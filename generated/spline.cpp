@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid(alpha=1) (consistency order 2)
 
 // full: 73 operations (334 before CSE)
-extern "C" void spline_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spline_trapezoid_alpha_1_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -133,7 +136,7 @@ extern "C" void spline_trapezoid_alpha_1_full(double h, double t0, double t1, co
 }
 
 // sweep: 59 operations (234 before CSE)
-extern "C" void spline_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spline_trapezoid_alpha_1_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -202,7 +205,7 @@ extern "C" void spline_trapezoid_alpha_1_sweep(double h, double t0, double t1, c
 }
 
 // grad: 65 operations (254 before CSE)
-extern "C" void spline_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spline_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -236,7 +239,7 @@ extern "C" void spline_trapezoid_alpha_1_grad(double h, double t0, double t1, co
 }
 
 // action: 35 operations (72 before CSE)
-extern "C" double spline_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double spline_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -253,6 +256,7 @@ extern "C" double spline_trapezoid_alpha_1_action(double h, double t0, double t1
 }
 
 // grad_extended: the grad kernel in pd_quad, 65 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void spline_trapezoid_alpha_1_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -294,11 +298,12 @@ extern "C" void spline_trapezoid_alpha_1_grad_extended(double h_in, double t0_in
   pd_split(D1, D1_out, 4);
   pd_split(D2, D2_out, 4);
 }
+#endif
 
 // ---- gauss2 (consistency order 4)
 
 // full: 78 operations (363 before CSE)
-extern "C" void spline_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spline_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -386,7 +391,7 @@ extern "C" void spline_gauss2_full(double h, double t0, double t1, const double*
 }
 
 // sweep: 67 operations (254 before CSE)
-extern "C" void spline_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spline_gauss2_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -455,7 +460,7 @@ extern "C" void spline_gauss2_sweep(double h, double t0, double t1, const double
 }
 
 // grad: 70 operations (283 before CSE)
-extern "C" void spline_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void spline_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -488,7 +493,7 @@ extern "C" void spline_gauss2_grad(double h, double t0, double t1, const double*
 }
 
 // action: 38 operations (81 before CSE)
-extern "C" double spline_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double spline_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -505,6 +510,7 @@ extern "C" double spline_gauss2_action(double h, double t0, double t1, const dou
 }
 
 // grad_extended: the grad kernel in pd_quad, 70 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void spline_gauss2_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -545,14 +551,20 @@ extern "C" void spline_gauss2_grad_extended(double h_in, double t0_in, double t1
   pd_split(D1, D1_out, 4);
   pd_split(D2, D2_out, 4);
 }
+#endif
 
 static const char* const spline_coords[] = {
     "x",
     "y",
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization spline_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action, spline_trapezoid_alpha_1_grad_extended},
-    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action, spline_gauss2_grad_extended},
+    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action, PD_EXTENDED(spline_trapezoid_alpha_1_grad_extended)},
+    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action, PD_EXTENDED(spline_gauss2_grad_extended)},
 };
 
 extern "C" const pardel_model spline_model = {

@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid (consistency order 2)
 
 // full: 1202 operations (571596 before CSE)
-extern "C" void zermelo_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -378,7 +381,7 @@ extern "C" void zermelo_trapezoid_full(double h, double t0, double t1, const dou
 }
 
 // sweep: 1014 operations (413520 before CSE)
-extern "C" void zermelo_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -674,7 +677,7 @@ extern "C" void zermelo_trapezoid_sweep(double h, double t0, double t1, const do
 }
 
 // grad: 391 operations (40685 before CSE)
-extern "C" void zermelo_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -800,7 +803,7 @@ extern "C" void zermelo_trapezoid_grad(double h, double t0, double t1, const dou
 }
 
 // action: 142 operations (4457 before CSE)
-extern "C" double zermelo_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double zermelo_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -850,6 +853,7 @@ extern "C" double zermelo_trapezoid_action(double h, double t0, double t1, const
 }
 
 // grad_extended: the grad kernel in pd_quad, 391 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void zermelo_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -985,11 +989,12 @@ extern "C" void zermelo_trapezoid_grad_extended(double h_in, double t0_in, doubl
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 702 operations (665508 before CSE)
-extern "C" void zermelo_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   (void)t0;
   (void)t1;
@@ -1212,7 +1217,7 @@ extern "C" void zermelo_midpoint_full(double h, double t0, double t1, const doub
 }
 
 // sweep: 598 operations (450401 before CSE)
-extern "C" void zermelo_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   (void)t0;
   (void)t1;
@@ -1398,7 +1403,7 @@ extern "C" void zermelo_midpoint_sweep(double h, double t0, double t1, const dou
 }
 
 // grad: 224 operations (37502 before CSE)
-extern "C" void zermelo_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   (void)t0;
   (void)t1;
@@ -1482,7 +1487,7 @@ extern "C" void zermelo_midpoint_grad(double h, double t0, double t1, const doub
 }
 
 // action: 76 operations (3118 before CSE)
-extern "C" double zermelo_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double zermelo_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   (void)t0;
   (void)t1;
@@ -1511,6 +1516,7 @@ extern "C" double zermelo_midpoint_action(double h, double t0, double t1, const 
 }
 
 // grad_extended: the grad kernel in pd_quad, 224 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void zermelo_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   (void)t0_in;
@@ -1604,10 +1610,11 @@ extern "C" void zermelo_midpoint_grad_extended(double h_in, double t0_in, double
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- clock: h * dt/ds at the left end of the interval
 // 71 operations (1114 before CSE)
-extern "C" double zermelo_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
+extern "C" PARDEL_HD double zermelo_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
   (void)t0;
   const double pd_t0001 = q0[0] - 4.0;
   const double pd_t0002 = q0[1] - 4.0;
@@ -1640,9 +1647,14 @@ static const char* const zermelo_param_names[] = {
 static const double zermelo_param_defaults[] = {
     1.7,
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization zermelo_discretizations[] = {
-    {"trapezoid", 2, zermelo_trapezoid_full, zermelo_trapezoid_sweep, zermelo_trapezoid_grad, zermelo_trapezoid_action, zermelo_trapezoid_grad_extended},
-    {"midpoint", 2, zermelo_midpoint_full, zermelo_midpoint_sweep, zermelo_midpoint_grad, zermelo_midpoint_action, zermelo_midpoint_grad_extended},
+    {"trapezoid", 2, zermelo_trapezoid_full, zermelo_trapezoid_sweep, zermelo_trapezoid_grad, zermelo_trapezoid_action, PD_EXTENDED(zermelo_trapezoid_grad_extended)},
+    {"midpoint", 2, zermelo_midpoint_full, zermelo_midpoint_sweep, zermelo_midpoint_grad, zermelo_midpoint_action, PD_EXTENDED(zermelo_midpoint_grad_extended)},
 };
 
 extern "C" const pardel_model zermelo_model = {

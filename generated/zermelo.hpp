@@ -13,29 +13,33 @@ extern "C" {
 extern const pardel_model zermelo_model;
 
 /* trapezoid */
-void zermelo_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void zermelo_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void zermelo_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void zermelo_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void zermelo_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void zermelo_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double zermelo_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double zermelo_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void zermelo_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* midpoint */
-void zermelo_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void zermelo_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22);
-void zermelo_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void zermelo_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* D1, double* D2, double* D11, double* D22);
-void zermelo_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+PARDEL_HD void zermelo_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
-double zermelo_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double zermelo_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
 void zermelo_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* h * clock on one interval */
-double zermelo_clock(double h, double t0, const double* q0, const double* q1, const double* p);
+PARDEL_HD double zermelo_clock(double h, double t0, const double* q0, const double* q1, const double* p);
 
 #ifdef __cplusplus
 }

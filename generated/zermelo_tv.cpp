@@ -6,7 +6,9 @@
 #include <cmath>
 
 // The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
-// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h).
+// where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
+// a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
+#if !defined(__CUDACC__)
 #if defined(__SIZEOF_FLOAT128__) && defined(__has_include)
 #if __has_include(<quadmath.h>)
 #define PD_HAVE_QUADMATH 1
@@ -40,11 +42,12 @@ static inline void pd_split(const pd_quad* v, double* out, int n) {
     out[2 * i + 1] = static_cast<double>(v[i] - static_cast<pd_quad>(out[2 * i]));
   }
 }
+#endif
 
 // ---- trapezoid (consistency order 2)
 
 // full: 687 operations (90283 before CSE)
-extern "C" void zermelo_tv_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_tv_trapezoid_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   const double pd_t0001 = q0[1] + q0[0]*2.0;
   const double pd_t0002 = std::sin(pd_t0001);
@@ -243,7 +246,7 @@ extern "C" void zermelo_tv_trapezoid_full(double h, double t0, double t1, const 
 }
 
 // sweep: 540 operations (64072 before CSE)
-extern "C" void zermelo_tv_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_tv_trapezoid_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   const double pd_t0001 = q0[1] + q0[0]*2.0;
   const double pd_t0002 = std::sin(pd_t0001);
@@ -417,7 +420,7 @@ extern "C" void zermelo_tv_trapezoid_sweep(double h, double t0, double t1, const
 }
 
 // grad: 213 operations (7011 before CSE)
-extern "C" void zermelo_tv_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_tv_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   const double pd_t0001 = p[0]/h;
   const double pd_t0002 = q0[1] - q1[1];
@@ -503,7 +506,7 @@ extern "C" void zermelo_tv_trapezoid_grad(double h, double t0, double t1, const 
 }
 
 // action: 67 operations (847 before CSE)
-extern "C" double zermelo_tv_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double zermelo_tv_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   const double pd_t0001 = 0.5*t0;
   const double pd_t0002 = std::cos(pd_t0001);
@@ -532,6 +535,7 @@ extern "C" double zermelo_tv_trapezoid_action(double h, double t0, double t1, co
 }
 
 // grad_extended: the grad kernel in pd_quad, 213 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void zermelo_tv_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   const pd_quad h = h_in;
@@ -629,11 +633,12 @@ extern "C" void zermelo_tv_trapezoid_grad_extended(double h_in, double t0_in, do
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- midpoint (consistency order 2)
 
 // full: 406 operations (92040 before CSE)
-extern "C" void zermelo_tv_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_tv_midpoint_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   const double pd_t0001 = (q0[1] + q1[1])*0.5 + (q0[0] + q1[0]);
   const double pd_t0002 = std::sin(pd_t0001);
@@ -780,7 +785,7 @@ extern "C" void zermelo_tv_midpoint_full(double h, double t0, double t1, const d
 }
 
 // sweep: 324 operations (62409 before CSE)
-extern "C" void zermelo_tv_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_tv_midpoint_sweep(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* D1, double* D2, double* D11, double* D22) {
   const double pd_t0001 = (q0[1] + q1[1])*0.5 + (q0[0] + q1[0]);
   const double pd_t0002 = std::sin(pd_t0001);
@@ -896,7 +901,7 @@ extern "C" void zermelo_tv_midpoint_sweep(double h, double t0, double t1, const 
 }
 
 // grad: 120 operations (5835 before CSE)
-extern "C" void zermelo_tv_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD void zermelo_tv_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2) {
   const double pd_t0001 = (q0[1] + q1[1])*0.5 + (q0[0] + q1[0]);
   const double pd_t0002 = std::sin(pd_t0001);
@@ -949,7 +954,7 @@ extern "C" void zermelo_tv_midpoint_grad(double h, double t0, double t1, const d
 }
 
 // action: 36 operations (554 before CSE)
-extern "C" double zermelo_tv_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
+extern "C" PARDEL_HD double zermelo_tv_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   const double pd_t0001 = (q0[0] - q1[0])/h;
   const double pd_t0002 = std::sin((q0[1] + q1[1])*0.5 + (q0[0] + q1[0]))*p[0];
@@ -964,6 +969,7 @@ extern "C" double zermelo_tv_midpoint_action(double h, double t0, double t1, con
 }
 
 // grad_extended: the grad kernel in pd_quad, 120 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
 extern "C" void zermelo_tv_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
     const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out) {
   const pd_quad h = h_in;
@@ -1028,10 +1034,11 @@ extern "C" void zermelo_tv_midpoint_grad_extended(double h_in, double t0_in, dou
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
 }
+#endif
 
 // ---- clock: h * dt/ds at the left end of the interval
 // 33 operations (212 before CSE)
-extern "C" double zermelo_tv_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
+extern "C" PARDEL_HD double zermelo_tv_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
   const double pd_t0001 = p[0]*std::sin(q0[1] + q0[0]*2.0);
   const double pd_t0002 = t0*0.5;
   const double pd_t0003 = pd_t0001*std::cos(pd_t0002);
@@ -1053,9 +1060,14 @@ static const char* const zermelo_tv_param_names[] = {
 static const double zermelo_tv_param_defaults[] = {
     0.80000000000000004,
 };
+#if defined(__CUDACC__)
+#define PD_EXTENDED(kernel) nullptr
+#else
+#define PD_EXTENDED(kernel) kernel
+#endif
 static const pardel_discretization zermelo_tv_discretizations[] = {
-    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, zermelo_tv_trapezoid_grad_extended},
-    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, zermelo_tv_midpoint_grad_extended},
+    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, PD_EXTENDED(zermelo_tv_trapezoid_grad_extended)},
+    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, PD_EXTENDED(zermelo_tv_midpoint_grad_extended)},
 };
 
 extern "C" const pardel_model zermelo_tv_model = {

@@ -47,7 +47,8 @@ CC=clang CXX=clang++ cmake -S . -B "$build_dir" -G Ninja \
   -DCMAKE_CXX_FLAGS="$san_flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DPARDEL_BUILD_BENCHMARKS=OFF
+  -DPARDEL_BUILD_BENCHMARKS=OFF \
+  -DPARDEL_WITH_CUDA=OFF
 cmake --build "$build_dir" -j "$jobs" --target fuzz_lag_parser fuzz_scene_parser fuzz_checkpoint_reader \
   fuzz_sweep_reader fuzz_scene_overrides fuzz_trajectory_reader
 

@@ -56,7 +56,8 @@ cmake -S . -B "$build_dir" -G Ninja \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DPARDEL_REGENERATE=ON \
   -DPARDEL_BUILD_BENCHMARKS=OFF \
-  -DPARDEL_WITH_MPI=OFF
+  -DPARDEL_WITH_MPI=OFF \
+  -DPARDEL_WITH_CUDA=OFF
 # Targets that this configuration does not define (e.g. without GiNaC) are skipped.
 available=()
 for t in "${targets[@]}"; do

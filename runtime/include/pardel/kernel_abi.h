@@ -5,8 +5,8 @@
  * Generated code includes only this header (and pardel/condensation.hpp, header-only, for
  * discretizations with interior values). Everything here is plain C: kernels are flat
  * functions of doubles over caller-owned arrays, with no allocation, no exceptions and no
- * std containers, so that many models link into one binary and the same kernels can later
- * be compiled for a GPU.
+ * std containers, so that many models link into one binary and the same generated source
+ * compiles for an NVIDIA GPU as well (PARDEL_HD below).
  *
  * Conventions (m = order * ncoords, the dimension of a point of T^(order-1)Q):
  *  - q0, q1 are points [coords, coords', ..., coords^(order-1)], each of length m;
@@ -21,6 +21,18 @@
 
 /* 3: pardel_discretization gained grad_extended (its array's stride changed). */
 #define PARDEL_KERNEL_ABI_VERSION 3
+
+/* The qualifier of every generated kernel with double arithmetic only: __host__ __device__ under a
+ * CUDA compiler, so that the same generated source runs on the host and on the device (device code
+ * calls the kernels by name, declared in the model's generated header, compiled with relocatable
+ * device code); empty for plain C and C++. Under a CUDA compiler the extended-precision kernel is
+ * left out (pardel_discretization::grad_extended is NULL there) and the kernels of discretizations
+ * with interior values (pardel/condensation.hpp) are host functions. */
+#if defined(__CUDACC__)
+#define PARDEL_HD __host__ __device__
+#else
+#define PARDEL_HD
+#endif
 
 #ifdef __cplusplus
 extern "C" {
