@@ -115,7 +115,8 @@ class ModelWorkshop : public ::testing::Test {
     const std::string so = work + "/model.so";
     g.compile_status = run_shell(shell_word(PARDEL_TEST_CXX) + " -std=c++17 -Wall -Wextra -Werror -O1 -fPIC -shared -I" +
                                  shell_word(PARDEL_ABI_INCLUDE) + " " + shell_word(work + "/" + g.model_name + ".cpp") +
-                                 " -o " + shell_word(so) + " > " + shell_word(work + "/compile.log") + " 2>&1");
+                                 " -o " + shell_word(so) + " " + PARDEL_TEST_LINK + " > " +
+                                 shell_word(work + "/compile.log") + " 2>&1");
     g.compile_log = read_text(work + "/compile.log");
     if (g.compile_status != 0) return g;
     void* handle = ::dlopen(so.c_str(), RTLD_NOW | RTLD_LOCAL);
