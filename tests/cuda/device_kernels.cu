@@ -98,35 +98,42 @@ bool device_run(int N, const std::vector<double>& q, const std::vector<double>& 
   return true;
 }
 
+/** Calls f with a value of the model's check type; false when the name is not one of them. */
+template <class F>
+bool visit_model(const std::string& name, F&& f) {
+  if (name == "bratu") f(Bratu{});
+  else if (name == "fuel_nav") f(FuelNav{});
+  else if (name == "min_snap") f(MinSnap{});
+  else if (name == "zermelo_tv") f(ZermeloTv{});
+  else return false;
+  return true;
+}
+
 }  // namespace
 
 int values_per_interval(int m) { return 1 + 2 * m + 3 * m * m; }
 
 const pardel_model* device_model(const std::string& name) {
-  if (name == "bratu") return &Bratu::model();
-  if (name == "fuel_nav") return &FuelNav::model();
-  if (name == "min_snap") return &MinSnap::model();
-  if (name == "zermelo_tv") return &ZermeloTv::model();
-  return nullptr;
+  const pardel_model* model = nullptr;
+  visit_model(name, [&](auto m) { model = &decltype(m)::model(); });
+  return model;
 }
 
 std::vector<double> evaluate_on_host(const std::string& model, int N, const std::vector<double>& q,
                                      const std::vector<double>& t, const std::vector<double>& p) {
-  if (model == "bratu") return host_loop<Bratu>(N, q, t, p);
-  if (model == "fuel_nav") return host_loop<FuelNav>(N, q, t, p);
-  if (model == "min_snap") return host_loop<MinSnap>(N, q, t, p);
-  if (model == "zermelo_tv") return host_loop<ZermeloTv>(N, q, t, p);
-  return {};
+  std::vector<double> out;
+  visit_model(model, [&](auto m) { out = host_loop<decltype(m)>(N, q, t, p); });
+  return out;
 }
 
 bool evaluate_on_device(const std::string& model, int N, const std::vector<double>& q, const std::vector<double>& t,
                         const std::vector<double>& p, std::vector<double>& out, std::string& why) {
-  if (model == "bratu") return device_run<Bratu>(N, q, t, p, out, why);
-  if (model == "fuel_nav") return device_run<FuelNav>(N, q, t, p, out, why);
-  if (model == "min_snap") return device_run<MinSnap>(N, q, t, p, out, why);
-  if (model == "zermelo_tv") return device_run<ZermeloTv>(N, q, t, p, out, why);
-  why = "model " + model + " is not compiled for the device check";
-  return false;
+  bool ran = false;
+  if (!visit_model(model, [&](auto m) { ran = device_run<decltype(m)>(N, q, t, p, out, why); })) {
+    why = "model " + model + " is not compiled for the device check";
+    return false;
+  }
+  return ran;
 }
 
 }  // namespace pardel_cuda_check
