@@ -13,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "batch_entries.hpp"
 #include "engine.hpp"
 #include "pardel/memory.hpp"
 #include "pardel/pardel.hpp"
@@ -44,7 +45,10 @@ std::string batch_refusal(const Problem& base, const Options& options, const Opt
   return "a batch of " + std::to_string(count) + " problems: " + refusal;
 }
 
-/** The problem of one batch entry: the base with the entry's boundary values and params. */
+}  // namespace
+
+namespace detail {
+
 Problem entry_problem(const Problem& base, const BatchProblem& p) {
   Problem problem = base;
   if (!p.q0.empty()) problem.q0 = p.q0;
@@ -53,8 +57,6 @@ Problem entry_problem(const Problem& base, const BatchProblem& p) {
   return problem;
 }
 
-/** The entry's initial guess: its own, else the straight line where the problem allows one (else
- *  nothing, and solve() reports what is wrong with the problem). */
 Trajectory entry_guess(const Problem& problem, const BatchProblem& p) {
   if (p.guess.N > 0) return p.guess;
   const std::size_t dim = problem.model ? static_cast<std::size_t>(problem.model->dim) : 0;
@@ -62,7 +64,10 @@ Trajectory entry_guess(const Problem& problem, const BatchProblem& p) {
   return linear_guess(problem);
 }
 
-}  // namespace
+}  // namespace detail
+
+using detail::entry_guess;
+using detail::entry_problem;
 
 BatchSummary solve_batch(const Problem& base, const Options& options, const std::vector<BatchProblem>& problems) {
   const auto start = std::chrono::steady_clock::now();

@@ -1,0 +1,236 @@
+/**
+ * @file batch_device.cuh
+ * The device side of solve_batch_cuda for one model and discretization (Kernel, dimension D):
+ * the sweep kernel (one node per thread, the nodes of one problem in consecutive blocks, a block
+ * reduction of what the nodes found and one atomic fold per block into the problem's record), the
+ * decision kernel (one problem per thread: batch_sweep::decide) and the launch loop, which looks
+ * at the count of running problems every check_every sweeps and at nothing else. Included by the
+ * generated per-model registration sources (runtime/cuda/CMakeLists.txt).
+ */
+#ifndef PARDEL_CUDA_BATCH_DEVICE_CUH
+#define PARDEL_CUDA_BATCH_DEVICE_CUH
+
+#include <cuda_runtime.h>
+
+#include <cub/block/block_reduce.cuh>
+
+#include "batch_sweep.hpp"
+#include "device_registry.hpp"
+
+namespace pardel::cuda_detail {
+
+namespace bs = pardel::batch_sweep;
+
+constexpr int kBlock = 128;
+
+template <int D>
+struct MergeStats {
+  __device__ bs::Stats<D> operator()(const bs::Stats<D>& a, const bs::Stats<D>& b) const {
+    bs::Stats<D> c = a;
+    bs::merge(c, b);
+    return c;
+  }
+};
+
+/** Non-negative doubles order as their bit patterns: a maximum by atomicMax on the bits. */
+__device__ inline void atomic_larger(double* at, double v) {
+  if (v > 0) atomicMax(reinterpret_cast<unsigned long long*>(at), static_cast<unsigned long long>(__double_as_longlong(v)));
+}
+/** -1 (no node) is the largest unsigned value: the first node by atomicMin on the bits. */
+__device__ inline void atomic_first(int* at, int v) {
+  if (v >= 0) atomicMin(reinterpret_cast<unsigned int*>(at), static_cast<unsigned int>(v));
+}
+
+template <class Kernel, int D>
+__global__ void __launch_bounds__(kBlock) sweep_kernel(int N, int blocks_per_problem, const double* __restrict__ in,
+                                                       double* __restrict__ out, const double* __restrict__ t,
+                                                       const double* __restrict__ h, const double* __restrict__ p,
+                                                       int np, bs::Settings set,
+                                                       const bs::ProblemState<D>* __restrict__ state,
+                                                       bs::Stats<D>* stats) {
+  const int b = blockIdx.x / blocks_per_problem;
+  if (state[b].status != bs::running) return;  // the whole block: the reduction below needs all or none
+  const int k = (blockIdx.x % blocks_per_problem) * kBlock + threadIdx.x;
+  const long nodes = static_cast<long>(N) + 1;
+  const double* q = in + b * nodes * D;
+  double* o = out + b * nodes * D;
+  const double* pb = p + static_cast<long>(b) * np;
+  bs::Stats<D> mine;
+  bs::clear(mine);
+  if (k == 0 || k == N) {
+    for (int i = 0; i < D; ++i) o[static_cast<long>(k) * D + i] = q[static_cast<long>(k) * D + i];
+  } else if (k < N) {
+    bs::Interval<D> left, right;
+    Kernel::sweep(h[k - 1], t[k - 1], t[k], q + static_cast<long>(k - 1) * D, q + static_cast<long>(k) * D, pb,
+                  left.D1, left.D2, left.D11, left.D22);
+    Kernel::sweep(h[k], t[k], t[k + 1], q + static_cast<long>(k) * D, q + static_cast<long>(k + 1) * D, pb, right.D1,
+                  right.D2, right.D11, right.D22);
+    bs::update_node<Kernel, D>(k, q, t, h, pb, left, right, set, o + static_cast<long>(k) * D, mine);
+  }
+  using Reduce = cub::BlockReduce<bs::Stats<D>, kBlock>;
+  __shared__ typename Reduce::TempStorage scratch;
+  const bs::Stats<D> all = Reduce(scratch).Reduce(mine, MergeStats<D>());
+  if (threadIdx.x == 0) {
+    bs::Stats<D>& s = stats[b];
+    atomic_larger(&s.residual, all.residual);
+    atomic_larger(&s.scale, all.scale);
+    atomic_larger(&s.qmax, all.qmax);
+    for (int i = 0; i < D; ++i) {
+      atomic_larger(&s.comp_residual[i], all.comp_residual[i]);
+      atomic_larger(&s.comp_scale[i], all.comp_scale[i]);
+    }
+    atomic_first(&s.bad_residual, all.bad_residual);
+    atomic_first(&s.singular, all.singular);
+    atomic_first(&s.bad_value, all.bad_value);
+  }
+}
+
+template <int D>
+__global__ void start_kernel(int B, bs::ProblemState<D>* state, bs::Stats<D>* stats, const int* invalid) {
+  const int b = blockIdx.x * blockDim.x + threadIdx.x;
+  if (b >= B) return;
+  bs::start(state[b]);
+  if (invalid[b]) state[b].status = bs::not_started;
+  bs::clear(stats[b]);
+}
+
+template <int D>
+__global__ void decide_kernel(int B, long it, bs::Settings set, bs::ProblemState<D>* state, bs::Stats<D>* stats,
+                              int* running) {
+  const int b = blockIdx.x * blockDim.x + threadIdx.x;
+  if (b >= B || state[b].status != bs::running) return;
+  bs::decide(state[b], stats[b], it, set);
+  bs::clear(stats[b]);
+  if (state[b].status != bs::running) atomicSub(running, 1);
+}
+
+/** Device buffers, freed on every path. */
+struct Buffers {
+  void* held[8] = {};
+  int n = 0;
+  ~Buffers() {
+    for (int i = 0; i < n; ++i) cudaFree(held[i]);
+  }
+  template <class T>
+  T* get(std::size_t count, cudaError_t& err) {
+    void* b = nullptr;
+    if (err == cudaSuccess) err = cudaMalloc(&b, sizeof(T) * (count > 0 ? count : 1));
+    if (err != cudaSuccess) return nullptr;
+    held[n++] = b;
+    return static_cast<T*>(b);
+  }
+};
+
+/** The launch loop for one model and discretization (a DeviceRunner, device_registry.hpp). */
+template <class Kernel, int D>
+std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
+  const int B = in.B, N = in.N;
+  const long nodes = static_cast<long>(N) + 1;
+  const std::size_t values = static_cast<std::size_t>(B) * static_cast<std::size_t>(nodes) * D;
+  cudaError_t err = cudaSuccess;
+  Buffers buf;
+  double* q0 = buf.get<double>(values, err);
+  double* q1 = buf.get<double>(values, err);
+  double* t = buf.get<double>(static_cast<std::size_t>(nodes), err);
+  double* h = buf.get<double>(static_cast<std::size_t>(N), err);
+  double* p = buf.get<double>(static_cast<std::size_t>(B) * in.np, err);
+  auto* state = buf.get<bs::ProblemState<D>>(static_cast<std::size_t>(B), err);
+  auto* stats = buf.get<bs::Stats<D>>(static_cast<std::size_t>(B), err);
+  int* flags = buf.get<int>(static_cast<std::size_t>(B) + 1, err);  // invalid[B], then the running count
+  if (err != cudaSuccess) return std::string("device allocation failed: ") + cudaGetErrorString(err);
+  cudaEvent_t e0, e1, e2, e3;
+  cudaEventCreate(&e0);
+  cudaEventCreate(&e1);
+  cudaEventCreate(&e2);
+  cudaEventCreate(&e3);
+  struct Events {
+    cudaEvent_t* e;
+    ~Events() {
+      for (int i = 0; i < 4; ++i) cudaEventDestroy(e[i]);
+    }
+  };
+  cudaEvent_t all[4] = {e0, e1, e2, e3};
+  Events guard{all};
+  cudaEventRecord(e0);
+  int running = 0;
+  for (int b = 0; b < B; ++b) running += in.invalid[b] ? 0 : 1;
+  err = cudaMemcpy(q0, in.q, sizeof(double) * values, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(t, in.t, sizeof(double) * nodes, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(h, in.h, sizeof(double) * N, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess && in.np > 0)
+    err = cudaMemcpy(p, in.p, sizeof(double) * static_cast<std::size_t>(B) * in.np, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(flags, in.invalid, sizeof(int) * B, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(flags + B, &running, sizeof(int), cudaMemcpyHostToDevice);
+  if (err != cudaSuccess) return std::string("copy to the device failed: ") + cudaGetErrorString(err);
+  const int per_problem = static_cast<int>((nodes + kBlock - 1) / kBlock);
+  const long blocks = static_cast<long>(per_problem) * B;
+  const int decide_blocks = (B + 127) / 128;
+  start_kernel<D><<<decide_blocks, 128>>>(B, state, stats, flags);
+  cudaEventRecord(e1);
+  long it = 0;
+  bool interrupted = false;
+  while (running > 0) {
+    for (int c = 0; c < in.check_every; ++c, ++it) {
+      const double* from = it % 2 == 0 ? q0 : q1;
+      double* to = it % 2 == 0 ? q1 : q0;
+      sweep_kernel<Kernel, D><<<static_cast<unsigned>(blocks), kBlock>>>(N, per_problem, from, to, t, h, p, in.np,
+                                                                          in.settings, state, stats);
+      decide_kernel<D><<<decide_blocks, 128>>>(B, it, in.settings, state, stats, flags + B);
+    }
+    err = cudaMemcpy(&running, flags + B, sizeof(int), cudaMemcpyDeviceToHost);  // waits for the sweeps
+    if (err != cudaSuccess) return std::string("a device sweep failed: ") + cudaGetErrorString(err);
+    if (running > 0 && in.keep_going && !in.keep_going()) {
+      interrupted = true;
+      break;
+    }
+  }
+  err = cudaGetLastError();
+  if (err != cudaSuccess) return std::string("a device sweep failed: ") + cudaGetErrorString(err);
+  cudaEventRecord(e2);
+  std::vector<bs::ProblemState<D>> host_state(static_cast<std::size_t>(B));
+  err = cudaMemcpy(host_state.data(), state, sizeof(bs::ProblemState<D>) * B, cudaMemcpyDeviceToHost);
+  if (err != cudaSuccess) return std::string("copy from the device failed: ") + cudaGetErrorString(err);
+  // Each problem's returned iterate is in the buffer its record names; problems still running
+  // (interrupted) return the last iterate, in the buffer the next sweep would have read.
+  const int last = static_cast<int>(it % 2);
+  for (int b = 0; b < B && err == cudaSuccess; ++b) {
+    const bs::ProblemState<D>& s = host_state[static_cast<std::size_t>(b)];
+    const int which = s.status == bs::running ? last : s.answer;
+    const std::size_t at = static_cast<std::size_t>(b) * static_cast<std::size_t>(nodes) * D;
+    err = cudaMemcpyAsync(result.q + at, (which == 0 ? q0 : q1) + at, sizeof(double) * nodes * D,
+                          cudaMemcpyDeviceToHost);
+  }
+  if (err == cudaSuccess) err = cudaDeviceSynchronize();
+  if (err != cudaSuccess) return std::string("copy from the device failed: ") + cudaGetErrorString(err);
+  cudaEventRecord(e3);
+  cudaEventSynchronize(e3);
+  float ms[3] = {0, 0, 0};
+  cudaEventElapsedTime(&ms[0], e0, e1);
+  cudaEventElapsedTime(&ms[1], e1, e2);
+  cudaEventElapsedTime(&ms[2], e2, e3);
+  result.upload = ms[0] * 1e-3;
+  result.sweeps = ms[1] * 1e-3;
+  result.download = ms[2] * 1e-3;
+  result.sweeps_run = it;
+  result.interrupted = interrupted;
+  result.last_iteration = it;
+  for (int b = 0; b < B; ++b) {
+    const bs::ProblemState<D>& s = host_state[static_cast<std::size_t>(b)];
+    ProblemRecord& r = result.records[static_cast<std::size_t>(b)];
+    r.status = s.status;
+    r.iterations = s.status == bs::running ? it : s.iterations;
+    r.node = s.node;
+    r.unresolved = s.unresolved;
+    r.residual = s.residual;
+    r.scale = s.scale;
+    r.target = s.target;
+    r.r_initial = s.r_initial;
+    r.comp_residual.assign(s.comp_residual, s.comp_residual + D);
+    r.comp_target.assign(s.comp_target, s.comp_target + D);
+  }
+  return "";
+}
+
+}  // namespace pardel::cuda_detail
+
+#endif  // PARDEL_CUDA_BATCH_DEVICE_CUH

@@ -1,0 +1,284 @@
+/**
+ * @file cuda.cu
+ * The host side of solve_batch_cuda (pardel/cuda.hpp): what the device takes and refuses, the
+ * batch as flat arrays, the memory check before anything is allocated on the device, and the
+ * entries made from the device's per-problem records (messages, actions, point assessments).
+ */
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "batch_entries.hpp"
+#include "device_registry.hpp"
+#include "pardel/cuda.hpp"
+
+namespace pardel {
+namespace cuda_detail {
+
+void add_entry(std::vector<DeviceEntry>& entries, const pardel_model& model, pardel_sweep_kernel sweep,
+               DeviceRunner run) {
+  for (int i = 0; i < model.ndiscretizations; ++i)
+    if (model.discretizations[i].sweep == sweep) entries.push_back({&model, &model.discretizations[i], run});
+}
+
+}  // namespace cuda_detail
+
+namespace {
+
+namespace bs = pardel::batch_sweep;
+using cuda_detail::DeviceEntry;
+
+std::string format(const char* fmt, double a, double b = 0, double c = 0, double d = 0) {
+  char buf[400];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c, d);
+  return buf;
+}
+
+const DeviceEntry* find_entry(const pardel_model& model, const pardel_discretization& disc) {
+  for (const DeviceEntry& e : cuda_detail::device_entries())
+    if (e.discretization == &disc ||
+        (std::strcmp(e.model->name, model.name) == 0 && std::strcmp(e.discretization->name, disc.name) == 0 &&
+         e.model->dim == model.dim))
+      return &e;
+  return nullptr;
+}
+
+std::string device_list() {
+  std::string list;
+  for (const DeviceEntry& e : cuda_detail::device_entries())
+    list += (list.empty() ? "" : ", ") + std::string(e.model->name) + " (" + e.discretization->name + ")";
+  return list.empty() ? std::string("none") : list;
+}
+
+/** Why the device does not take these options or this base problem ("" when it does). */
+std::string options_refusal(const Problem& base, const Options& options) {
+  std::string error;
+  if (!options.is_valid(&error)) return error;
+  if (options.method != Method::jacobi && options.method != Method::jacobi_newton)
+    return std::string("the device solves with methods jacobi and jacobi-newton; method ") +
+           to_string(options.method) + " runs on CPU cores (solve_batch)";
+  if (options.resume_from) return "solve_batch_cuda does not resume solves (Options::resume_from is set)";
+  if (options.refine_start_N > 0) return "the device solves on one grid: refine_start_N must be 0";
+  if (options.accuracy > 0) return "the device solves on one grid: accuracy (adaptive grids) must be 0";
+  if (!base.model || !base.discretization) return "the base problem has no model or discretization";
+  if (base.N < 2) return "the base problem needs N >= 2";
+  if (!base.knots.empty()) return "the device batch takes no knots (solve_batch solves problems with knots)";
+  if (base.clock != ClockMode::none) return "the device batch takes no clock (solve_batch solves problems with one)";
+  return "";
+}
+
+Termination to_termination(int status) {
+  switch (status) {
+    case bs::converged: return Termination::converged;
+    case bs::max_iterations: return Termination::max_iterations;
+    case bs::diverged: return Termination::diverged;
+    case bs::stalled: return Termination::stalled;
+    case bs::running: return Termination::interrupted;
+    default: return Termination::non_finite;
+  }
+}
+
+/** The entry's message, in the words of the CPU solver where the rule is the same. */
+std::string record_message(const cuda_detail::ProblemRecord& r, const Options& options, const pardel_model& model) {
+  std::string unresolved;
+  if (r.unresolved >= 0) {
+    const std::size_t i = static_cast<std::size_t>(r.unresolved);
+    const int nc = model.ncoords > 0 ? model.ncoords : 1;
+    std::string name = model.coords ? model.coords[r.unresolved % nc] : std::to_string(r.unresolved);
+    for (int d = 0; d < r.unresolved / nc; ++d) name += "'";
+    unresolved = "; component " + name +
+                 format("'s equations are resolved only to %.3g, above its own target %.3g: the solve is not converged",
+                        r.comp_residual[i], r.comp_target[i]);
+  }
+  switch (r.status) {
+    case bs::converged:
+      return options.tol > 0 ? format("DEL residual %.3g <= tol %.3g", r.residual, r.target)
+                             : format("DEL residual %.3g <= %.3g = max(rtol x scale of the DEL terms %.3g, 10 x "
+                                      "round-off level)",
+                                      r.residual, r.target, r.scale);
+    case bs::max_iterations:
+      return format("reached max_iterations = %.0f with DEL residual %.3g (tol %.3g)",
+                    static_cast<double>(options.max_iterations), r.residual, r.target) +
+             (r.residual <= r.target ? unresolved : std::string());
+    case bs::stalled:
+      return format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and no component "
+                    "has come 1%% closer to its own target in 200 iterations",
+                    r.residual, 16 * 2.220446049250313e-16 * r.scale) +
+             unresolved;
+    case bs::diverged:
+      return r.residual > options.divergence_factor * r.r_initial
+                 ? format("DEL residual %.3g grew beyond divergence_factor x initial residual %.3g at iteration %.0f",
+                          r.residual, r.r_initial, static_cast<double>(r.iterations))
+                 : format("iterates exploded (max |q| > 1e150) in iteration %.0f", static_cast<double>(r.iterations + 1));
+    case bs::running:
+      return format("interrupted by keep_going at iteration %.0f", static_cast<double>(r.iterations));
+    default:
+      return r.node >= 0 ? "non-finite DEL residual, value or singular diagonal block at node " +
+                               std::to_string(r.node) + format(" (iteration %.0f); the last finite iterate is returned",
+                                                               static_cast<double>(r.iterations))
+                         : std::string("non-finite value");
+  }
+}
+
+}  // namespace
+
+bool cuda_device_available(std::string* why) {
+  int devices = 0;
+  const cudaError_t status = cudaGetDeviceCount(&devices);
+  if (status == cudaSuccess && devices > 0) return true;
+  if (why) *why = status != cudaSuccess ? std::string("no CUDA device: ") + cudaGetErrorString(status) : "no CUDA device";
+  return false;
+}
+
+bool cuda_supports(const pardel_model& model, const pardel_discretization& discretization, std::string* why) {
+  if (find_entry(model, discretization)) return true;
+  if (why)
+    *why = std::string("model ") + model.name + " with discretization " + discretization.name +
+           " is not compiled for the device; the device build has: " + device_list() +
+           " (PARDEL_DEVICE_MODELS at configure time)";
+  return false;
+}
+
+BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const std::vector<BatchProblem>& problems,
+                              const CudaSettings& settings, CudaBatchTimes* times) {
+  const auto start = std::chrono::steady_clock::now();
+  BatchSummary batch;
+  batch.threads = 1;
+  batch.refusal = options_refusal(base, options);
+  if (batch.refusal.empty() && settings.check_every < 1) batch.refusal = "CudaSettings::check_every must be >= 1";
+  const DeviceEntry* entry = nullptr;
+  if (batch.refusal.empty() && !(entry = find_entry(*base.model, *base.discretization)))
+    cuda_supports(*base.model, *base.discretization, &batch.refusal);
+  std::string why;
+  if (batch.refusal.empty() && !cuda_device_available(&why)) batch.refusal = why;
+  if (!batch.refusal.empty()) return batch;
+
+  const pardel_model& model = *base.model;
+  const int B = static_cast<int>(problems.size()), N = base.N, dim = model.dim, np = model.nparams;
+  const std::size_t nodes = static_cast<std::size_t>(N) + 1, per = nodes * static_cast<std::size_t>(dim);
+  // Memory: the two iterate buffers and the per-problem records on the device, against what it
+  // has free, before anything is allocated there or on the host.
+  const double device_bytes = 2.0 * B * per * 8 + B * (np * 8.0 + 1024) + nodes * 16.0;
+  std::size_t free_bytes = 0, total_bytes = 0;
+  if (cudaMemGetInfo(&free_bytes, &total_bytes) != cudaSuccess || device_bytes > 0.9 * free_bytes) {
+    batch.refusal = format("a batch of %.0f problems needs about %.3g GB on the device, which has %.3g GB free", B,
+                           device_bytes / 1e9, free_bytes / 1e9);
+    return batch;
+  }
+
+  batch.entries.resize(problems.size());
+  std::vector<double> q(static_cast<std::size_t>(B) * per), p(static_cast<std::size_t>(B) * np);
+  std::vector<int> invalid(static_cast<std::size_t>(B), 0);
+  for (int b = 0; b < B; ++b) {
+    const BatchProblem& bp = problems[static_cast<std::size_t>(b)];
+    BatchEntry& e = batch.entries[static_cast<std::size_t>(b)];
+    const Problem problem = detail::entry_problem(base, bp);
+    Trajectory guess = detail::entry_guess(problem, bp);
+    std::string error;
+    if (!validate(problem, guess, &error)) {
+      e.summary.termination = Termination::invalid_input;
+      e.summary.message = error;
+      invalid[static_cast<std::size_t>(b)] = 1;
+      continue;
+    }
+    std::copy(guess.q.begin(), guess.q.end(), q.begin() + static_cast<long>(b * per));
+    std::copy(problem.q0.begin(), problem.q0.end(), q.begin() + static_cast<long>(b * per));
+    std::copy(problem.qN.begin(), problem.qN.end(), q.begin() + static_cast<long>(b * per + N * dim));
+    if (np > 0) {
+      if (problem.params.empty())
+        std::copy(model.param_defaults, model.param_defaults + np, p.begin() + static_cast<long>(b) * np);
+      else
+        std::copy(problem.params.begin(), problem.params.end(), p.begin() + static_cast<long>(b) * np);
+    }
+  }
+  // The grid, as the CPU solver makes it (runtime/src/engine.cpp).
+  std::vector<double> t(nodes), h(static_cast<std::size_t>(N), base.T / N);
+  for (int k = 0; k <= N; ++k) t[static_cast<std::size_t>(k)] = base.t0 + base.T * k / N;
+  t[static_cast<std::size_t>(N)] = base.t0 + base.T;
+  if (!base.times.empty()) {
+    t = base.times;
+    for (int k = 0; k < N; ++k) h[static_cast<std::size_t>(k)] = t[static_cast<std::size_t>(k) + 1] - t[static_cast<std::size_t>(k)];
+  }
+
+  cuda_detail::DeviceBatch in;
+  in.B = B;
+  in.N = N;
+  in.np = np;
+  in.q = q.data();
+  in.t = t.data();
+  in.h = h.data();
+  in.p = p.data();
+  in.invalid = invalid.data();
+  in.settings.keep = 1.0 - options.damping;
+  in.settings.steps = options.newton_substeps;
+  in.settings.nonlinear = options.method == Method::jacobi ? 1 : 0;
+  in.settings.tol = options.tol;
+  in.settings.rtol = options.rtol;
+  in.settings.max_iterations = options.max_iterations;
+  in.settings.divergence_factor = options.divergence_factor;
+  in.check_every = settings.check_every;
+  in.keep_going = options.keep_going;
+  cuda_detail::DeviceBatchResult out;
+  out.q = q.data();  // the guesses are on the device once uploaded: the answers come back here
+  out.records.resize(static_cast<std::size_t>(B));
+  const std::string failed = entry->run(in, out);
+  if (!failed.empty()) {
+    batch.entries.clear();
+    batch.refusal = failed;
+    return batch;
+  }
+
+  const auto host_start = std::chrono::steady_clock::now();
+  const double device_seconds = out.upload + out.sweeps + out.download;
+  long converged = 0;
+#pragma omp parallel for schedule(dynamic) reduction(+ : converged)
+  for (int b = 0; b < B; ++b) {
+    if (invalid[static_cast<std::size_t>(b)]) continue;
+    const BatchProblem& bp = problems[static_cast<std::size_t>(b)];
+    BatchEntry& e = batch.entries[static_cast<std::size_t>(b)];
+    const cuda_detail::ProblemRecord& r = out.records[static_cast<std::size_t>(b)];
+    const Problem problem = detail::entry_problem(base, bp);
+    Trajectory& tr = e.trajectory;
+    tr.N = N;
+    tr.dim = dim;
+    tr.t = t;
+    tr.q.assign(q.begin() + static_cast<long>(b * per), q.begin() + static_cast<long>((b + 1) * per));
+    Summary& s = e.summary;
+    s.termination = to_termination(r.status);
+    s.message = record_message(r, options, model);
+    s.method = options.method;
+    s.iterations = r.iterations;
+    s.N = N;
+    s.threads = 1;
+    s.residual = r.residual;
+    s.residual_floor = 16 * 2.220446049250313e-16 * r.scale;
+    s.tolerance = r.target;
+    s.final_time = t[static_cast<std::size_t>(N)];
+    s.wall_seconds = device_seconds;
+    s.action = discrete_action(problem, tr);
+    s.error_note = "not estimated: the device batch solves one grid";
+    if (s.converged()) {
+      ++converged;
+      if (settings.assess) s.point = assess_point(problem, tr, 1);
+    }
+  }
+  batch.converged = converged;
+  const auto end = std::chrono::steady_clock::now();
+  batch.wall_seconds = std::chrono::duration<double>(end - start).count();
+  if (times) {
+    times->upload = out.upload;
+    times->sweeps = out.sweeps;
+    times->download = out.download;
+    times->host = std::chrono::duration<double>(end - host_start).count();
+    times->sweeps_run = out.sweeps_run;
+  }
+  return batch;
+}
+
+}  // namespace pardel

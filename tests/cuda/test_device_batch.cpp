@@ -1,0 +1,185 @@
+// solve_batch_cuda (pardel/cuda.hpp) against solve_batch on CPU cores with the same options:
+// every problem's status, iteration count and returned iterate (1e-12), and the point found, on
+// batches with random boundary values, params and wiggly guesses of models compiled for the device
+// (fuel navigation, Zermelo's vortices, a pendulum under nonlinear Jacobi, a damped 2-step
+// Jacobi-Newton on the oscillator, Bratu's problem driven to overflow). What the device refuses is
+// checked without a device; the comparisons skip, saying why, where there is none.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "pardel/cuda.hpp"
+#include "pardel/pardel.hpp"
+
+extern "C" const pardel_model fuel_nav_model, zermelo_model, pendulum_model, harmonic_model, bratu_model;
+
+namespace {
+
+pardel::Problem problem_of(const pardel_model& m, double T, int N, std::vector<double> q0, std::vector<double> qN) {
+  pardel::Problem p;
+  p.model = &m;
+  p.discretization = &m.discretizations[0];
+  p.T = T;
+  p.N = N;
+  p.q0 = std::move(q0);
+  p.qN = std::move(qN);
+  return p;
+}
+
+pardel::Options options_of(pardel::Method method, long max_iterations) {
+  pardel::Options o;
+  o.method = method;
+  o.max_iterations = max_iterations;
+  o.error_estimate = false;
+  o.iterative_refinement = pardel::Refinement::off;
+  return o;
+}
+
+/** B problems: end points moved by up to `spread`, params scaled by up to `param_spread`, and a
+ *  sine bump of up to `bump` on the straight line as the guess. */
+std::vector<pardel::BatchProblem> random_batch(const pardel::Problem& base, int B, double spread, double param_spread,
+                                               double bump, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const pardel_model& m = *base.model;
+  std::vector<pardel::BatchProblem> out;
+  for (int b = 0; b < B; ++b) {
+    pardel::BatchProblem bp;
+    bp.q0 = base.q0;
+    bp.qN = base.qN;
+    for (int i = 0; i < m.ncoords; ++i) {
+      bp.q0[i] += spread * u(rng);
+      bp.qN[i] += spread * u(rng);
+    }
+    for (int i = 0; i < m.nparams; ++i) bp.params.push_back(m.param_defaults[i] * (1 + param_spread * u(rng)));
+    pardel::Problem p = base;
+    p.q0 = bp.q0;
+    p.qN = bp.qN;
+    bp.guess = pardel::linear_guess(p);
+    const double a = bump * u(rng), phase = 3 * u(rng);
+    for (int k = 1; k < base.N; ++k)
+      for (int i = 0; i < m.ncoords; ++i) bp.guess.q[k * m.dim + i] += a * std::sin(M_PI * k / base.N) * std::cos(phase + i);
+    out.push_back(bp);
+  }
+  return out;
+}
+
+/** The number of problems that converged (on both). */
+int compare(const pardel::Problem& base, const pardel::Options& options, const std::vector<pardel::BatchProblem>& batch) {
+  std::string why;
+  if (!pardel::cuda_device_available(&why)) {
+    std::printf("skipped: %s\n", why.c_str());
+    return -1;
+  }
+  pardel::CudaSettings settings;
+  settings.check_every = 7;  // not a divisor of the iteration counts: the device stops each problem at its own
+  const pardel::BatchSummary gpu = pardel::solve_batch_cuda(base, options, batch, settings);
+  EXPECT_TRUE(gpu.refusal.empty()) << gpu.refusal;
+  if (!gpu.refusal.empty()) return 0;
+  pardel::Options cpu_options = options;
+  cpu_options.threads = 0;
+  const pardel::BatchSummary cpu = pardel::solve_batch(base, cpu_options, batch);
+  EXPECT_EQ(gpu.entries.size(), cpu.entries.size());
+  if (gpu.entries.size() != cpu.entries.size()) return 0;
+  int converged = 0;
+  for (std::size_t b = 0; b < batch.size(); ++b) {
+    const pardel::Summary& g = gpu.entries[b].summary;
+    const pardel::Summary& c = cpu.entries[b].summary;
+    SCOPED_TRACE("problem " + std::to_string(b) + ": device: " + g.message + " | cpu: " + c.message);
+    EXPECT_EQ(g.termination, c.termination);
+    EXPECT_EQ(g.iterations, c.iterations);
+    const std::vector<double>& qg = gpu.entries[b].trajectory.q;
+    const std::vector<double>& qc = cpu.entries[b].trajectory.q;
+    EXPECT_EQ(qg.size(), qc.size());
+    if (qg.size() != qc.size()) continue;
+    double diff = 0, size = 0;
+    for (std::size_t i = 0; i < qg.size(); ++i) {
+      diff = std::max(diff, std::fabs(qg[i] - qc[i]));
+      size = std::max(size, std::fabs(qc[i]));
+    }
+    EXPECT_LE(diff, 1e-12 * (1 + size));
+    if (c.converged()) {
+      ++converged;
+      EXPECT_EQ(g.point.kind, c.point.kind);
+      EXPECT_LE(g.residual, g.tolerance);
+    }
+  }
+  EXPECT_EQ(gpu.converged, cpu.converged);
+  return converged;
+}
+
+/** Skips the test where there is no device. */
+#define PARDEL_NEEDS_DEVICE()                                   \
+  do {                                                          \
+    std::string why;                                            \
+    if (!pardel::cuda_device_available(&why)) GTEST_SKIP() << why; \
+  } while (0)
+
+TEST(DeviceBatchRefusals, MethodsKnotsAndModelsTheDeviceLacks) {
+  const pardel::Problem base = problem_of(fuel_nav_model, 5, 20, {0, 0}, {1, 1});
+  std::vector<pardel::BatchProblem> one(1);
+  pardel::BatchSummary s = pardel::solve_batch_cuda(base, options_of(pardel::Method::newton, 10), one);
+  EXPECT_NE(s.refusal.find("jacobi-newton"), std::string::npos) << s.refusal;
+  EXPECT_TRUE(s.entries.empty());
+  pardel::Problem knotted = base;
+  knotted.knots.push_back(pardel::Knot{});
+  s = pardel::solve_batch_cuda(knotted, options_of(pardel::Method::jacobi_newton, 10), one);
+  EXPECT_NE(s.refusal.find("knots"), std::string::npos) << s.refusal;
+  EXPECT_TRUE(pardel::cuda_supports(fuel_nav_model, fuel_nav_model.discretizations[1]));
+  // A model that is not in the device build: a copy under another name.
+  pardel_model other = fuel_nav_model;
+  other.name = "fuel_nav_copy";
+  pardel_discretization disc = fuel_nav_model.discretizations[0];
+  std::string why;
+  EXPECT_FALSE(pardel::cuda_supports(other, disc, &why));
+  EXPECT_NE(why.find("zermelo (trapezoid)"), std::string::npos) << why;
+}
+
+TEST(DeviceBatch, FuelNavigationIteratesAfterNineSweeps) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(fuel_nav_model, 5, 40, {0, 0}, {1.5, 1});
+  compare(base, options_of(pardel::Method::jacobi_newton, 9), random_batch(base, 40, 0.3, 0, 0.4, 1));
+}
+
+TEST(DeviceBatch, FuelNavigationToTheEnd) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(fuel_nav_model, 5, 20, {0, 0}, {1.5, 1});
+  EXPECT_GT(compare(base, options_of(pardel::Method::jacobi_newton, 20000), random_batch(base, 64, 0.3, 0, 0.4, 2)), 32);
+}
+
+TEST(DeviceBatch, ZermeloRoutesWithTheirOwnWind) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(zermelo_model, 1, 24, {0, 0}, {6, 2});
+  EXPECT_GT(compare(base, options_of(pardel::Method::jacobi_newton, 20000), random_batch(base, 48, 0.3, 0.2, 1.0, 3)), 24);
+}
+
+TEST(DeviceBatch, PendulumUnderNonlinearJacobi) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(pendulum_model, 1.5, 30, {0.3}, {-0.8});
+  EXPECT_GT(compare(base, options_of(pardel::Method::jacobi, 20000), random_batch(base, 33, 0.5, 0.3, 0.6, 4)), 16);
+}
+
+TEST(DeviceBatch, DampedTwoStepJacobiNewtonOnTheOscillator) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(harmonic_model, 2, 30, {1}, {-0.5});
+  pardel::Options o = options_of(pardel::Method::jacobi_newton, 20000);
+  o.damping = 0.4;
+  o.newton_substeps = 2;
+  o.tol = 1e-11;
+  EXPECT_GT(compare(base, o, random_batch(base, 20, 0.5, 0.3, 0.8, 5)), 10);
+}
+
+TEST(DeviceBatch, BratuDrivenToOverflowStopsEachProblemAlone) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(bratu_model, 1, 24, {0}, {0});
+  std::vector<pardel::BatchProblem> batch = random_batch(base, 12, 0.1, 0.5, 0.5, 6);
+  for (int b = 0; b < 12; b += 3) batch[b].guess.q[12] = 800;  // exp(800) overflows
+  compare(base, options_of(pardel::Method::jacobi_newton, 5000), batch);
+}
+
+}  // namespace
