@@ -5,44 +5,46 @@
 # OUT (default out/gpu). The binaries come from a build with PARDEL_WITH_CUDA, here or copied from
 # another machine (static CUDA runtime; docs/gpu.md):
 #   tools/gpu/run.sh [BIN_DIR] [OUT]        (BIN_DIR default build)
-# PYTHON names the interpreter that has JAX (default python3). BATCH sets the batch size (10000).
+# PYTHON names the interpreter that has JAX (default python3); BATCH the batch size (10000); WORK the
+# folder for the batches, the answers and the logs (default OUT/work; logs.tar.gz in OUT keeps the logs).
 set -uo pipefail
 bin=${1:-build}
 out=${2:-out/gpu}
 python=${PYTHON:-python3}
 batch=${BATCH:-10000}
-mkdir -p "$out/work"
+work=${WORK:-$out/work}
+mkdir -p "$out" "$work"
 here=$(cd "$(dirname "$0")" && pwd)
 status=0
 {
   echo "== machine"
   nvidia-smi --query-gpu=name,memory.total,driver_version,clocks.max.sm --format=csv 2>&1
   nproc
-  echo "commit: $(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown)"
+  echo "commit: ${PARDEL_COMMIT:-$(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown)}"
 } | tee "$out/machine.txt"
 
 echo "== device tests"
 for t in test_cuda_device_kernels test_cuda_device_batch; do
-  if ! timeout 300 "$bin/$t" --gtest_brief=1 >"$out/work/$t.log" 2>&1; then
+  if ! timeout 150 "$bin/$t" --gtest_brief=1 >"$work/$t.log" 2>&1; then
     status=1
     echo "$t FAILED"
   fi
-  tail -n 4 "$out/work/$t.log"
+  tail -n 4 "$work/$t.log"
 done
-grep -h -B2 -A12 "Failure" "$out"/work/test_cuda_*.log | head -n 80
+grep -h -B2 -A12 "Failure" "$work"/test_cuda_*.log | head -n 80
 
 echo "== pardel on the device and on the CPU"
-if ! timeout 420 "$bin/bench_device" --out "$out/work" --batch "$batch" 2>&1 | tee "$out/bench_device.txt"; then
+if ! timeout 270 "$bin/bench_device" --out "$work" --batch "$batch" 2>&1 | tee "$out/bench_device.txt"; then
   status=1
 fi
-cp "$out/work/bench_device.json" "$out/" 2>/dev/null
+cp "$work/bench_device.json" "$out/" 2>/dev/null
 
 echo "== the JAX peer"
 for name in zermelo_N80 fuel_nav_N100; do
-  if [ -f "$out/work/$name.json" ]; then
-    timeout 240 "$python" "$here/jax_peer.py" --batch "$out/work/$name.json" --json "$out/work/jax_$name.json" \
-      --solution "$out/work/jax_$name.bin" 2>&1 | tail -n 3
-    "$python" - "$out/work" "$name" <<'PY' 2>&1
+  if [ -f "$work/$name.json" ]; then
+    timeout 100 "$python" "$here/jax_peer.py" --batch "$work/$name.json" --json "$work/jax_$name.json" \
+      --solution "$work/jax_$name.bin" 2>&1 | tail -n 3
+    "$python" - "$work" "$name" <<'PY' 2>&1
 import json, sys
 import numpy as np
 work, name = sys.argv[1], sys.argv[2]
@@ -58,7 +60,7 @@ print(f"{name}: JAX solve {peer['solve_seconds']:.3f} s (compile {peer['compile_
 PY
   fi
 done
-timeout 120 "$python" "$here/jax_peer.py" --sweep-only 10000000 --json "$out/work/jax_sweep.json" 2>&1 | tail -n 2
-cp "$out"/work/jax_*.json "$out/" 2>/dev/null
-tar -C "$out" -czf "$out/logs.tar.gz" work --exclude='*.bin' 2>/dev/null
+timeout 60 "$python" "$here/jax_peer.py" --sweep-only 10000000 --json "$work/jax_sweep.json" 2>&1 | tail -n 2
+cp "$work"/jax_*.json "$out/" 2>/dev/null
+tar -C "$work" -czf "$out/logs.tar.gz" --exclude='*.bin' . 2>/dev/null
 exit $status
