@@ -11,7 +11,7 @@
  * Each batch is also written for the JAX peer (tools/gpu/jax_peer.py): a JSON description and the
  * guesses as raw float64, and the device's answers beside them.
  *
- *   bench_device --out DIR [--batch 10000] [--cpu-sample 64] [--sweep-N 10000000]
+ *   bench_device --out DIR [--batch 10000] [--cpu-sample 64] [--sweep-N 10000000] [--batches-only 1]
  */
 #include <omp.h>
 
@@ -38,6 +38,7 @@ struct Args {
   int cpu_sample = 64;
   int sweep_N = 10000000;
   int scaling_sample = 32;
+  bool batches_only = false;  ///< --batches-only 1: no large-N sweep, no scaling
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -170,6 +171,7 @@ int main(int argc, char** argv) {
     else if (k == "--cpu-sample") a.cpu_sample = std::atoi(v.c_str());
     else if (k == "--sweep-N") a.sweep_N = std::atoi(v.c_str());
     else if (k == "--scaling-sample") a.scaling_sample = std::atoi(v.c_str());
+    else if (k == "--batches-only") a.batches_only = v == "1";
     else {
       std::fprintf(stderr, "bench_device: unknown option %s\n", k.c_str());
       return 2;
@@ -223,7 +225,11 @@ int main(int argc, char** argv) {
                  r.median_it, r.max_it, r.sample, r.threads, r.cpu_s, r.cpu_converged, r.same_status,
                  r.same_iterations, r.max_diff, speedup, i + 1 < rows.size() ? "," : "");
   }
-  std::fprintf(json, "  ],\n");
+  std::fprintf(json, "  ]%s\n", a.batches_only ? "\n}" : ",");
+  if (a.batches_only) {
+    std::fclose(json);
+    return 0;
+  }
 
   // One sweep at large N (fuel navigation, straight-line guess): the device's time per sweep over
   // 200 sweeps, and the CPU's over 20 sweeps on all cores.

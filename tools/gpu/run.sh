@@ -5,13 +5,16 @@
 # OUT (default out/gpu). The binaries come from a build with PARDEL_WITH_CUDA, here or copied from
 # another machine (static CUDA runtime; docs/gpu.md):
 #   tools/gpu/run.sh [BIN_DIR] [OUT]        (BIN_DIR default build)
-# PYTHON names the interpreter that has JAX (default python3); BATCH the batch size (10000); WORK the
+# PYTHON names the interpreter that has JAX (default python3); BATCH the batch size (10000);
+# BENCH_FLAGS more options of bench_device; JAX_LIMIT seconds for each JAX batch run (100); WORK the
 # folder for the batches, the answers and the logs (default OUT/work; logs.tar.gz in OUT keeps the logs).
 set -uo pipefail
 bin=${1:-build}
 out=${2:-out/gpu}
 python=${PYTHON:-python3}
 batch=${BATCH:-10000}
+bench_flags=${BENCH_FLAGS:-}
+jax_limit=${JAX_LIMIT:-100}
 work=${WORK:-$out/work}
 mkdir -p "$out" "$work"
 here=$(cd "$(dirname "$0")" && pwd)
@@ -34,7 +37,7 @@ done
 grep -h -B2 -A12 "Failure" "$work"/test_cuda_*.log | head -n 80
 
 echo "== pardel on the device and on the CPU"
-if ! timeout 270 "$bin/bench_device" --out "$work" --batch "$batch" 2>&1 | tee "$out/bench_device.txt"; then
+if ! timeout 270 "$bin/bench_device" --out "$work" --batch "$batch" $bench_flags 2>&1 | tee "$out/bench_device.txt"; then
   status=1
 fi
 cp "$work/bench_device.json" "$out/" 2>/dev/null
@@ -42,7 +45,7 @@ cp "$work/bench_device.json" "$out/" 2>/dev/null
 echo "== the JAX peer"
 for name in zermelo_N80 fuel_nav_N100; do
   if [ -f "$work/$name.json" ]; then
-    timeout 100 "$python" "$here/jax_peer.py" --batch "$work/$name.json" --json "$work/jax_$name.json" \
+    timeout "$jax_limit" "$python" "$here/jax_peer.py" --batch "$work/$name.json" --json "$work/jax_$name.json" \
       --solution "$work/jax_$name.bin" 2>&1 | tail -n 3
     "$python" - "$work" "$name" <<'PY' 2>&1
 import json, sys
