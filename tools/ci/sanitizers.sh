@@ -41,7 +41,7 @@ targets=(
   runtime_test_api runtime_test_block_tridiagonal runtime_test_certificate runtime_test_clock
   runtime_test_hybrid runtime_test_jacobi runtime_test_jacobi_newton runtime_test_knots
   runtime_test_newton runtime_test_refinement runtime_test_stationary runtime_test_trajectory
-  runtime_test_component_scale
+  runtime_test_component_scale runtime_test_batch_sweep
   test_reliability_checkpoint_resume test_reliability_checkpoint_cli test_reliability_nonfinite_models
 )
 
