@@ -243,7 +243,7 @@ PARDEL_HD inline void start(ProblemState<D>& s) {
   s.unresolved = -1;
   s.residual = s.scale = s.target = 0;
   s.r_initial = 0;
-  s.best_distance = 1.0 / 0.0;
+  s.best_distance = INFINITY;
   s.best_iteration = 0;
   for (int i = 0; i < D; ++i) s.start_scale[i] = s.comp_residual[i] = s.comp_target[i] = 0;
 }
@@ -263,7 +263,7 @@ PARDEL_HD inline void decide(ProblemState<D>& s, const Stats<D>& st, long it, co
     s.node = st.bad_residual;
     s.answer = it > 0 ? before : here;
     s.iterations = it > 0 ? it - 1 : 0;
-    s.residual = 0.0 / 0.0;
+    s.residual = NAN;
     return;
   }
   if (it == 0)
@@ -275,7 +275,7 @@ PARDEL_HD inline void decide(ProblemState<D>& s, const Stats<D>& st, long it, co
   s.scale = st.scale;
   s.target = target;
   int unresolved = -1;
-  double distance = r == 0 ? 0 : (target > 0 ? r / target : 1.0 / 0.0);
+  double distance = r == 0 ? 0 : (target > 0 ? r / target : INFINITY);
   for (int i = 0; i < D; ++i) {
     const double ct = set.tol > 0 ? set.tol
                                   : larger(larger(set.rtol * st.comp_scale[i], 10 * 16 * eps * st.comp_scale[i]),
@@ -283,7 +283,7 @@ PARDEL_HD inline void decide(ProblemState<D>& s, const Stats<D>& st, long it, co
     s.comp_residual[i] = st.comp_residual[i];
     s.comp_target[i] = ct;
     if (!(st.comp_residual[i] <= ct) && unresolved < 0) unresolved = i;
-    const double ratio = st.comp_residual[i] == 0 ? 0 : (ct > 0 ? st.comp_residual[i] / ct : 1.0 / 0.0);
+    const double ratio = st.comp_residual[i] == 0 ? 0 : (ct > 0 ? st.comp_residual[i] / ct : INFINITY);
     distance = larger(distance, ratio);
   }
   s.unresolved = unresolved;
