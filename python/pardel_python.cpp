@@ -39,6 +39,9 @@
 #include "pardel/app/outputs.hpp"
 #include "pardel/model_loader.hpp"
 #include "pardel/pardel.hpp"
+#ifdef PARDEL_HAVE_CUDA
+#include "pardel/cuda.hpp"
+#endif
 #include "pardel/app/scene.hpp"
 #include "pardel/app/sweep.hpp"
 
@@ -219,6 +222,7 @@ const std::vector<std::pair<std::string, std::string>> kArguments = {
     {"newton_substeps", "solver.newton_substeps"},
     {"newton_shift", "solver.newton_shift"},
     {"linear_solver", "solver.linear_solver"},
+    {"device", "solver.device"},
     {"threads", "solver.threads"},
     {"refine_start_N", "solver.refine.start_N"},
     {"refine_factor", "solver.refine.factor"},
@@ -894,6 +898,9 @@ PYBIND11_MODULE(_pardel, m) {
   m.doc() = "pardel's compiled core: models, scenes and solves (use the package `pardel`)";
   // project(pardel VERSION ...) of the top-level CMakeLists.txt, as `pardel --version` says it.
   m.attr("__version__") = PARDEL_VERSION;
+#ifdef PARDEL_HAVE_CUDA
+  pardel::enable_cuda();  // device = "cuda"
+#endif
 
   static py::exception<InputError> input_error(m, "PardelError", PyExc_ValueError);
   static py::exception<SceneError> scene_error(m, "SceneError", input_error.ptr());

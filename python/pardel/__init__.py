@@ -294,7 +294,7 @@ _INT_OPTIONS = {"max_iterations": _LONG_MAX, "newton_substeps": _INT_MAX, "threa
                 "refine_start_N": _INT_MAX, "clock_update_every": _INT_MAX, "history_every": _LONG_MAX,
                 "accuracy_max_N": _INT_MAX}
 _NUMBER_OPTIONS = ("tol", "rtol", "damping", "refine_factor", "refine_settle", "divergence_factor", "accuracy")
-_STRING_OPTIONS = ("discretization", "clock", "method", "linear_solver", "newton_shift")
+_STRING_OPTIONS = ("discretization", "clock", "method", "linear_solver", "newton_shift", "device")
 _BOOL_OPTIONS = ("error_estimate", "extrapolate")
 
 
@@ -505,8 +505,8 @@ def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=N
     Keyword options (the scene keys of `pardel solve`, docs/examples.md): discretization, params
     (dict by name, or a list in declaration order), t0, knots ([(t, q), ...]), polyline (guess
     vertices), clock, method, tol, rtol, max_iterations, damping, newton_substeps, newton_shift,
-    linear_solver, threads, refine_start_N, refine_factor, clock_update_every, error_estimate
-    (True/False), extrapolate (True/False); and history_every, refine_settle, divergence_factor of
+    linear_solver, device ("cpu" or "cuda": docs/gpu.md), threads, refine_start_N, refine_factor,
+    clock_update_every, error_estimate (True/False), extrapolate (True/False); and history_every, refine_settle, divergence_factor of
     pardel::Options. guess and on_iteration: as in solve_scene.
     A wrong type raises TypeError, a missing argument too; unknown options and bad values raise
     PardelError (a ValueError); each names the argument.

@@ -62,7 +62,7 @@ std::string options_refusal(const Problem& base, const Options& options) {
   if (!options.is_valid(&error)) return error;
   if (options.method != Method::jacobi && options.method != Method::jacobi_newton)
     return std::string("the device solves with methods jacobi and jacobi-newton; method ") +
-           to_string(options.method) + " runs on CPU cores (solve_batch)";
+           to_string(options.method) + " runs on the CPU (solver.device = \"cpu\")";
   if (options.resume_from) return "solve_batch_cuda does not resume solves (Options::resume_from is set)";
   if (options.refine_start_N > 0) return "the device solves on one grid: refine_start_N must be 0";
   if (options.accuracy > 0) return "the device solves on one grid: accuracy (adaptive grids) must be 0";
@@ -127,6 +127,13 @@ std::string record_message(const cuda_detail::ProblemRecord& r, const Options& o
 }
 
 }  // namespace
+
+void enable_cuda() {
+  detail::set_device_batch_solver(Device::cuda, [](const Problem& base, const Options& options,
+                                                   const std::vector<BatchProblem>& problems) {
+    return solve_batch_cuda(base, options, problems);
+  });
+}
 
 bool cuda_device_available(std::string* why) {
   int devices = 0;

@@ -147,6 +147,7 @@ constexpr Named<Method> kMethods[] = {{Method::automatic, "auto"},
                                       {Method::newton, "newton"},
                                       {Method::hybrid, "hybrid"},
                                       {Method::stationary_newton, "stationary-newton"}};
+constexpr Named<Device> kDevices[] = {{Device::cpu, "cpu"}, {Device::cuda, "cuda"}};
 constexpr Named<LinearSolver> kLinearSolvers[] = {{LinearSolver::block_ldlt, "ldlt"},
                                                   {LinearSolver::cyclic_reduction, "cyclic-reduction"}};
 constexpr Named<NewtonShift> kNewtonShifts[] = {{NewtonShift::identity, "identity"},
@@ -195,6 +196,9 @@ const char* to_string(Method method) { return name_in(kMethods, method); }
 bool parse_method(std::string_view text, Method* method) { return parse_in(kMethods, text, method); }
 std::vector<std::string> method_names() { return names_in(kMethods); }
 
+const char* to_string(Device device) { return name_in(kDevices, device); }
+bool parse_device(std::string_view text, Device* device) { return parse_in(kDevices, text, device); }
+std::vector<std::string> device_names() { return names_in(kDevices); }
 const char* to_string(LinearSolver solver) { return name_in(kLinearSolvers, solver); }
 bool parse_linear_solver(std::string_view text, LinearSolver* solver) { return parse_in(kLinearSolvers, text, solver); }
 std::vector<std::string> linear_solver_names() { return names_in(kLinearSolvers); }
@@ -300,6 +304,8 @@ bool Options::is_valid(std::string* error) const {
   }
   if (!in_table(kMethods, method))
     return bad("method", std::to_string(static_cast<int>(method)), "is not a known method");
+  if (!in_table(kDevices, device))
+    return bad("device", std::to_string(static_cast<int>(device)), "is not a known device");
   if (!in_table(kLinearSolvers, linear_solver))
     return bad("linear_solver", std::to_string(static_cast<int>(linear_solver)), "is not a known linear solver");
   if (!in_table(kNewtonShifts, newton_shift))

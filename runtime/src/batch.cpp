@@ -64,12 +64,53 @@ Trajectory entry_guess(const Problem& problem, const BatchProblem& p) {
   return linear_guess(problem);
 }
 
+namespace {
+std::atomic<DeviceBatchSolver> cuda_solver{nullptr};
+
+std::string no_device_solver(Device device) {
+  return std::string("device ") + to_string(device) +
+         ": this program has no solver for it (pardel built without PARDEL_WITH_CUDA, or a program that did not "
+         "link pardel::cuda and call pardel::enable_cuda(); docs/gpu.md)";
+}
+}  // namespace
+
+void set_device_batch_solver(Device device, DeviceBatchSolver solver) {
+  if (device == Device::cuda) cuda_solver.store(solver);
+}
+
+Summary solve_on_device(const Problem& problem, const Options& options, Trajectory& trajectory) {
+  Summary summary;
+  summary.method = options.method;
+  summary.N = problem.N;
+  const DeviceBatchSolver solver = options.device == Device::cuda ? cuda_solver.load() : nullptr;
+  if (!solver) {
+    summary.message = no_device_solver(options.device);
+    return summary;
+  }
+  std::vector<BatchProblem> one(1);
+  if (trajectory.N > 0) one[0].guess = trajectory;
+  BatchSummary batch = solver(problem, options, one);
+  if (!batch.refusal.empty() || batch.entries.size() != 1) {
+    summary.message = std::string("device ") + to_string(options.device) + ": " + batch.refusal;
+    return summary;
+  }
+  if (batch.entries[0].trajectory.N > 0) trajectory = std::move(batch.entries[0].trajectory);
+  return batch.entries[0].summary;
+}
+
 }  // namespace detail
 
 using detail::entry_guess;
 using detail::entry_problem;
 
 BatchSummary solve_batch(const Problem& base, const Options& options, const std::vector<BatchProblem>& problems) {
+  if (options.device == Device::cuda) {
+    const detail::DeviceBatchSolver solver = detail::cuda_solver.load();
+    if (solver) return solver(base, options, problems);
+    BatchSummary refused;
+    refused.refusal = detail::no_device_solver(options.device);
+    return refused;
+  }
   const auto start = std::chrono::steady_clock::now();
   BatchSummary batch;
   const int threads = std::max(1, std::min(detail::resolve_threads(options.threads),

@@ -16,6 +16,7 @@
 
 #include "adaptive.hpp"
 #include "assessment.hpp"
+#include "batch_entries.hpp"
 #include "engine.hpp"
 #include "error_estimate.hpp"
 #include "iteration.hpp"
@@ -365,6 +366,7 @@ void estimate_error(const Problem& problem, const Options& requested, const Traj
 }  // namespace
 
 Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
+  if (requested.device != Device::cpu) return detail::solve_on_device(problem, requested, trajectory);
   if (requested.accuracy > 0) return detail::solve_adaptive(problem, requested, trajectory);
   Trajectory level;
   Summary summary = solve_attempts(problem, requested, trajectory, &level);

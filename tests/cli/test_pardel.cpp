@@ -296,6 +296,21 @@ TEST(PardelSolve, ThreadsOptionFailsAsTheSceneKeyDoes) {
   }
 }
 
+TEST(PardelSolve, DeviceOptionIsCheckedAndARefusedDeviceWritesNothing) {
+  TempDir dir;
+  app::write_file_atomic(dir / "small.toml", kSmallScene);
+  const Result bad = pardel("solve '" + (dir / "small.toml") + "' --quiet --no-plot --device gpu");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--device: gpu not in {cpu,cuda}"), std::string::npos) << bad.err;
+  // Newton does not run on the device; a build without CUDA or a machine without a device refuses
+  // any method: either way the error names the device and nothing is written.
+  const Result refused = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "out") +
+                                "' --quiet --no-plot --device cuda --set solver.method=newton");
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_NE(refused.err.find("error: device cuda: "), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(PardelSolve, OpenMPThreadsWaitPassivelyUnlessTheUserChose) {
   // Spinning OpenMP threads cost a scheduler quantum per loop where another process holds a core
   // (docs/solvers.md): the command sets OMP_WAIT_POLICY=passive before OpenMP starts, and keeps

@@ -131,6 +131,7 @@ damping = 0.25
 newton_substeps = 2
 newton_shift = "identity"
 linear_solver = "cyclic-reduction"
+device = "cuda"
 threads = 1
 refine = { start_N = 40, factor = 1.5, settle = 0.01 }
 clock_update_every = 10
@@ -164,6 +165,7 @@ dir = "somewhere"
   EXPECT_EQ(scene.options.newton_substeps, 2);
   EXPECT_EQ(scene.options.newton_shift, NewtonShift::identity);
   EXPECT_EQ(scene.options.linear_solver, LinearSolver::cyclic_reduction);
+  EXPECT_EQ(scene.options.device, Device::cuda);
   EXPECT_EQ(scene.options.threads, 1);
   EXPECT_EQ(scene.options.refine_start_N, 40);
   EXPECT_EQ(scene.options.refine_factor, 1.5);
@@ -187,6 +189,7 @@ TEST(Scene, DefaultsWhenKeysAreLeftOut) {
   EXPECT_EQ(scene.options.rtol, 1e-10);
   EXPECT_EQ(scene.options.newton_shift, NewtonShift::difference);
   EXPECT_EQ(scene.options.linear_solver, LinearSolver::block_ldlt);
+  EXPECT_EQ(scene.options.device, Device::cpu);
   EXPECT_TRUE(scene.options.error_estimate);
   EXPECT_FALSE(scene.options.extrapolate);
   EXPECT_TRUE(scene.output_dir.empty());
@@ -266,6 +269,8 @@ TEST(SceneOverrides, ErrorsNameTheOverride) {
                                                                      "'jacobi-newton'?",
                                                                      0),
             0u);
+  EXPECT_EQ(error_of(kFuelNav, {"solver.device=gpu"}),
+            "--set solver.device=gpu: error: unknown device 'gpu' (expected 'cpu' or 'cuda')");
   EXPECT_NE(error_of(kFuelNav, {"grid.N"}).find("expected KEY=VALUE"), std::string::npos);
   EXPECT_NE(error_of(kFuelNav, {"grid..N=3"}).find("is not a key path"), std::string::npos);
   EXPECT_NE(error_of(kFuelNav, {"model.x=3"}).find("model is a string, not a table"), std::string::npos);

@@ -199,4 +199,30 @@ TEST(DeviceBatch, BratuDrivenToOverflowStopsEachProblemAlone) {
   compare(base, options_of(pardel::Method::jacobi_newton, 5000), batch);
 }
 
+TEST(DeviceSolve, OptionsDeviceCudaRunsSolveOnTheDevice) {
+  pardel::enable_cuda();
+  const pardel::Problem base = problem_of(fuel_nav_model, 5, 30, {0, 0}, {1.5, 1});
+  pardel::Options o = options_of(pardel::Method::newton, 100);
+  o.device = pardel::Device::cuda;
+  pardel::Trajectory tr = pardel::linear_guess(base);
+  pardel::Summary s = pardel::solve(base, o, tr);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("device cuda: the device solves with methods jacobi and jacobi-newton"), std::string::npos)
+      << s.message;
+  PARDEL_NEEDS_DEVICE();
+  o.method = pardel::Method::jacobi_newton;
+  o.max_iterations = 20000;
+  s = pardel::solve(base, o, tr);
+  pardel::Options cpu = o;
+  cpu.device = pardel::Device::cpu;
+  pardel::Trajectory reference = pardel::linear_guess(base);
+  const pardel::Summary c = pardel::solve(base, cpu, reference);
+  EXPECT_EQ(s.termination, c.termination) << s.message << " | " << c.message;
+  EXPECT_TRUE(c.converged()) << c.message;
+  EXPECT_LE(std::labs(s.iterations - c.iterations), 2 + c.iterations / 100);
+  double diff = 0;
+  for (std::size_t i = 0; i < tr.q.size(); ++i) diff = std::max(diff, std::fabs(tr.q[i] - reference.q[i]));
+  EXPECT_LE(diff, 1e-8);
+}
+
 }  // namespace

@@ -228,3 +228,20 @@ TEST(SolveBatch, EmptyBatch) {
 }
 
 }  // namespace
+
+TEST(SolveBatch, DeviceCudaWithoutTheCudaSolversIsRefusedWithTheReason) {
+  // This program links the runtime alone (no pardel::cuda, no enable_cuda()).
+  const pardel::Problem base = base_problem();
+  pardel::Options options;
+  options.method = pardel::Method::jacobi_newton;
+  options.device = pardel::Device::cuda;
+  const pardel::BatchSummary batch = pardel::solve_batch(base, options, varied_problems(base));
+  EXPECT_TRUE(batch.entries.empty());
+  EXPECT_NE(batch.refusal.find("device cuda: this program has no solver for it"), std::string::npos) << batch.refusal;
+  pardel::Trajectory tr = pardel::linear_guess(base);
+  const std::vector<double> before = tr.q;
+  const pardel::Summary s = pardel::solve(base, options, tr);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("pardel::enable_cuda()"), std::string::npos) << s.message;
+  EXPECT_EQ(tr.q, before);
+}

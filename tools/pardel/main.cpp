@@ -32,6 +32,9 @@
 #include "pardel/memory.hpp"
 #include "pardel/mpi_session.hpp"
 #include "pardel/pardel.hpp"
+#ifdef PARDEL_HAVE_CUDA
+#include "pardel/cuda.hpp"
+#endif
 #include "pardel/regular_file.hpp"
 #include "pardel_cli/config.hpp"
 #include "plot_runner.hpp"
@@ -274,6 +277,7 @@ struct SolveArgs {
   bool no_plot = false;
   std::string resume;  ///< output folder of an interrupted solve to continue
   bool no_memory_check = false;
+  std::string device;  ///< --device: appended to the overrides as solver.device
   std::string certificate = "inertia";  ///< "full": also the seed's certificate (pardel check's)
 };
 
@@ -538,6 +542,9 @@ void prefer_passive_openmp_wait(char** argv) {
 
 int main(int argc, char** argv) {
   prefer_passive_openmp_wait(argv);
+#ifdef PARDEL_HAVE_CUDA
+  pardel::enable_cuda();  // solver.device = "cuda"
+#endif
   const pardel::mpi::Session mpi_session(&argc, &argv);
   CLI::App app{"pardel: solve the boundary-value problems of variational integrators"};
   app.footer(kExitCodesHelp);
@@ -570,6 +577,8 @@ int main(int argc, char** argv) {
       ->allow_extra_args(false);
   // Checked as solver.threads is: checked_threads_text, attached below with sweep's --threads.
   solve_cmd->add_option("--threads", s.threads, "Threads (0: all cores); overrides solver.threads");
+  solve_cmd->add_option("--device", s.device, "cpu or cuda: where to solve; overrides solver.device (docs/gpu.md)")
+      ->check(CLI::IsMember(pardel::device_names()));
   solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
   solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
   solve_cmd->add_option("--certificate", s.certificate,
@@ -616,7 +625,10 @@ int main(int argc, char** argv) {
   try {
     if (*models) return run_models(models_json);
     if (*kernels) return run_kernels(k);
-    if (*solve_cmd) return run_solve(s);
+    if (*solve_cmd) {
+      if (!s.device.empty()) s.sets.push_back("solver.device=" + s.device);
+      return run_solve(s);
+    }
     if (*check) return run_check(c);
     if (sweep_cmd.parsed()) return sweep_cmd.run(resolve_model_spec, bundled_model_names());
   } catch (const UsageError& error) {

@@ -474,7 +474,7 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   r.check_keys(*solver, "solver",
                {"method", "tol", "rtol", "max_iterations", "damping", "newton_substeps", "newton_shift",
                 "linear_solver", "threads", "refine", "clock_update_every", "history_every", "divergence_factor",
-                "clock", "error_estimate", "extrapolate", "iterative_refinement"});
+                "clock", "error_estimate", "extrapolate", "iterative_refinement", "device"});
   if (const auto method = r.string(solver, "method", "solver.method")) {
     if (!parse_method(*method, &options.method)) {
       const std::string suggestion = nearest_name(*method, kMethodNames);
@@ -508,6 +508,12 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
     if (!parse_linear_solver(*ls, &options.linear_solver)) {
       r.fail(*solver->get("linear_solver"), "solver.linear_solver",
              fmt::format("unknown linear_solver '{}' (expected {})", *ls, quoted_alternatives(linear_solver_names())));
+    }
+  }
+  if (const auto device = r.string(solver, "device", "solver.device")) {
+    if (!parse_device(*device, &options.device)) {
+      r.fail(*solver->get("device"), "solver.device",
+             fmt::format("unknown device '{}' (expected {})", *device, quoted_alternatives(device_names())));
     }
   }
   if (const auto threads = r.bounded_integer(solver, "threads", "solver.threads", "threads"))

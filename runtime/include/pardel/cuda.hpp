@@ -14,6 +14,11 @@
 
 namespace pardel {
 
+/** Makes Options::device = Device::cuda work in solve() and solve_batch() of this program (they
+ *  call solve_batch_cuda with the default CudaSettings); the command line and the Python module
+ *  call it when pardel was built with CUDA. */
+void enable_cuda();
+
 /** Whether a CUDA device can run solves here; false with the reason (no driver, no device). */
 bool cuda_device_available(std::string* why = nullptr);
 

@@ -134,6 +134,18 @@ bool parse_linear_solver(std::string_view text, LinearSolver* solver);
 /** Every linear solver's name, in the order of the enum. */
 std::vector<std::string> linear_solver_names();
 
+/** Where solve() and solve_batch() run (Options::device). */
+enum class Device {
+  cpu,   ///< the host's cores (OpenMP)
+  cuda,  ///< an NVIDIA GPU: solve_batch_cuda (pardel/cuda.hpp), in a program that linked pardel::cuda
+         ///< and called enable_cuda(); jacobi and jacobi-newton on one grid (docs/gpu.md)
+};
+const char* to_string(Device device);
+/** Parses "cpu", "cuda"; false if unknown. */
+bool parse_device(std::string_view text, Device* device);
+/** Every device's name, in the order of the enum. */
+std::vector<std::string> device_names();
+
 /** The metric M of Newton's trust region |s|_M <= Delta (and of the shift H + lambda M). */
 enum class NewtonShift {
   identity,    ///< M = I
@@ -235,6 +247,7 @@ struct Options {
   int clock_update_every = 100;  ///< iterations between node-time updates under a clock
   long history_every = 1;        ///< record the history every this many iterations
   LinearSolver linear_solver = LinearSolver::block_ldlt;  ///< newton and hybrid
+  Device device = Device::cpu;  ///< where the solve runs (Device::cuda: see Device)
   NewtonShift newton_shift = NewtonShift::difference;     ///< newton and hybrid: trust-region metric
   double refine_settle = 1e-3;   ///< a coarse level is settled when its residual fell by this factor
   double divergence_factor = 1e8;  ///< diverged when the residual exceeds this times the initial one

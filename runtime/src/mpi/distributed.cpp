@@ -1042,6 +1042,14 @@ Summary solve_distributed(const Problem& problem, const Options& options, Trajec
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   }
   if (ranks <= 1) return solve(problem, options, trajectory);
+  if (options.device != Device::cpu) {
+    Summary refused;
+    refused.method = options.method;
+    refused.N = problem.N;
+    refused.message = std::string("device ") + to_string(options.device) + ": a solve over " + std::to_string(ranks) +
+                      " MPI ranks runs on their CPU cores; solve on the device in one process";
+    return refused;
+  }
   try {
     return solve_over_ranks(problem, options, trajectory, ranks, rank);
   } catch (const std::exception& error) {
