@@ -1,6 +1,7 @@
 # What `cmake --install` puts under the prefix, and the CMake package that find_package(pardel)
 # reads there:
-#   include/pardel/                    the public headers (pardel.hpp, kernel_abi.h, ...)
+#   include/pardel/                    the public headers (pardel.hpp, kernel_abi.h, ...; not cuda.hpp:
+#                                      pardel::cuda is not installed)
 #   include/pardel/app/                the headers of pardel::app (scenes, outputs, sweeps)
 #   lib/libpardel_*.a                  pardel::runtime, pardel::mpi, pardel::app, pardel::bundled_models
 #   bin/pardel-gen                     the code generator (when GiNaC was found)
@@ -46,8 +47,10 @@ install(TARGETS ${_pardel_export_targets} EXPORT pardelTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT cxx
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT cxx
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT cxx)
+# pardel/cuda.hpp stays out: pardel::cuda (the device solvers) is a build-tree target only, and an
+# installed header without its library would not link.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/runtime/include/pardel DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-        COMPONENT cxx)
+        COMPONENT cxx PATTERN "cuda.hpp" EXCLUDE)
 if(PARDEL_INSTALL_APP)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/runtime/app/include/pardel DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
           COMPONENT cxx)
