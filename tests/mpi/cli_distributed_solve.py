@@ -4,7 +4,7 @@ free final time, spacecraft_sundman with fixed total time, whose nodes move with
 the same trajectory to 1e-7; rank 0 alone writes the outputs and
 summary.json records the ranks. Checkpoints: `mpirun -np 2 pardel solve` interrupted by SIGINT writes
 checkpoint.json, and its --resume, under mpirun or in one process, ends with the trajectory.csv of the
-uninterrupted run byte for byte."""
+uninterrupted run byte for byte. `--device cuda` over 2 ranks is refused (exit 2) and writes nothing."""
 import argparse
 import csv
 import json
@@ -74,6 +74,19 @@ def interrupted_and_resumed(args):
     return failures
 
 
+def device_refused_over_ranks(args):
+    """solver.device = cuda over 2 ranks: exit 2 with the reason, nothing written."""
+    out_dir = os.path.join(args.work, "device_np2")
+    code, out, err = run([args.mpirun, "-np", "2", "--oversubscribe", args.pardel, "solve",
+                          os.path.join(args.scenes, "fuel_nav.toml"), "--quiet", "--no-plot", "--device", "cuda",
+                          "--set", "solver.method=jacobi-newton", "--out", out_dir])
+    if code != 2 or "device cuda: a solve over 2 MPI ranks runs on their CPU cores" not in err:
+        return [f"device over ranks: exit {code}, expected 2 with the reason\n{out}{err}"]
+    if os.path.exists(out_dir):
+        return ["device over ranks: the refused solve wrote " + out_dir]
+    return []
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--pardel", required=True)
@@ -133,6 +146,7 @@ def main():
             if worst > tolerance:
                 failures.append(f"{name}: trajectories differ by {worst:.3g} > {tolerance}")
     failures += interrupted_and_resumed(args)
+    failures += device_refused_over_ranks(args)
     for failure in failures:
         print("FAIL:", failure)
     return 1 if failures else 0
