@@ -363,13 +363,14 @@ int run_solve_unguarded(const SolveArgs& args) {
   if (out_dir.empty() && resume) out_dir = args.resume;
   if (out_dir.empty()) out_dir = scene.output_dir;
   if (out_dir.empty()) out_dir = (fs::path("out") / fs::path(args.scene).stem()).string();
-  std::error_code ec;
-  const bool created_out_dir = !fs::exists(out_dir, ec);
-  create_output_folder(out_dir);
   // Under mpirun with more than one rank, one solve decomposed over the ranks: every rank solves,
-  // rank 0 alone writes the outputs and reports.
+  // rank 0 alone creates the output folder, writes the outputs and reports (so that it alone knows
+  // whether it created the folder, and removes it again when the solve is refused).
   const int ranks = pardel::mpi::world_size();
   const bool root = pardel::mpi::world_rank() == 0;
+  std::error_code ec;
+  const bool created_out_dir = root && !fs::exists(out_dir, ec);
+  if (root) create_output_folder(out_dir);
   ProgressLine progress(root && !args.quiet, scene.options.tol);
   scene.options.on_iteration = [&progress, root](const IterationRecord& record) {
     if (root) progress.update(record);
