@@ -194,6 +194,7 @@ BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const
       invalid[static_cast<std::size_t>(b)] = 1;
       continue;
     }
+    if (guess.N != N) guess = resample(problem, guess, N);  // as solve() takes a guess on another grid
     std::copy(guess.q.begin(), guess.q.end(), q.begin() + static_cast<long>(b * per));
     std::copy(problem.q0.begin(), problem.q0.end(), q.begin() + static_cast<long>(b * per));
     std::copy(problem.qN.begin(), problem.qN.end(), q.begin() + static_cast<long>(b * per + N * dim));

@@ -158,7 +158,15 @@ TEST(DeviceBatch, FuelNavigationIteratesAfterNineSweeps) {
 TEST(DeviceBatch, FuelNavigationToTheEnd) {
   PARDEL_NEEDS_DEVICE();
   const pardel::Problem base = problem_of(fuel_nav_model, 5, 20, {0, 0}, {1.5, 1});
-  EXPECT_GT(compare(base, options_of(pardel::Method::jacobi_newton, 20000), random_batch(base, 64, 0.3, 0, 0.4, 2)), 32);
+  std::vector<pardel::BatchProblem> batch = random_batch(base, 64, 0.3, 0, 0.4, 2);
+  // Two guesses on other grids: resampled to the problem's N, as solve() does.
+  pardel::Problem coarse = base;
+  coarse.N = 7;
+  pardel::Problem fine = base;
+  fine.N = 45;
+  batch[5].guess = pardel::linear_guess(coarse);
+  batch[6].guess = pardel::linear_guess(fine);
+  EXPECT_GT(compare(base, options_of(pardel::Method::jacobi_newton, 20000), batch), 32);
 }
 
 TEST(DeviceBatch, ZermeloRoutesThroughTheVortices) {
