@@ -138,19 +138,16 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   auto* stats = buf.get<bs::Stats<D>>(static_cast<std::size_t>(B), err);
   int* flags = buf.get<int>(static_cast<std::size_t>(B) + 1, err);  // invalid[B], then the running count
   if (err != cudaSuccess) return std::string("device allocation failed: ") + cudaGetErrorString(err);
-  cudaEvent_t e0, e1, e2, e3;
-  cudaEventCreate(&e0);
-  cudaEventCreate(&e1);
-  cudaEventCreate(&e2);
-  cudaEventCreate(&e3);
-  struct Events {
-    cudaEvent_t* e;
-    ~Events() {
-      for (int i = 0; i < 4; ++i) cudaEventDestroy(e[i]);
+  struct Events {  // start, sweeps begin, sweeps end, copies back done; destroyed on every path
+    cudaEvent_t e[4];
+    Events() {
+      for (cudaEvent_t& x : e) cudaEventCreate(&x);
     }
-  };
-  cudaEvent_t all[4] = {e0, e1, e2, e3};
-  Events guard{all};
+    ~Events() {
+      for (cudaEvent_t x : e) cudaEventDestroy(x);
+    }
+  } events;
+  cudaEvent_t &e0 = events.e[0], &e1 = events.e[1], &e2 = events.e[2], &e3 = events.e[3];
   cudaEventRecord(e0);
   int running = 0;
   for (int b = 0; b < B; ++b) running += in.invalid[b] ? 0 : 1;
@@ -168,7 +165,6 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   start_kernel<D><<<decide_blocks, 128>>>(B, state, stats, flags);
   cudaEventRecord(e1);
   long it = 0;
-  bool interrupted = false;
   while (running > 0) {
     for (int c = 0; c < in.check_every; ++c, ++it) {
       const double* from = it % 2 == 0 ? q0 : q1;
@@ -179,10 +175,7 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
     }
     err = cudaMemcpy(&running, flags + B, sizeof(int), cudaMemcpyDeviceToHost);  // waits for the sweeps
     if (err != cudaSuccess) return std::string("a device sweep failed: ") + cudaGetErrorString(err);
-    if (running > 0 && in.keep_going && !in.keep_going()) {
-      interrupted = true;
-      break;
-    }
+    if (running > 0 && in.keep_going && !in.keep_going()) break;  // the running problems end interrupted
   }
   err = cudaGetLastError();
   if (err != cudaSuccess) return std::string("a device sweep failed: ") + cudaGetErrorString(err);
@@ -212,8 +205,6 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   result.sweeps = ms[1] * 1e-3;
   result.download = ms[2] * 1e-3;
   result.sweeps_run = it;
-  result.interrupted = interrupted;
-  result.last_iteration = it;
   for (int b = 0; b < B; ++b) {
     const bs::ProblemState<D>& s = host_state[static_cast<std::size_t>(b)];
     ProblemRecord& r = result.records[static_cast<std::size_t>(b)];

@@ -42,8 +42,7 @@ struct DeviceBatchResult {
   double* q = nullptr;  ///< B (N+1) dim values, written: each problem's returned iterate
   std::vector<ProblemRecord> records;
   double upload = 0, sweeps = 0, download = 0;
-  long sweeps_run = 0, last_iteration = 0;
-  bool interrupted = false;
+  long sweeps_run = 0;
 };
 
 /** Runs a batch of one model and discretization; returns "" or what failed on the device. */
