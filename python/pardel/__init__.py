@@ -47,7 +47,7 @@ if _INSTALLED_TOOLCHAIN:
 
 __all__ = [
     "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError", "ModelWarning",
-    "model", "models", "solve", "load_scene", "solve_scene", "check", "kernels", "lag_cache_dir",
+    "model", "model_from_sympy", "models", "solve", "load_scene", "solve_scene", "check", "kernels", "lag_cache_dir",
     "sweep", "SweepResult", "SweepVariant", "SweepSolution", "solve_batch", "BatchResult",
 ]
 
@@ -144,10 +144,21 @@ def _model_spec(spec):
 
 
 class Model:
-    """A compiled model: name, coords, order, dim, params (name -> default), discretizations."""
+    """A compiled model: name, coords, order, dim, params (name -> default), discretizations.
+
+    lag_text is the .lag text it was built from (for .lag text and pardel.model_from_sympy; None for
+    a bundled name or a .lag path). A Model pickles as what it was built from (the name, the absolute
+    path or the text), and unpickling loads it again (compiling it, or finding it in the cache,
+    in the process that unpickles: a path is read again there)."""
 
     def __init__(self, spec):
         _check_model("pardel.model", "spec", spec)
+        if isinstance(spec, Model):
+            self.lag_text = spec.lag_text
+        elif isinstance(spec, str) and "\n" in spec:
+            self.lag_text = spec
+        else:
+            self.lag_text = None
         self.spec = _model_spec(spec)
         self._handle = _pardel.load_model(os.fsencode(self.spec))  # a path's bytes, also when not UTF-8
         info = self._handle.info()
@@ -166,11 +177,42 @@ class Model:
         return "pardel.Model(%r: coords %s, order %d, params %s, discretizations %s)" % (
             self.name, self.coords, self.order, self.params, self.discretizations)
 
+    def __reduce__(self):
+        # What it was built from; the compiled handle is this process's alone.
+        return (Model, (self.spec if self.lag_text is None else self.lag_text,))
+
 
 def model(spec):
     """The model of a bundled name, a .lag path, or .lag text (compiled on first use, cached in
     lag_cache_dir())."""
     return Model(spec)
+
+
+def model_from_sympy(L, coords, params=None, *, order=None, name="sympy_model", discretizations=None,
+                     clock=None, cost=None, allow_singular=False):
+    """A model from a Lagrangian written with SymPy: L is printed as .lag text (Model.lag_text) and
+    compiled as pardel.model compiles .lag text, so its kernels are those of the same model written
+    by hand.
+
+    L: a SymPy expression in the coordinates, their time derivatives, the time and the params.
+    coords: the coordinates, functions of one time symbol: sympy.Function("x")(t) (or
+    sympy.physics.mechanics.dynamicsymbols("x")); derivatives are x.diff(t), x.diff(t, 2), ...
+    (x', x'' in .lag), and the time symbol elsewhere in L is .lag's t. params: a dict {symbol or
+    name: default} in declaration order, the default a real number or a constant SymPy expression
+    (sympy.pi / 4); a symbol of L whose name is a param's is that param. order: the highest
+    derivative L may use (default: the highest in L, at least 1). name: the model's name.
+    discretizations: a list of names ("midpoint", "galerkin_gauss(s=4)"; docs/discretizations.md),
+    None for the generator's default. clock: dt/ds (a SymPy expression, as L). cost: (name,
+    "action" or "clock"). allow_singular: True writes "# pardel: allow-singular".
+
+    Raises TypeError for an argument of the wrong type and PardelError (a ValueError) for what .lag
+    cannot write (a function other than .lag's, a symbol that is neither the time nor a param, a
+    function that is not a coordinate, a complex or infinite number), each naming the argument;
+    pardel.ModelError when the generator refuses the model (one that is not regular, say).
+    """
+    from . import _sympy  # SymPy is needed for this function alone
+    return Model(_sympy.lag_text("pardel.model_from_sympy", L, coords, params, order, name, discretizations,
+                                 clock, cost, allow_singular))
 
 
 def models():
