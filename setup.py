@@ -147,6 +147,8 @@ setup(
     version=project_version(),
     packages=["pardel"],
     package_dir={"": "python"},
+    # The type hints' marker (PEP 561) and the stub of the compiled core.
+    package_data={"pardel": ["py.typed", "_pardel.pyi"]},
     ext_modules=[CMakeExtension("pardel._pardel")],
     cmdclass={"build_ext": CMakeBuild},
     zip_safe=False,

@@ -1,5 +1,6 @@
 """Solves in other processes: a softening Duffing oscillator driven by a periodic force, built with
-SymPy (L = x'^2/2 - k x^2/2 + beta x^4/4 + F cos(Omega t) x), solved for several forcing amplitudes by a concurrent.futures.ProcessPoolExecutor. The model and the results cross
+SymPy (L = x'^2/2 - k x^2/2 + beta x^4/4 + F cos(Omega t) x), solved for several forcing
+amplitudes by a concurrent.futures.ProcessPoolExecutor. The model and the results cross
 between processes by pickle (a Model pickles as its .lag text, which each worker loads from the
 cache; a Result pickles whole); the answers are checked against the same solves in this process
 (usage: process_pool.py [--out DIR])."""

@@ -9,7 +9,12 @@ Everything here checks its arguments (TypeError for a wrong type, ValueError for
 naming the argument) and translates to the compiled core (pardel._pardel), which calls the pardel
 runtime, the model loader and the scene reader that `pardel solve` uses: the remaining checks,
 their messages and the numbers are the command line's.
+
+The public functions and classes carry type hints (the package has a py.typed marker, and the
+compiled core a stub, _pardel.pyi), and help() describes each of them.
 """
+from __future__ import annotations
+
 import atexit
 import hashlib
 import json
@@ -18,8 +23,28 @@ import os
 import shutil
 import stat
 import tempfile
+from typing import TYPE_CHECKING, Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import sympy  # model_from_sympy's annotations (SymPy is imported by that function alone)
+try:
+    from numpy.typing import ArrayLike
+except ImportError:  # NumPy before 1.20
+    ArrayLike = Any  # type: ignore[misc]
+
+# The annotations' names for the arguments (typing.get_type_hints resolves them):
+# a model: a bundled model's name, a .lag path, .lag text or a Model;
+ModelLike = Union[str, "os.PathLike[str]", "Model"]
+# a path;
+PathArg = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+# an initial guess: an (M+1) x dim array or a previous Result;
+Guess = Union[ArrayLike, "Result", None]
+# on_iteration(iteration, N, residual, action): a false return stops the solve;
+OnIteration = Callable[[int, int, float, float], Any]
+# params: numbers by name, or numbers in declaration order.
+Params = Union[Mapping[str, float], Sequence[float], np.ndarray]
 
 # OpenMP threads wait passively (sleep) between parallel loops unless the user chose otherwise:
 # spinning threads cost a scheduler quantum per loop where another process keeps a core busy (as
@@ -31,6 +56,14 @@ if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
 from . import _pardel  # noqa: E402
 from ._pardel import ModelError, ModelWarning, PardelError, SceneError  # noqa: E402
 
+# The compiled core's exceptions, described for help().
+PardelError.__doc__ = ("A bad value given to pardel (a ValueError): the message starts with the function and names "
+                       "the argument, or is the command line's message for input the runtime refuses.")
+SceneError.__doc__ = ("A scene pardel's scene reader refuses (a PardelError): the message is the command line's "
+                      "FILE:LINE:COL: error: ..., or --set KEY=VALUE: error: ... for an override.")
+ModelError.__doc__ = ("A model that cannot be loaded (a PardelError): a malformed or irregular .lag (the generator's "
+                      "FILE:LINE:COL: error: ... with its caret line), a failed compile, or a cache folder refused.")
+
 # The version of project(pardel VERSION ...) in the top-level CMakeLists.txt, compiled into the core
 # (also what `pardel --version` prints and what pip records for the package).
 __version__ = _pardel.__version__
@@ -41,7 +74,7 @@ __version__ = _pardel.__version__
 try:
     from ._installed import LOADER_TOOLCHAIN as _INSTALLED_TOOLCHAIN
 except ImportError:
-    _INSTALLED_TOOLCHAIN = None
+    _INSTALLED_TOOLCHAIN = None  # type: ignore[assignment]
 if _INSTALLED_TOOLCHAIN:
     _pardel.set_loader_toolchain(**_INSTALLED_TOOLCHAIN)
 
@@ -52,7 +85,7 @@ __all__ = [
 ]
 
 
-def lag_cache_dir():
+def lag_cache_dir() -> str:
     """The folder of compiled models (the model loader's): $PARDEL_CACHE_DIR, else
     $XDG_CACHE_HOME/pardel, else $HOME/.cache/pardel; with none of them set, a private folder of
     this process (tempfile.mkdtemp, removed at exit), so nothing is reused between processes."""
@@ -64,12 +97,13 @@ def lag_cache_dir():
     if os.environ.get("HOME"):
         return os.path.join(os.environ["HOME"], ".cache", "pardel")
     if _process_cache is None:
-        _process_cache = tempfile.mkdtemp(prefix="pardel-cache-")
-        atexit.register(shutil.rmtree, _process_cache, True)
+        folder = tempfile.mkdtemp(prefix="pardel-cache-")
+        atexit.register(shutil.rmtree, folder, True)
+        _process_cache = folder
     return _process_cache
 
 
-_process_cache = None
+_process_cache: Optional[str] = None
 
 
 def _private_folder(path):
@@ -144,14 +178,31 @@ def _model_spec(spec):
 
 
 class Model:
-    """A compiled model: name, coords, order, dim, params (name -> default), discretizations.
+    """A compiled model: name, coords, order, ncoords (len(coords)), dim (ncoords x order: the values
+    of a node), params (name -> default, in declaration order), discretizations, has_clock (whether
+    it declares a clock), time_dependent (whether L or the clock uses t), source (the .lag file it
+    was generated from, as the generator recorded it) and spec (what the loader loaded: the name,
+    the absolute path, or the cache file of the text).
 
     lag_text is the .lag text it was built from (for .lag text and pardel.model_from_sympy; None for
     a bundled name or a .lag path). A Model pickles as what it was built from (the name, the absolute
     path or the text), and unpickling loads it again (compiling it, or finding it in the cache,
     in the process that unpickles: a path is read again there)."""
 
-    def __init__(self, spec):
+    name: str
+    coords: List[str]
+    order: int
+    ncoords: int
+    dim: int
+    params: Dict[str, float]
+    discretizations: List[str]
+    has_clock: bool
+    time_dependent: bool
+    source: str
+    spec: str
+    lag_text: Optional[str]
+
+    def __init__(self, spec: ModelLike) -> None:
         _check_model("pardel.model", "spec", spec)
         if isinstance(spec, Model):
             self.lag_text = spec.lag_text
@@ -173,23 +224,26 @@ class Model:
         self.has_clock = info["has_clock"]
         self.time_dependent = info["time_dependent"]
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "pardel.Model(%r: coords %s, order %d, params %s, discretizations %s)" % (
             self.name, self.coords, self.order, self.params, self.discretizations)
 
-    def __reduce__(self):
+    def __reduce__(self) -> Tuple[Any, Tuple[str]]:
         # What it was built from; the compiled handle is this process's alone.
         return (Model, (self.spec if self.lag_text is None else self.lag_text,))
 
 
-def model(spec):
+def model(spec: ModelLike) -> Model:
     """The model of a bundled name, a .lag path, or .lag text (compiled on first use, cached in
     lag_cache_dir())."""
     return Model(spec)
 
 
-def model_from_sympy(L, coords, params=None, *, order=None, name="sympy_model", discretizations=None,
-                     clock=None, cost=None, allow_singular=False):
+def model_from_sympy(L: sympy.Expr, coords: Union[Sequence[sympy.Expr], sympy.Expr],
+                     params: Optional[Mapping[Union[sympy.Symbol, str], Union[float, sympy.Expr]]] = None, *,
+                     order: Optional[int] = None, name: str = "sympy_model",
+                     discretizations: Optional[Sequence[str]] = None, clock: Optional[sympy.Expr] = None,
+                     cost: Optional[Tuple[str, str]] = None, allow_singular: bool = False) -> Model:
     """A model from a Lagrangian written with SymPy: L is printed as .lag text (Model.lag_text) and
     compiled as pardel.model compiles .lag text, so its kernels are those of the same model written
     by hand.
@@ -215,26 +269,32 @@ def model_from_sympy(L, coords, params=None, *, order=None, name="sympy_model", 
                                  clock, cost, allow_singular))
 
 
-def models():
+def models() -> List[str]:
     """The names of the bundled models."""
     return list(_pardel.bundled_models())
 
 
 class Scene:
     """A scene read and checked by pardel's scene reader (from a TOML file or from solve's
-    arguments); `info` holds its problem and options."""
+    arguments): model (the model's name), N, and info, a dict of its problem and options (path,
+    model, model_spec, discretization, params by name, knots, clock, method, tol, rtol,
+    max_iterations, threads, output_dir, T, N, ...)."""
 
-    def __init__(self, core):
+    model: str
+    N: int
+    info: Dict[str, Any]
+
+    def __init__(self, core: _pardel.Scene) -> None:
         self._core = core
         self.info = core.info()
         self.model = self.info["model"].name
         self.N = self.info["N"]
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "pardel.Scene(%r: model %s, N = %d, T = %g)" % (self.info["path"], self.model, self.N, self.info["T"])
 
 
-def load_scene(path, overrides=()):
+def load_scene(path: PathArg, overrides: Sequence[str] = ()) -> Scene:
     """Reads a scene file; `overrides` are "key.path=value" strings, as `pardel solve --set` takes."""
     _check_path("pardel.load_scene", "path", path)
     overrides = _check_overrides("pardel.load_scene", "overrides", overrides)
@@ -253,11 +313,42 @@ class Result:
     of the coordinates at the nodes, NaN when not estimated), error_by_coordinate (dict by name,
     empty when not estimated), error_note (how it was made, or "not estimated: " and why),
     extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
-    solve's grids, in order, and its outcome; empty otherwise), summary (the whole summary.json
-    dictionary).
+    solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
+    wall_seconds, model (the model's name), coords (its coordinate names), stopped_by_callback
+    (whether on_iteration stopped the solve), summary (the whole summary.json dictionary);
+    converged (status == "converged") and coordinate(name). A Result pickles whole.
     """
 
-    def __init__(self, raw, model_coords):
+    t: np.ndarray
+    q: np.ndarray
+    p0: np.ndarray
+    pN: np.ndarray
+    history: Dict[str, np.ndarray]
+    coords: List[str]
+    status: str
+    message: str
+    iterations: int
+    residual: Optional[float]
+    action: Optional[float]
+    cost: Optional[float]
+    cost_name: str
+    cost_definition: str
+    point: Dict[str, Any]
+    error_estimate: float
+    error_by_coordinate: Dict[str, float]
+    error_note: str
+    extrapolated: bool
+    grid_sizes: List[int]
+    grid_note: str
+    method: str
+    N: int
+    final_time: float
+    wall_seconds: float
+    model: str
+    stopped_by_callback: bool
+    summary: Dict[str, Any]
+
+    def __init__(self, raw: Dict[str, Any], model_coords: Sequence[str]) -> None:
         self.summary = json.loads(raw["summary"])
         s = self.summary
         self.t = np.asarray(raw["t"])
@@ -290,17 +381,18 @@ class Result:
         self.stopped_by_callback = raw["stopped_by_callback"]
 
     @property
-    def converged(self):
+    def converged(self) -> bool:
+        """Whether the solve converged (status == "converged")."""
         return self.status == "converged"
 
-    def coordinate(self, name):
+    def coordinate(self, name: str) -> np.ndarray:
         """The values of one coordinate (by name) at the nodes."""
         if name not in self.coords:
             raise PardelError("pardel.Result.coordinate: unknown coordinate %s (the model's: %s)" % (
                 _shown(name), ", ".join(self.coords)))
         return self.q[:, self.coords.index(name)]
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         # summary.json writes a non-finite residual, action or cost as null (None here).
         return "pardel.Result(%s: %s iterations, residual %s, %s = %s, %s)" % (
             self.status, self.iterations, _number_text(self.residual, "%.3g"), self.cost_name,
@@ -517,7 +609,8 @@ def _guess_arrays(guess, where="pardel.solve_scene", name="guess"):
     return _check_array(where, name, guess, 2, what), None
 
 
-def solve_scene(scene, guess=None, threads=None, on_iteration=None):
+def solve_scene(scene: Scene, guess: Guess = None, threads: Optional[int] = None,
+                on_iteration: Optional[OnIteration] = None) -> Result:
     """Solves a scene (from load_scene) as `pardel solve` does, without writing files.
 
     guess: None (the scene's guess), an (M+1) x dim array or a previous Result (resampled to the
@@ -535,7 +628,9 @@ def solve_scene(scene, guess=None, threads=None, on_iteration=None):
     return Result(raw, scene.info["model"].info()["coords"])
 
 
-def solve(model, q0=None, qN=None, T=None, N=None, *, guess=None, on_iteration=None, **options):
+def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLike] = None, T: Optional[float] = None,
+          N: Optional[int] = None, *, guess: Guess = None, on_iteration: Optional[OnIteration] = None,
+          **options: Any) -> Result:
     """Solves one boundary-value problem.
 
     model: a bundled name, a .lag path, .lag text or a Model. q0, qN: boundary points (dim values:
@@ -564,9 +659,21 @@ class BatchResult:
     indexing reach them too), and over the batch: status (array of str), converged (array of
     bool), iterations, residual, action and cost (arrays), t and q (arrays of shape (B, N+1) and
     (B, N+1, dim); NaN rows for a problem whose trajectory is on another grid), threads (problems
-    solved at once) and wall_seconds."""
+    solved at once) and wall_seconds. Pickles whole."""
 
-    def __init__(self, raw, model_coords):
+    results: List[Result]
+    status: np.ndarray
+    converged: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    action: np.ndarray
+    cost: np.ndarray
+    t: np.ndarray
+    q: np.ndarray
+    threads: int
+    wall_seconds: float
+
+    def __init__(self, raw: Dict[str, Any], model_coords: Sequence[str]) -> None:
         self.results = [Result(r, model_coords) for r in raw["results"]]
         self.threads = raw["threads"]
         self.wall_seconds = raw["wall_seconds"]
@@ -587,16 +694,16 @@ class BatchResult:
                 self.q[i] = r.q
                 self.t[i] = r.t
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.results)
 
-    def __getitem__(self, i):
+    def __getitem__(self, i: int) -> Result:
         return self.results[i]
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Result]:
         return iter(self.results)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "pardel.BatchResult(%d problems, %d converged, %d threads, %.3g s)" % (
             len(self.results), int(self.converged.sum()), self.threads, self.wall_seconds)
 
@@ -615,7 +722,10 @@ def _batched(where, name, value, ndim, what, sizes):
     return array
 
 
-def solve_batch(model, q0=None, qN=None, T=None, N=None, *, params=None, guess=None, threads=None, **options):
+def solve_batch(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLike] = None,
+                T: Optional[float] = None, N: Optional[int] = None, *,
+                params: Union[Mapping[str, Union[float, ArrayLike]], ArrayLike, None] = None,
+                guess: Optional[ArrayLike] = None, threads: Optional[int] = None, **options: Any) -> BatchResult:
     """Solves B independent problems that differ in their boundary values, params and initial
     guesses, several at once (pardel::solve_batch: one problem per thread, each solved as
     pardel.solve solves it with threads=1, bit for bit, whatever the number of threads).
@@ -755,7 +865,24 @@ class SweepVariant:
     else None), solution (the id of the distinct solution it reached, or None), and t, q (its
     trajectory as arrays when converged, else None: the sweep keeps only converged trajectories)."""
 
-    def __init__(self, raw, values):
+    id: int
+    configuration: int
+    values: Dict[str, str]
+    guess: str
+    guess_points: List[List[float]]
+    status: str
+    message: str
+    iterations: int
+    residual: float
+    action: float
+    cost: float
+    seconds: float
+    certificate: Optional[str]
+    solution: Optional[int]
+    t: Optional[np.ndarray]
+    q: Optional[np.ndarray]
+
+    def __init__(self, raw: Dict[str, Any], values: Dict[str, str]) -> None:
         for key, value in raw.items():
             setattr(self, key, value)
         self.values = values
@@ -765,10 +892,11 @@ class SweepVariant:
             self.q = np.asarray(self.q)
 
     @property
-    def converged(self):
+    def converged(self) -> bool:
+        """Whether the variant's solve converged (status == "converged")."""
         return self.status == "converged"
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "pardel.SweepVariant(%d, %s: %s, cost %.10g, solution %s)" % (
             self.id, self.guess, self.status, self.cost, self.solution)
 
@@ -779,7 +907,19 @@ class SweepSolution:
     that reached it), first_variant (the representative), certificate, and t, q (the
     representative's trajectory, what solution_<id>.csv holds)."""
 
-    def __init__(self, raw, representative):
+    id: int
+    configuration: int
+    rank: int
+    cost: float
+    action: float
+    residual: float
+    variants: List[int]
+    first_variant: int
+    certificate: Optional[str]
+    t: Optional[np.ndarray]
+    q: Optional[np.ndarray]
+
+    def __init__(self, raw: Dict[str, Any], representative: SweepVariant) -> None:
         for key, value in raw.items():
             setattr(self, key, value)
         self.variants = list(raw["variants"])
@@ -787,7 +927,7 @@ class SweepSolution:
         self.t = representative.t
         self.q = representative.q
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "pardel.SweepSolution(%d: configuration %d, rank %d, cost %.10g, %d variants, %s)" % (
             self.id, self.configuration, self.rank, self.cost, len(self.variants), self.certificate)
 
@@ -799,7 +939,18 @@ class SweepResult:
     configurations, cost_name, converged (how many variants converged), failures (counts by
     status) and wall_seconds; out is the folder the files were written to, or None."""
 
-    def __init__(self, raw, out):
+    variants: List[SweepVariant]
+    solutions: List[SweepSolution]
+    best: Optional[SweepSolution]
+    summary: Dict[str, Any]
+    configurations: int
+    cost_name: str
+    converged: int
+    failures: Dict[str, int]
+    wall_seconds: float
+    out: Optional[str]
+
+    def __init__(self, raw: Dict[str, Any], out: Optional[str]) -> None:
         self.summary = json.loads(raw["summary"])
         s = self.summary
         axes = list(raw["axes"])
@@ -814,12 +965,13 @@ class SweepResult:
         self.wall_seconds = s["wall_seconds"]
         self.out = out
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "pardel.SweepResult(%s: %d variants, %d converged, %d distinct solutions)" % (
             self.summary["sweep"], len(self.variants), self.converged, len(self.solutions))
 
 
-def sweep(path, overrides=(), *, threads=None, out=None):
+def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int] = None,
+          out: Optional[Union[str, os.PathLike[str]]] = None) -> SweepResult:
     """Runs a sweep file as `pardel sweep` does (pardel::app's sweep: the same variants, solves,
     grouping and ranking) and returns a SweepResult.
 
@@ -845,7 +997,7 @@ def sweep(path, overrides=(), *, threads=None, out=None):
     return SweepResult(raw, out)
 
 
-def check(scene, q=None):
+def check(scene: Scene, q: Guess = None) -> Dict[str, Any]:
     """`pardel check`: the seed's convergence certificate at a trajectory (q an array or a Result;
     None: the scene's initial guess), as the dictionary of `pardel check --json`; its "certificate"
     also holds free_components, intervals_violating, residual, tol, error and report (the text of
@@ -855,7 +1007,8 @@ def check(scene, q=None):
     return json.loads(_pardel.check_scene(scene._core, arr, t))
 
 
-def kernels(model, discretization, h, t0, t1, q0, q1, params=None):
+def kernels(model: ModelLike, discretization: str, h: float, t0: float, t1: float, q0: ArrayLike, q1: ArrayLike,
+            params: Optional[Params] = None) -> Dict[str, Any]:
     """The discrete Lagrangian and its derivatives on one interval (what `pardel kernels` prints):
     a dict Ld, D1, D2, D11, D12, D22. params: dict by name (defaults for the rest) or a list."""
     where = "pardel.kernels"

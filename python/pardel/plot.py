@@ -2,7 +2,16 @@
 coordinate against t, and the convergence history. Each function draws into `ax` when given (else
 a new figure from matplotlib.pyplot, which works under the Agg backend) and returns the axes.
 """
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Optional
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from . import Result
 
 
 def _check_result(where, result):
@@ -23,7 +32,7 @@ def _axes(ax):
     return ax
 
 
-def path(result, ax=None, label=None):
+def path(result: Result, ax: Optional[Axes] = None, label: Optional[str] = None) -> Axes:
     """The path (first coordinate against the second) with its end points marked."""
     _check_result("pardel.plot.path", result)
     if len(result.coords) < 2:
@@ -43,7 +52,7 @@ def path(result, ax=None, label=None):
     return ax
 
 
-def coordinates(result, ax=None):
+def coordinates(result: Result, ax: Optional[Axes] = None) -> Axes:
     """Each coordinate against the node times."""
     _check_result("pardel.plot.coordinates", result)
     ax = _axes(ax)
@@ -55,7 +64,7 @@ def coordinates(result, ax=None):
     return ax
 
 
-def convergence(result, ax=None):
+def convergence(result: Result, ax: Optional[Axes] = None) -> Axes:
     """The DEL residual (infinity norm) of each recorded iteration, on a log scale."""
     _check_result("pardel.plot.convergence", result)
     ax = _axes(ax)

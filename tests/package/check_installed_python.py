@@ -1,6 +1,7 @@
 """The installed Python module pardel (package test, installed mode): imported from the prefix
 alone, it compiles a .lag file with the installed pardel-gen and render script (not the build
-tree's) and solves it; the projectile's end momenta equal the exact velocities.
+tree's) and solves it; the projectile's end momenta equal the exact velocities. The package carries
+its pure-Python modules, the type hints' marker py.typed and the compiled core's stub _pardel.pyi.
 
 usage: check_installed_python.py PREFIX PROJECTILE_LAG   (PYTHONPATH names the installed package)
 """
@@ -14,6 +15,8 @@ import pardel
 prefix, lag = os.path.realpath(sys.argv[1]), sys.argv[2]
 module = os.path.realpath(pardel.__file__)
 assert module.startswith(prefix + os.sep), "pardel imported from %s, not from %s" % (module, prefix)
+for name in ("py.typed", "_pardel.pyi", "_sympy.py", "plot.py"):  # the type hints' marker, the core's stub
+    assert os.path.isfile(os.path.join(os.path.dirname(module), name)), "the installed package has no %s" % name
 toolchain = pardel._pardel.loader_toolchain()
 for key in ("generator", "render_script", "abi_include"):
     path = os.path.realpath(toolchain[key])

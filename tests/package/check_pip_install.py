@@ -3,7 +3,8 @@ package from the checkout into it (pip install --no-build-isolation --no-index, 
 jinja2 visible through --system-site-packages) and, from a folder outside the checkout with no
 PYTHONPATH, checks that the installed package is the one imported, that it compiles and solves a
 .lag text written here (a charged particle in a uniform magnetic field, which no bundled model
-resembles) to its exact solution with its own pardel-gen, and that pardel.__version__,
+resembles) to its exact solution with its own pardel-gen, that it carries its type hints' marker
+py.typed and the compiled core's stub _pardel.pyi, and that pardel.__version__,
 importlib.metadata.version("pardel") and `pardel --version` all give the version of
 project(pardel VERSION ...) in CMakeLists.txt.
 
@@ -103,7 +104,8 @@ def main():
             fail("pardel was imported from %s, not from the virtual environment %s" % (got["file"], venv))
         package = os.path.dirname(got["file"])
         for tool in ("_toolchain/bin/pardel-gen", "_toolchain/codegen/render.py",
-                     "_toolchain/codegen/templates/model.cpp.j2", "_toolchain/include/pardel/kernel_abi.h"):
+                     "_toolchain/codegen/templates/model.cpp.j2", "_toolchain/include/pardel/kernel_abi.h",
+                     "py.typed", "_pardel.pyi", "_sympy.py", "plot.py"):
             if not os.path.isfile(os.path.join(package, tool)):
                 fail("the installed package has no %s" % tool)
         for tool, path in got["toolchain"].items():
