@@ -739,6 +739,11 @@ def solve_batch(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[A
     that fails has its own status (invalid_input too). Ctrl-C stops the batch and raises
     KeyboardInterrupt; a batch whose estimated memory does not fit the machine raises PardelError.
     """
+    return _solve_batch(model, q0, qN, T, N, params, guess, threads, options)
+
+
+def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
+    """solve_batch's work (unannotated: it rebinds its arguments to their checked forms)."""
     where = "pardel.solve_batch"
     _check_model(where, "model", model)
     if q0 is None or qN is None:
@@ -1011,6 +1016,11 @@ def kernels(model: ModelLike, discretization: str, h: float, t0: float, t1: floa
             params: Optional[Params] = None) -> Dict[str, Any]:
     """The discrete Lagrangian and its derivatives on one interval (what `pardel kernels` prints):
     a dict Ld, D1, D2, D11, D12, D22. params: dict by name (defaults for the rest) or a list."""
+    return _kernels(model, discretization, h, t0, t1, q0, q1, params)
+
+
+def _kernels(model, discretization, h, t0, t1, q0, q1, params):
+    """kernels' work (unannotated: it rebinds its arguments to their checked forms)."""
     where = "pardel.kernels"
     _check_model(where, "model", model)
     _check_string(where, "discretization", discretization)
