@@ -3,7 +3,8 @@ forced Duffing oscillator with explicit time dependence, a second-order beam-lik
 the numbers of the same models written by hand as .lag text, and to independent solutions: the
 closed-form motion and the exact solution of the discrete recursion (solved here with NumPy), a
 Runge-Kutta shot of the continuous equation, and the closed-form solution of a fourth-order ODE.
-What .lag cannot write is refused, naming the argument."""
+Two bundled models written again with SymPy (zermelo_tv with its clock and cost, the pendulum with
+dynamicsymbols) solve as the bundled ones. What .lag cannot write is refused, naming the argument."""
 import math
 import pickle
 
@@ -310,3 +311,45 @@ def test_a_sympy_model_pickles_as_its_text():
     again = pickle.loads(pickle.dumps(model))
     assert again.lag_text == model.lag_text and again.spec == model.spec
     assert (again.name, again.coords, again.params) == (model.name, model.coords, model.params)
+
+
+# ---------------------------------------------------------------------------------------------
+# Bundled models written again with SymPy: the time-varying Zermelo problem (clock, cost, t, sqrt)
+# and the pendulum with coordinates from sympy.physics.mechanics.dynamicsymbols solve as the
+# bundled ones (lagrangians/zermelo_tv.lag, lagrangians/pendulum.lag) do.
+
+def test_zermelo_tv_from_sympy_is_the_bundled_model():
+    a = sp.Symbol("a")
+    W1, W2 = a * sp.sin(2 * x + y) * sp.cos(t / 2), a * sp.sin(2 * x + y) * sp.sin(t / 2)
+    alpha = 1 - (W1 ** 2 + W2 ** 2)
+    Wv = W1 * x.diff(t) + W2 * y.diff(t)
+    F = sp.sqrt((x.diff(t) ** 2 + y.diff(t) ** 2) / alpha + Wv ** 2 / alpha ** 2) - Wv / alpha
+    model = pardel.model_from_sympy(F ** 2, [x, y], {a: sp.Rational(4, 5)}, name="zermelo_tv_sympy", clock=F,
+                                    cost=("travel_time", "clock"), discretizations=["trapezoid", "midpoint"])
+    bundled = pardel.model("zermelo_tv")
+    assert model.has_clock and model.time_dependent and model.params == bundled.params
+    for discretization in model.discretizations:
+        # The seed's run (scenes/zermelo_tv.toml): the node times are the summed clock.
+        problem = dict(q0=[1, 6], qN=[6, 2], T=1, N=50, clock="free_final_time", clock_update_every=100,
+                       discretization=discretization)
+        r, s = pardel.solve(model, **problem), pardel.solve(bundled, **problem)
+        assert r.converged and s.converged
+        assert r.cost_name == s.cost_name == "travel_time"
+        np.testing.assert_allclose(r.q, s.q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(r.t, s.t, rtol=0, atol=1e-12)
+        assert r.cost == pytest.approx(s.cost, rel=1e-12)
+
+
+def test_dynamicsymbols_pendulum_is_the_bundled_model():
+    mechanics = pytest.importorskip("sympy.physics.mechanics")
+    angle = mechanics.dynamicsymbols("x")
+    time = mechanics.dynamicsymbols._t
+    g, length = sp.symbols("g l")
+    model = pardel.model_from_sympy(angle.diff(time) ** 2 / 2 + g / length * sp.cos(angle), [angle],
+                                    {g: 9.81, length: 1}, name="pendulum_sympy",
+                                    discretizations=pardel.model("pendulum").discretizations)
+    for discretization in model.discretizations:
+        problem = dict(q0=[0.3], qN=[-0.5], T=0.8, N=20, discretization=discretization, params={"l": 2})
+        r, s = pardel.solve(model, **problem), pardel.solve("pendulum", **problem)
+        assert r.converged and s.converged
+        np.testing.assert_allclose(r.q, s.q, rtol=0, atol=1e-12)
