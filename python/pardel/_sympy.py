@@ -5,6 +5,7 @@ offending part, before the generator runs."""
 import math
 import numbers
 import re
+from collections.abc import Mapping, Sequence
 
 import sympy
 from mpmath.libmp import prec_to_dps, to_str
@@ -182,7 +183,7 @@ def lag_text(where, L, coords, params, order, name, discretizations, clock, cost
     # coords: functions of one time symbol, x(t), as sympy.Function("x")(t) or dynamicsymbols make.
     if isinstance(coords, AppliedUndef):
         coords = [coords]
-    if isinstance(coords, (str, bytes, sympy.Basic)) or not isinstance(coords, (list, tuple)):
+    if isinstance(coords, (str, bytes, sympy.Basic)) or not isinstance(coords, Sequence):
         raise TypeError("%s: coords must be a list of coordinates, functions of the time such as "
                         "sympy.Function('x')(t), got %s %s" % (where, type(coords).__name__, _shown(coords)))
     if not coords:
@@ -212,7 +213,7 @@ def lag_text(where, L, coords, params, order, name, discretizations, clock, cost
     # params: {Symbol or name: default}; the default a real number or a constant SymPy expression.
     if params is None:
         params = {}
-    if not isinstance(params, dict):
+    if not isinstance(params, Mapping):
         raise TypeError("%s: params must be a dict {symbol or name: default}, got %s %s" % (
             where, type(params).__name__, _shown(params)))
     param_values = {}
@@ -282,7 +283,7 @@ def lag_text(where, L, coords, params, order, name, discretizations, clock, cost
     if discretizations is not None:
         if isinstance(discretizations, str):
             discretizations = discretizations.split()
-        if not isinstance(discretizations, (list, tuple)) or not discretizations:
+        if isinstance(discretizations, bytes) or not isinstance(discretizations, Sequence) or not discretizations:
             raise TypeError("%s: discretizations must be a non-empty list of names such as 'midpoint' or "
                             "'galerkin_gauss(s=4)', got %s" % (where, _shown(discretizations)))
         for i, d in enumerate(discretizations):
