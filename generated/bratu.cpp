@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// The extended-precision kernels (grad_extended, full_extended) compute in pd_quad: __float128 with libquadmath
 // where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
 // a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
 #if !defined(__CUDACC__)
@@ -246,8 +246,8 @@ static const double bratu_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization bratu_discretizations[] = {
-    {"trapezoid", 2, bratu_trapezoid_full, bratu_trapezoid_sweep, bratu_trapezoid_grad, bratu_trapezoid_action, PD_EXTENDED(bratu_trapezoid_grad_extended)},
-    {"midpoint", 2, bratu_midpoint_full, bratu_midpoint_sweep, bratu_midpoint_grad, bratu_midpoint_action, PD_EXTENDED(bratu_midpoint_grad_extended)},
+    {"trapezoid", 2, bratu_trapezoid_full, bratu_trapezoid_sweep, bratu_trapezoid_grad, bratu_trapezoid_action, PD_EXTENDED(bratu_trapezoid_grad_extended), nullptr},
+    {"midpoint", 2, bratu_midpoint_full, bratu_midpoint_sweep, bratu_midpoint_grad, bratu_midpoint_action, PD_EXTENDED(bratu_midpoint_grad_extended), nullptr},
 };
 
 extern "C" const pardel_model bratu_model = {

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// The extended-precision kernels (grad_extended, full_extended) compute in pd_quad: __float128 with libquadmath
 // where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
 // a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
 #if !defined(__CUDACC__)
@@ -274,8 +274,8 @@ static const char* const free_particle_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization free_particle_discretizations[] = {
-    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action, PD_EXTENDED(free_particle_trapezoid_grad_extended)},
-    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action, PD_EXTENDED(free_particle_midpoint_grad_extended)},
+    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action, PD_EXTENDED(free_particle_trapezoid_grad_extended), nullptr},
+    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action, PD_EXTENDED(free_particle_midpoint_grad_extended), nullptr},
 };
 
 extern "C" const pardel_model free_particle_model = {

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// The extended-precision kernels (grad_extended, full_extended) compute in pd_quad: __float128 with libquadmath
 // where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
 // a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
 #if !defined(__CUDACC__)
@@ -432,8 +432,8 @@ static const char* const fuel_nav_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization fuel_nav_discretizations[] = {
-    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action, PD_EXTENDED(fuel_nav_trapezoid_grad_extended)},
-    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action, PD_EXTENDED(fuel_nav_midpoint_grad_extended)},
+    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action, PD_EXTENDED(fuel_nav_trapezoid_grad_extended), nullptr},
+    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action, PD_EXTENDED(fuel_nav_midpoint_grad_extended), nullptr},
 };
 
 extern "C" const pardel_model fuel_nav_model = {

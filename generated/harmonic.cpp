@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// The extended-precision kernels (grad_extended, full_extended) compute in pd_quad: __float128 with libquadmath
 // where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
 // a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
 #if !defined(__CUDACC__)
@@ -578,10 +578,10 @@ static const double harmonic_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization harmonic_discretizations[] = {
-    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, PD_EXTENDED(harmonic_trapezoid_grad_extended)},
-    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, PD_EXTENDED(harmonic_midpoint_grad_extended)},
-    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, nullptr},
-    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, nullptr},
+    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, PD_EXTENDED(harmonic_trapezoid_grad_extended), nullptr},
+    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, PD_EXTENDED(harmonic_midpoint_grad_extended), nullptr},
+    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, nullptr, nullptr},
+    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, nullptr, nullptr},
 };
 
 extern "C" const pardel_model harmonic_model = {

@@ -24,6 +24,11 @@ PARDEL_HD double interp_fuel_trapezoid_alpha_1_action(double h, double t0, doubl
 void interp_fuel_trapezoid_alpha_1_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
 #endif
+#if !defined(__CUDACC__)
+void interp_fuel_trapezoid_alpha_1_full_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11,
+    double* D12, double* D22);
+#endif
 
 /* gauss2 */
 PARDEL_HD void interp_fuel_gauss2_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -36,6 +41,11 @@ PARDEL_HD double interp_fuel_gauss2_action(double h, double t0, double t1, const
 #if !defined(__CUDACC__)
 void interp_fuel_gauss2_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
+#endif
+#if !defined(__CUDACC__)
+void interp_fuel_gauss2_full_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11,
+    double* D12, double* D22);
 #endif
 
 #ifdef __cplusplus

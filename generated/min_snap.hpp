@@ -24,6 +24,11 @@ PARDEL_HD double min_snap_hermite_gauss_s_4_action(double h, double t0, double t
 void min_snap_hermite_gauss_s_4_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
 #endif
+#if !defined(__CUDACC__)
+void min_snap_hermite_gauss_s_4_full_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2, double* D11,
+    double* D12, double* D22);
+#endif
 
 #ifdef __cplusplus
 }

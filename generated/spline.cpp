@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// The extended-precision kernels (grad_extended, full_extended) compute in pd_quad: __float128 with libquadmath
 // where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
 // a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
 #if !defined(__CUDACC__)
@@ -300,6 +300,109 @@ extern "C" void spline_trapezoid_alpha_1_grad_extended(double h_in, double t0_in
 }
 #endif
 
+// full_extended: the full kernel in pd_quad, 73 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
+extern "C" void spline_trapezoid_alpha_1_full_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out, double* D11_out, double* D12_out, double* D22_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[4], D2[4], D11[16], D12[16], D22[16];
+  const pd_quad pd_t0001 = 3.0*(q0[0] - q1[0]);
+  const pd_quad pd_t0002 = pd_t0001 + h*(q0[2] + 2.0*q1[2]);
+  const pd_quad pd_t0003 = h*h;
+  const pd_quad pd_t0004 = 1.0/(pd_t0003*pd_t0003);
+  const pd_quad pd_t0005 = h*(q1[2] + 2.0*q0[2]) + pd_t0001;
+  const pd_quad pd_t0006 = (q0[1] - q1[1])*3.0;
+  const pd_quad pd_t0007 = h*(q1[3] + q0[3]*2.0) + pd_t0006;
+  const pd_quad pd_t0008 = pd_t0006 + h*(q0[3] + q1[3]*2.0);
+  const pd_quad pd_t0009 = h*6.0;
+  const pd_quad pd_t0010 = pd_t0009*(pd_t0005*pd_t0004 + pd_t0002*pd_t0004);
+  const pd_quad pd_t0011 = pd_t0009*(pd_t0008*pd_t0004 + pd_t0007*pd_t0004);
+  const pd_quad pd_t0012 = h*2.0;
+  const pd_quad pd_t0013 = 1.0/(h*pd_t0003);
+  const pd_quad pd_t0014 = pd_t0002*pd_t0013;
+  const pd_quad pd_t0015 = pd_t0005*pd_t0013;
+  const pd_quad pd_t0016 = pd_t0008*pd_t0013;
+  const pd_quad pd_t0017 = pd_t0007*pd_t0013;
+  const pd_quad pd_t0018 = pd_t0013*36.0;
+  const pd_quad pd_t0019 = 1.0/pd_t0003*18.0;
+  const pd_quad pd_t0020 = 1.0/h;
+  const pd_quad pd_t0021 = pd_t0020*10.0;
+  const pd_quad pd_t0022 = -pd_t0018;
+  const pd_quad pd_t0023 = -pd_t0019;
+  const pd_quad pd_t0024 = pd_t0020*8.0;
+  Ld[0] = h*(pd_t0002*pd_t0002*pd_t0004 + (pd_t0005*pd_t0005*pd_t0004 + (pd_t0007*pd_t0007*pd_t0004 + pd_t0008*pd_t0008*pd_t0004)));
+  D1[0] = pd_t0010;
+  D1[1] = pd_t0011;
+  D1[2] = pd_t0012*(pd_t0014 + 2.0*pd_t0015);
+  D1[3] = pd_t0012*(pd_t0016 + 2.0*pd_t0017);
+  D2[0] = -pd_t0010;
+  D2[1] = -pd_t0011;
+  D2[2] = pd_t0012*(pd_t0015 + 2.0*pd_t0014);
+  D2[3] = pd_t0012*(pd_t0017 + 2.0*pd_t0016);
+  D11[0] = pd_t0018;
+  D11[1] = 0.0;
+  D11[2] = pd_t0019;
+  D11[3] = 0.0;
+  D11[4] = 0.0;
+  D11[5] = pd_t0018;
+  D11[6] = 0.0;
+  D11[7] = pd_t0019;
+  D11[8] = pd_t0019;
+  D11[9] = 0.0;
+  D11[10] = pd_t0021;
+  D11[11] = 0.0;
+  D11[12] = 0.0;
+  D11[13] = pd_t0019;
+  D11[14] = 0.0;
+  D11[15] = pd_t0021;
+  D12[0] = pd_t0022;
+  D12[1] = 0.0;
+  D12[2] = pd_t0019;
+  D12[3] = 0.0;
+  D12[4] = 0.0;
+  D12[5] = pd_t0022;
+  D12[6] = 0.0;
+  D12[7] = pd_t0019;
+  D12[8] = pd_t0023;
+  D12[9] = 0.0;
+  D12[10] = pd_t0024;
+  D12[11] = 0.0;
+  D12[12] = 0.0;
+  D12[13] = pd_t0023;
+  D12[14] = 0.0;
+  D12[15] = pd_t0024;
+  D22[0] = pd_t0018;
+  D22[1] = 0.0;
+  D22[2] = pd_t0023;
+  D22[3] = 0.0;
+  D22[4] = 0.0;
+  D22[5] = pd_t0018;
+  D22[6] = 0.0;
+  D22[7] = pd_t0023;
+  D22[8] = pd_t0023;
+  D22[9] = 0.0;
+  D22[10] = pd_t0021;
+  D22[11] = 0.0;
+  D22[12] = 0.0;
+  D22[13] = pd_t0023;
+  D22[14] = 0.0;
+  D22[15] = pd_t0021;
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
+  pd_split(D11, D11_out, 16);
+  pd_split(D12, D12_out, 16);
+  pd_split(D22, D22_out, 16);
+}
+#endif
+
 // ---- gauss2 (consistency order 4)
 
 // full: 78 operations (363 before CSE)
@@ -553,6 +656,108 @@ extern "C" void spline_gauss2_grad_extended(double h_in, double t0_in, double t1
 }
 #endif
 
+// full_extended: the full kernel in pd_quad, 78 operations; outputs as double-double pairs
+#if !defined(__CUDACC__)
+extern "C" void spline_gauss2_full_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
+    const double* q1_in, const double* p_in, double* Ld_out, double* D1_out, double* D2_out, double* D11_out, double* D12_out, double* D22_out) {
+  (void)t0_in;
+  (void)t1_in;
+  (void)p_in;
+  const pd_quad h = h_in;
+  pd_quad q0[4];
+  for (int i = 0; i < 4; ++i) q0[i] = q0_in[i];
+  pd_quad q1[4];
+  for (int i = 0; i < 4; ++i) q1[i] = q1_in[i];
+  pd_quad Ld[1], D1[4], D2[4], D11[16], D12[16], D22[16];
+  const pd_quad pd_t0001 = h*h;
+  const pd_quad pd_t0002 = 1.0/pd_t0001;
+  const pd_quad pd_t0003 = ((pd_quad(3.4641016151377544) + 2.0070168443613806e-16 - 3.0814879110195774e-33))*((q0[1] - q1[1])*pd_t0002);
+  const pd_quad pd_t0004 = 1.0/h;
+  const pd_quad pd_t0005 = pd_t0003 + (((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*q1[3] + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*q0[3])*pd_t0004;
+  const pd_quad pd_t0006 = (q0[0] - q1[0])*pd_t0002*((pd_quad(3.4641016151377544) + 2.0070168443613806e-16 - 3.0814879110195774e-33));
+  const pd_quad pd_t0007 = pd_t0006 + (q1[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q0[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0004;
+  const pd_quad pd_t0008 = (q0[2]*((pd_quad(0.7320508075688773) - 1.0671460244446628e-17)) + q1[2]*((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33)))*pd_t0004 + pd_t0006;
+  const pd_quad pd_t0009 = (((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*q0[3] + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*q1[3])*pd_t0004 + pd_t0003;
+  const pd_quad pd_t0010 = h*((pd_quad(1.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33));
+  const pd_quad pd_t0011 = pd_t0010*(pd_t0008*pd_t0002 + pd_t0007*pd_t0002);
+  const pd_quad pd_t0012 = pd_t0010*(pd_t0005*pd_t0002 + pd_t0009*pd_t0002);
+  const pd_quad pd_t0013 = h*0.5;
+  const pd_quad pd_t0014 = pd_t0008*pd_t0004;
+  const pd_quad pd_t0015 = pd_t0007*pd_t0004;
+  const pd_quad pd_t0016 = pd_t0009*pd_t0004;
+  const pd_quad pd_t0017 = pd_t0005*pd_t0004;
+  const pd_quad pd_t0018 = 1.0/(h*pd_t0001)*12.0;
+  const pd_quad pd_t0019 = pd_t0002*6.0;
+  const pd_quad pd_t0020 = pd_t0004*4.0;
+  const pd_quad pd_t0021 = -pd_t0018;
+  const pd_quad pd_t0022 = -pd_t0019;
+  const pd_quad pd_t0023 = pd_t0004*2.0;
+  Ld[0] = h*0.25*(pd_t0005*pd_t0005 + (pd_t0007*pd_t0007 + (pd_t0008*pd_t0008 + pd_t0009*pd_t0009)));
+  D1[0] = pd_t0011;
+  D1[1] = pd_t0012;
+  D1[2] = pd_t0013*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0014 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0015);
+  D1[3] = pd_t0013*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0016 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0017);
+  D2[0] = -pd_t0011;
+  D2[1] = -pd_t0012;
+  D2[2] = pd_t0013*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0015 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0014);
+  D2[3] = pd_t0013*(((pd_quad(0.7320508075688773) - 1.0671460244446628e-17))*pd_t0017 + ((pd_quad(2.7320508075688772) + 1.0035084221806903e-16 - 1.5407439555097887e-33))*pd_t0016);
+  D11[0] = pd_t0018;
+  D11[1] = 0.0;
+  D11[2] = pd_t0019;
+  D11[3] = 0.0;
+  D11[4] = 0.0;
+  D11[5] = pd_t0018;
+  D11[6] = 0.0;
+  D11[7] = pd_t0019;
+  D11[8] = pd_t0019;
+  D11[9] = 0.0;
+  D11[10] = pd_t0020;
+  D11[11] = 0.0;
+  D11[12] = 0.0;
+  D11[13] = pd_t0019;
+  D11[14] = 0.0;
+  D11[15] = pd_t0020;
+  D12[0] = pd_t0021;
+  D12[1] = 0.0;
+  D12[2] = pd_t0019;
+  D12[3] = 0.0;
+  D12[4] = 0.0;
+  D12[5] = pd_t0021;
+  D12[6] = 0.0;
+  D12[7] = pd_t0019;
+  D12[8] = pd_t0022;
+  D12[9] = 0.0;
+  D12[10] = pd_t0023;
+  D12[11] = 0.0;
+  D12[12] = 0.0;
+  D12[13] = pd_t0022;
+  D12[14] = 0.0;
+  D12[15] = pd_t0023;
+  D22[0] = pd_t0018;
+  D22[1] = 0.0;
+  D22[2] = pd_t0022;
+  D22[3] = 0.0;
+  D22[4] = 0.0;
+  D22[5] = pd_t0018;
+  D22[6] = 0.0;
+  D22[7] = pd_t0022;
+  D22[8] = pd_t0022;
+  D22[9] = 0.0;
+  D22[10] = pd_t0020;
+  D22[11] = 0.0;
+  D22[12] = 0.0;
+  D22[13] = pd_t0022;
+  D22[14] = 0.0;
+  D22[15] = pd_t0020;
+  pd_split(Ld, Ld_out, 1);
+  pd_split(D1, D1_out, 4);
+  pd_split(D2, D2_out, 4);
+  pd_split(D11, D11_out, 16);
+  pd_split(D12, D12_out, 16);
+  pd_split(D22, D22_out, 16);
+}
+#endif
+
 static const char* const spline_coords[] = {
     "x",
     "y",
@@ -563,8 +768,8 @@ static const char* const spline_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization spline_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action, PD_EXTENDED(spline_trapezoid_alpha_1_grad_extended)},
-    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action, PD_EXTENDED(spline_gauss2_grad_extended)},
+    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action, PD_EXTENDED(spline_trapezoid_alpha_1_grad_extended), PD_EXTENDED(spline_trapezoid_alpha_1_full_extended)},
+    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action, PD_EXTENDED(spline_gauss2_grad_extended), PD_EXTENDED(spline_gauss2_full_extended)},
 };
 
 extern "C" const pardel_model spline_model = {

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-// The extended-precision kernels (grad_extended) compute in pd_quad: __float128 with libquadmath
+// The extended-precision kernels (grad_extended, full_extended) compute in pd_quad: __float128 with libquadmath
 // where the compiler has both (GCC), else long double (clang has __float128 but not quadmath.h);
 // a CUDA compiler leaves them out (pardel/kernel_abi.h, PARDEL_HD).
 #if !defined(__CUDACC__)
@@ -1066,8 +1066,8 @@ static const double zermelo_tv_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization zermelo_tv_discretizations[] = {
-    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, PD_EXTENDED(zermelo_tv_trapezoid_grad_extended)},
-    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, PD_EXTENDED(zermelo_tv_midpoint_grad_extended)},
+    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, PD_EXTENDED(zermelo_tv_trapezoid_grad_extended), nullptr},
+    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, PD_EXTENDED(zermelo_tv_midpoint_grad_extended), nullptr},
 };
 
 extern "C" const pardel_model zermelo_tv_model = {

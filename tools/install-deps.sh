@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages pardel builds, tests and plots with. Idempotent.
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
-      libginac-dev libcln-dev libeigen3-dev libomp-dev
+      libginac-dev libcln-dev libeigen3-dev libomp-dev libboost-dev
       python3 python3-jinja2 python3-matplotlib python3-numpy python3-sympy
       python3-dev pybind11-dev python3-pybind11 python3-pytest
       python3-venv python3-setuptools python3-wheel

@@ -11,6 +11,7 @@
 
 #include "pardel_codegen/discretize.hpp"
 #include "pardel_codegen/lag_parser.hpp"
+#include "pardel/kernel_abi.h"  // PARDEL_KERNEL_ABI_VERSION: the IR names the ABI its kernels follow
 
 #ifndef PARDEL_GEN_VERSION
 #define PARDEL_GEN_VERSION "0.0.0"
@@ -232,13 +233,16 @@ ModelIR build_ir(const LagModel& model, const std::string& source_name, const Cs
       k.variant = variant;
       k.function = model.name + "_" + spec.ident + "_" + variant;
       KernelIR wide;
-      k.code = generate_kernel_code(outs, inputs, options, variant == "grad" ? &wide.code : nullptr);
+      // Extended-precision twins: the gradient for every model (the residual of iterative
+      // refinement), the Hessian for models of order >= 2 (its corrections at large N).
+      const bool extended = variant == "grad" || (variant == "full" && model.order >= 2);
+      k.code = generate_kernel_code(outs, inputs, options, extended ? &wide.code : nullptr);
       k.unused_inputs = unused(k.code, args);
-      if (variant == "grad") {
-        wide.variant = "grad_extended";
+      if (extended) {
+        wide.variant = variant + "_extended";
         wide.function = k.function + "_extended";
         wide.unused_inputs = k.unused_inputs;
-        dir.extended = std::move(wide);
+        (variant == "grad" ? dir.extended : dir.extended_full) = std::move(wide);
       }
       dir.kernels.push_back(std::move(k));
     }
@@ -275,7 +279,7 @@ std::string ir_to_json(const ModelIR& ir) {
   j << "  \"format_version\": 1,\n";
   j << "  \"generator\": " << json_string(std::string("pardel-gen ") + generator_version()) << ",\n";
   j << "  \"generator_version\": " << json_string(generator_version()) << ",\n";
-  j << "  \"abi_version\": 3,\n";
+  j << "  \"abi_version\": " << PARDEL_KERNEL_ABI_VERSION << ",\n";
   j << "  \"model\": {\n";
   j << "    \"name\": " << json_string(m.name) << ",\n";
   j << "    \"source\": " << json_string(ir.source_name) << ",\n";
@@ -312,6 +316,13 @@ std::string ir_to_json(const ModelIR& ir) {
     if (d.extended) {
       j << "\n";
       write_kernel(j, *d.extended, "      ");
+    } else {
+      j << "null";
+    }
+    j << ",\n     \"extended_full_kernel\": ";
+    if (d.extended_full) {
+      j << "\n";
+      write_kernel(j, *d.extended_full, "      ");
     } else {
       j << "null";
     }

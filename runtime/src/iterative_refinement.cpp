@@ -9,11 +9,128 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
 
 #include "block_tridiagonal.hpp"
 
+#if defined(PARDEL_EXTENDED_FLOAT128)
+#include <boost/multiprecision/eigen.hpp>
+#include <boost/multiprecision/float128.hpp>
+#endif
+#include <Eigen/LU>
+
 namespace pardel::detail {
 namespace {
+
+#if defined(PARDEL_EXTENDED_FLOAT128)
+using Extended = boost::multiprecision::float128;  // 113-bit significand: a double-double pair exactly
+#else
+using Extended = long double;
+#endif
+using XMat = Eigen::Matrix<Extended, Eigen::Dynamic, Eigen::Dynamic>;
+using XVec = Eigen::Matrix<Extended, Eigen::Dynamic, 1>;
+
+/**
+ * The node system at q in extended precision: the DEL residual and the block-tridiagonal Hessian
+ * from the discretization's full_extended kernel (each entry a double-double pair, read exactly),
+ * factored by block elimination with Eigen's partial-pivoting LU of each pivot block. The Hessian
+ * of an order-gamma model has a condition number of about N^(2 gamma); rounded to double it gives
+ * corrections of the wrong size once that passes 1/eps, in extended precision not before about
+ * 1/eps_extended. Fixed components are identity rows, as in BlockTridiagonal::assemble.
+ */
+class ExtendedNodeSystem {
+ public:
+  /** Evaluates residual and Hessian at q; false if a value is not finite. */
+  bool evaluate(const Context& ctx, const std::vector<double>& q) {
+    const int d = ctx.dim, N = ctx.N, n = N - 1;
+    const std::size_t dz = static_cast<std::size_t>(d), dd = dz * dz;
+    const std::size_t stride = 2 + 4 * dz + 6 * dd;  // pairs: Ld, D1, D2, D11, D12, D22
+    pairs_.resize(static_cast<std::size_t>(N) * stride);
+    const pardel_extended_full_kernel kern = ctx.disc->full_extended;
+    const double* p = ctx.p();
+#pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
+    for (int k = 0; k < N; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      double* out = pairs_.data() + kk * stride;
+      double* D1 = out + 2;
+      kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q.data() + kk * dz, q.data() + (kk + 1) * dz, p, out, D1,
+           D1 + 2 * dz, D1 + 4 * dz, D1 + 4 * dz + 2 * dd, D1 + 4 * dz + 4 * dd);
+    }
+    for (double v : pairs_)
+      if (!std::isfinite(v)) return false;
+    // Entry e of the pair array that starts at `at` in interval k.
+    auto entry = [&](int k, std::size_t at, std::size_t e) {
+      const double* v = pairs_.data() + static_cast<std::size_t>(k) * stride + at + 2 * e;
+      return Extended(v[0]) + Extended(v[1]);
+    };
+    const std::size_t D1 = 2, D2 = 2 + 2 * dz, D11 = 2 + 4 * dz, D12 = D11 + 2 * dd, D22 = D12 + 2 * dd;
+    diag_.assign(static_cast<std::size_t>(n), XMat::Zero(d, d));
+    off_.assign(static_cast<std::size_t>(n), XMat::Zero(d, d));
+    rhs_.assign(static_cast<std::size_t>(n), XVec::Zero(d));
+    residual_ = 0;
+    for (int i = 0; i < n; ++i) {
+      const int k = i + 1;
+      const std::size_t ii = static_cast<std::size_t>(i);
+      const unsigned char* f = ctx.is_free.data() + static_cast<std::size_t>(k) * dz;
+      const unsigned char* fn = ctx.is_free.data() + static_cast<std::size_t>(k + 1) * dz;
+      for (int a = 0; a < d; ++a) {
+        const std::size_t az = static_cast<std::size_t>(a);
+        if (f[a]) {
+          rhs_[ii](a) = -(entry(k - 1, D2, az) + entry(k, D1, az));
+          residual_ = std::max(residual_, std::fabs(static_cast<double>(rhs_[ii](a))));
+        }
+        for (int b = 0; b < d; ++b) {
+          const std::size_t ab = az * dz + static_cast<std::size_t>(b);
+          diag_[ii](a, b) = f[a] && f[b] ? entry(k - 1, D22, ab) + entry(k, D11, ab) : Extended(a == b ? 1 : 0);
+          if (k < N - 1 && f[a] && fn[b]) off_[ii](a, b) = entry(k, D12, ab);
+        }
+      }
+    }
+    return true;
+  }
+
+  /** Block elimination; false if a pivot block is singular in extended precision. */
+  bool factor() {
+    const std::size_t n = diag_.size();
+    lu_.resize(n);
+    gain_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      XMat W = diag_[i];
+      if (i > 0) W -= off_[i - 1].transpose() * gain_[i - 1];
+      lu_[i].compute(W);
+      if (!(lu_[i].matrixLU().diagonal().cwiseAbs().minCoeff() > 0)) return false;
+      gain_[i] = lu_[i].solve(off_[i]);
+    }
+    return true;
+  }
+
+  /** The largest free component of the DEL residual at the evaluated q, rounded to double. */
+  double residual_norm() const { return residual_; }
+
+  /** The correction -H^-1 r (node layout 1..N-1, rounded to double) into delta. */
+  void solve(std::vector<double>& delta) const {
+    const std::size_t n = diag_.size();
+    std::vector<XVec> y(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      XVec b = rhs_[i];
+      if (i > 0) b -= off_[i - 1].transpose() * y[i - 1];
+      y[i] = lu_[i].solve(b);
+    }
+    for (std::size_t i = n; i-- > 0;) {
+      if (i + 1 < n) y[i] -= gain_[i] * y[i + 1];
+      for (Eigen::Index a = 0; a < y[i].size(); ++a)
+        delta[(i + 1) * static_cast<std::size_t>(y[i].size()) + static_cast<std::size_t>(a)] =
+            static_cast<double>(y[i](a));
+    }
+  }
+
+ private:
+  std::vector<double> pairs_;
+  std::vector<XMat> diag_, off_, gain_;  // gain_[i] = W_i^-1 off_[i]
+  std::vector<XVec> rhs_;  // -r
+  std::vector<Eigen::PartialPivLU<XMat>> lu_;
+  double residual_ = 0;
+};
 
 /** s + e = a + b exactly (Knuth's two-sum). */
 inline void two_sum(double a, double b, double* s, double* e) {
@@ -35,84 +152,97 @@ double max_abs(const std::vector<double>& v, std::size_t from, std::size_t to) {
   return m;
 }
 
-template <int D>
-void refine_dim(Context& ctx, const Options& options, Summary& summary) {
-  const int d = ctx.dim, N = ctx.N;
-  const std::size_t dz = static_cast<std::size_t>(d), nodes = static_cast<std::size_t>(N) + 1;
+/** What one phase of refinement did. */
+struct Phase {
+  int steps = 0;          ///< corrections kept
+  double first = 0;       ///< size of the first correction
+  double residual = 0;    ///< max DEL residual in extended precision at the phase's start
+  bool settled = false;   ///< ended at corrections below the rounding of the nodes (or not needed)
+  std::string failure;    ///< why the phase could not run, if it could not
+};
+
+/**
+ * Corrections q += delta while each is at most half the one before; the first is kept only when
+ * the second confirms it. `correct` computes delta at q and returns its size (NaN: could not).
+ * Where the Hessian is too ill-conditioned for the precision it is solved in, the second correction
+ * is mostly not smaller than the first and the iterate returns to where the phase started (a test,
+ * not a proof: docs/solvers.md gives a grid where two bad corrections passed it).
+ */
+template <class Correct>
+Phase run_phase(Context& ctx, const Options& options, Correct&& correct) {
   const double eps = std::numeric_limits<double>::epsilon();
-  char buf[400];
+  const std::size_t first = static_cast<std::size_t>(ctx.dim), last = static_cast<std::size_t>(ctx.N) * first;
+  const double q_max = std::max(max_abs(ctx.q, 0, ctx.q.size()), std::numeric_limits<double>::min());
+  const std::vector<double> start = ctx.q;
+  std::vector<double> delta(ctx.q.size(), 0.0);
+  Phase phase;
+  double previous = std::numeric_limits<double>::infinity();
+  bool contracting = false;  // a correction was at most half the one before: the iteration converges
+  for (int it = 0; it <= kMaxRefinementSteps; ++it) {
+    double residual = 0;
+    const double norm = correct(delta, &residual);
+    if (it == 0) {
+      phase.residual = residual;
+      phase.first = norm;
+      if (options.iterative_refinement == Refinement::automatic && norm <= kRefinementThreshold * eps * q_max) {
+        phase.settled = true;
+        break;
+      }
+    }
+    if (!std::isfinite(norm) || (it > 0 && !(norm <= 0.5 * previous))) break;
+    if (it > 0) contracting = true;
+    if (norm <= eps * q_max) {
+      phase.settled = true;
+      break;
+    }
+    if (it == kMaxRefinementSteps) break;
+    for (std::size_t i = first; i < last; ++i) ctx.q[i] += ctx.is_free[i] ? delta[i] : 0.0;
+    ++phase.steps;
+    previous = norm;
+  }
+  if (!contracting) {  // the first correction is not confirmed: undone
+    ctx.q = start;
+    phase.steps = 0;
+  }
+  return phase;
+}
+
+/** Corrections from the extended residual and the double Hessian at the solve's point. */
+template <int D>
+Phase double_phase(Context& ctx, const Options& options) {
+  const int N = ctx.N;
   ensure_interval_arrays(ctx, Evaluated::full);
   if (ctx.evaluated != Evaluated::full) eval_full(ctx, ctx.q);
   BlockTridiagonal<D> H;
-  H.resize(N, d);
+  H.resize(N, ctx.dim);
   H.assemble(ctx, 0.0);
   if (!H.factor_ldlt() && !H.factor_indefinite(1e-12)) {
-    summary.refinement_note = "not run: the Hessian at the solution is singular to working precision";
-    return;
+    Phase phase;
+    phase.failure = "the Hessian at the solution is singular to working precision";
+    return phase;
   }
-  std::vector<double> pairs, res, delta(nodes * dz, 0.0), start = ctx.q;
-  const std::size_t first = dz, last = static_cast<std::size_t>(N) * dz;  // unknowns: nodes 1..N-1
-  const double q_max = std::max(max_abs(ctx.q, 0, ctx.q.size()), std::numeric_limits<double>::min());
-  double previous = std::numeric_limits<double>::infinity(), r_first = 0, r_last = 0, first_norm = 0;
-  int steps = 0;
-  bool contracting = false;  // a correction was at most half the one before: the iteration converges
-  // Corrections are kept while each is at most half the one before. Where the double Hessian is too
-  // ill-conditioned to give corrections of the right size (order 4 at large N) the second is mostly
-  // not smaller than the first, and the iterate returns to the solve's point (a test, not a proof:
-  // docs/solvers.md gives a grid where two bad corrections passed it).
-  for (int it = 0; it <= kMaxRefinementSteps; ++it) {
-    if (extended_residual(ctx, ctx.q, pairs, res) >= 0) {
-      if (!contracting) {
-        ctx.q = start;
-        steps = 0;
-      }
-      break;
-    }
-    r_last = max_abs(res, first, last);
-    if (it == 0) r_first = r_last;
+  const std::size_t first = static_cast<std::size_t>(ctx.dim), last = static_cast<std::size_t>(N) * first;
+  std::vector<double> pairs, res;
+  return run_phase(ctx, options, [&](std::vector<double>& delta, double* residual) {
+    if (extended_residual(ctx, ctx.q, pairs, res) >= 0) return std::numeric_limits<double>::quiet_NaN();
+    *residual = max_abs(res, first, last);
     for (std::size_t i = first; i < last; ++i) res[i] = -res[i];
     H.solve_ldlt(res.data() + first, delta.data() + first);
-    const double norm = max_abs(delta, first, last);
-    if (it == 0) {
-      first_norm = norm;
-      if (options.iterative_refinement == Refinement::automatic && norm <= kRefinementThreshold * eps * q_max) break;
-    }
-    if (it > 0 && !(norm <= 0.5 * previous)) {
-      if (!contracting) {  // the first correction is not confirmed: undone
-        ctx.q = start;
-        steps = 0;
-      }
-      break;
-    }
-    if (it > 0) contracting = true;
-    if (!std::isfinite(norm) || it == kMaxRefinementSteps || norm <= eps * q_max) break;
-    for (std::size_t i = first; i < last; ++i) ctx.q[i] += ctx.is_free[i] ? delta[i] : 0.0;
-    ++steps;
-    previous = norm;
-  }
-  double change = 0;
-  for (std::size_t i = 0; i < ctx.q.size(); ++i) change = std::max(change, std::fabs(ctx.q[i] - start[i]));
-  summary.refinement_steps = steps;
-  summary.refinement_change = change;
-  if (steps == 0) {
-    if (options.iterative_refinement == Refinement::automatic && first_norm <= kRefinementThreshold * eps * q_max)
-      return;  // nothing to say: round-off does not matter here
-    std::snprintf(buf, sizeof buf,
-                  "no correction kept: the first, %.2e, was not followed by one half its size (the Hessian is too "
-                  "ill-conditioned for a double solve here), or was below the rounding of the nodes",
-                  first_norm);
-    summary.refinement_note = buf;
-    return;
-  }
-  std::snprintf(buf, sizeof buf,
-                "%d correction%s, largest node change %.2e (the first %.2e; DEL residual in extended precision "
-                "%.2e at the solve's point)",
-                steps, steps == 1 ? "" : "s", change, first_norm, r_first);
-  summary.refinement_note = buf;
-  eval_full(ctx, ctx.q);
-  compute_residual(ctx);
-  ctx.action = sum_action(ctx);
-  ctx.action_known = true;
+    return max_abs(delta, first, last);
+  });
+}
+
+/** Newton corrections with residual and Hessian in extended precision, the Hessian re-evaluated
+ *  at every iterate. */
+Phase extended_phase(Context& ctx, const Options& options) {
+  ExtendedNodeSystem system;
+  const std::size_t first = static_cast<std::size_t>(ctx.dim), last = static_cast<std::size_t>(ctx.N) * first;
+  return run_phase(ctx, options, [&](std::vector<double>& delta, double* residual) {
+    if (!system.evaluate(ctx, ctx.q) || !system.factor()) return std::numeric_limits<double>::quiet_NaN();
+    system.solve(delta);
+    *residual = system.residual_norm();
+    return max_abs(delta, first, last);
+  });
 }
 
 }  // namespace
@@ -165,7 +295,50 @@ void refine_solution(Context& ctx, const Options& options, Summary& summary) {
       summary.refinement_note = "not run: the discretization has no extended-precision kernel";
     return;
   }
-  dispatch_dim(ctx.dim, [&](auto D) { refine_dim<decltype(D)::value>(ctx, options, summary); });
+  const std::vector<double> start = ctx.q;
+  const Phase plain = dispatch_dim(ctx.dim, [&](auto D) { return double_phase<decltype(D)::value>(ctx, options); });
+  Phase wide;
+  const bool extended = !plain.settled && ctx.disc->full_extended;
+  if (extended) wide = extended_phase(ctx, options);
+  const int steps = plain.steps + wide.steps;
+  double change = 0;
+  for (std::size_t i = 0; i < ctx.q.size(); ++i) change = std::max(change, std::fabs(ctx.q[i] - start[i]));
+  summary.refinement_steps = steps;
+  summary.refinement_change = change;
+  char buf[500];
+  const double eps = std::numeric_limits<double>::epsilon();
+  const double q_max = std::max(max_abs(start, 0, start.size()), std::numeric_limits<double>::min());
+  if (steps == 0) {
+    if (options.iterative_refinement == Refinement::automatic && plain.first <= kRefinementThreshold * eps * q_max)
+      return;  // nothing to say: round-off does not matter here
+    if (!plain.failure.empty() && !extended) {
+      summary.refinement_note = "not run: " + plain.failure;
+      return;
+    }
+    std::snprintf(buf, sizeof buf,
+                  "no correction kept: the first, %.2e, was not followed by one half its size (the Hessian is too "
+                  "ill-conditioned for a double solve here%s), or was below the rounding of the nodes",
+                  plain.failure.empty() ? plain.first : wide.first,
+                  extended ? ", and the extended-precision one gave none either" : "");
+    summary.refinement_note = buf;
+    return;
+  }
+  if (wide.steps > 0)
+    std::snprintf(buf, sizeof buf,
+                  "%d correction%s (%d with the Hessian in extended precision), largest node change %.2e (the "
+                  "first %.2e; DEL residual in extended precision %.2e at the solve's point)",
+                  steps, steps == 1 ? "" : "s", wide.steps, change, plain.steps > 0 ? plain.first : wide.first,
+                  plain.failure.empty() ? plain.residual : wide.residual);
+  else
+    std::snprintf(buf, sizeof buf,
+                  "%d correction%s, largest node change %.2e (the first %.2e; DEL residual in extended precision "
+                  "%.2e at the solve's point)",
+                  steps, steps == 1 ? "" : "s", change, plain.first, plain.residual);
+  summary.refinement_note = buf;
+  eval_full(ctx, ctx.q);
+  compute_residual(ctx);
+  ctx.action = sum_action(ctx);
+  ctx.action_known = true;
 }
 
 }  // namespace pardel::detail

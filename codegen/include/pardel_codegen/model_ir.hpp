@@ -45,6 +45,11 @@ struct DiscretizationIR {
    *  kernel_abi.h, pardel_extended_grad_kernel). Absent for a discretization with interior values,
    *  whose Newton solve for z is not straight-line code. */
   std::optional<KernelIR> extended;
+  /** Models of order >= 2 without interior values: the full kernel's code printed for extended
+   *  precision (variant "full_extended": Ld, D1, D2, D11, D12, D22 as double-double pairs;
+   *  kernel_abi.h, pardel_extended_full_kernel), for the corrections of iterative refinement where
+   *  the Hessian rounded to double is too ill-conditioned (condition ~ N^(2 order)). */
+  std::optional<KernelIR> extended_full;
 };
 
 struct ModelIR {

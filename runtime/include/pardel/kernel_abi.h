@@ -19,8 +19,9 @@
 #ifndef PARDEL_KERNEL_ABI_H
 #define PARDEL_KERNEL_ABI_H
 
-/* 3: pardel_discretization gained grad_extended (its array's stride changed). */
-#define PARDEL_KERNEL_ABI_VERSION 3
+/* 3: pardel_discretization gained grad_extended (its array's stride changed).
+ * 4: and full_extended. */
+#define PARDEL_KERNEL_ABI_VERSION 4
 
 /* The qualifier of every generated kernel with double arithmetic only: __host__ __device__ under a
  * CUDA compiler, so that the same generated source runs on the host and on the device (device code
@@ -63,6 +64,17 @@ typedef void (*pardel_grad_kernel)(double h, double t0, double t1, const double*
 typedef void (*pardel_extended_grad_kernel)(double h, double t0, double t1, const double* q0, const double* q1,
                                             const double* p, double* Ld, double* D1, double* D2);
 
+/**
+ * Ld and every first and second derivative in extended precision, as pardel_extended_grad_kernel
+ * writes them: each entry a double-double pair (Ld 2, D1 and D2 2m, D11, D12 and D22 2m^2 entries,
+ * row-major as in pardel_full_kernel). For models of order >= 2, whose node Hessian has a
+ * condition number of about N^(2 order): iterative refinement factors it in extended precision
+ * where the double one is too ill-conditioned for its corrections to converge (docs/solvers.md).
+ */
+typedef void (*pardel_extended_full_kernel)(double h, double t0, double t1, const double* q0, const double* q1,
+                                            const double* p, double* Ld, double* D1, double* D2, double* D11,
+                                            double* D12, double* D22);
+
 /** Ld alone: the discrete action of one interval. */
 typedef double (*pardel_action_kernel)(double h, double t0, double t1, const double* q0, const double* q1,
                                        const double* p);
@@ -86,6 +98,8 @@ typedef struct pardel_discretization {
   /** NULL when absent: discretizations with interior values (Galerkin with s > order), and
    *  kernels compiled without an extended floating-point type. */
   pardel_extended_grad_kernel grad_extended;
+  /** NULL when absent: as grad_extended, and for models of order 1. */
+  pardel_extended_full_kernel full_extended;
 } pardel_discretization;
 
 /** How a model's reported cost is computed from a solution (the .lag's `cost NAME = KIND`). */
