@@ -102,9 +102,11 @@ void check_refined(const Case& c, const std::vector<int>& Ns) {
     std::printf("%s N = %4d: error %.2e with refinement (%s)\n", c.model->name, N, e, s.refinement_note.c_str());
   }
   const int N = Ns.back();
-  const double off = solve_error(c, N, pardel::Refinement::off);
-  const double on = solve_error(c, N, pardel::Refinement::on);
-  std::printf("%s N = %d: error %.2e without refinement, %.2e with\n", c.model->name, N, off, on);
+  pardel::Summary s_off, s_on;
+  const double off = solve_error(c, N, pardel::Refinement::off, &s_off);
+  const double on = solve_error(c, N, pardel::Refinement::on, &s_on);
+  std::printf("%s N = %d: error %.2e without refinement, %.2e with (solve %.1f ms, %.1f ms)\n", c.model->name, N, off,
+              on, 1e3 * s_off.wall_seconds, 1e3 * s_on.wall_seconds);
   EXPECT_GT(off, 1e-8) << "round-off without refinement should be visible at N = " << N;
   EXPECT_GT(off, 1e4 * on);
 }
