@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "pardel/extended_kernels.hpp"  // PD_HAVE_QUADMATH: the precision of the extended kernels
 #include "generated_models.hpp"
 #include "pardel_codegen/discretize.hpp"
 #include "pardel_codegen/lag_parser.hpp"
@@ -329,6 +330,64 @@ TEST_P(GeneratedKernels, VariantsAgreeWithTheFullKernel) {
     expect_close(sweep.D2, full.D2, 1e-12, "sweep D2");
     expect_close(sweep.D11, full.D11, 1e-12, "sweep D11");
     expect_close(sweep.D22, full.D22, 1e-12, "sweep D22");
+  }
+}
+
+// The extended-precision kernels: present as the ABI says (grad_extended without interior values,
+// full_extended also only from order 2), their pairs' high parts the double kernels' values, each
+// low part at most half an ulp of its high part, and the gradient of full_extended equal to
+// grad_extended's to far below double rounding (two CSE'd programs of the same derivatives).
+TEST_P(GeneratedKernels, ExtendedKernelsAgreeWithTheDoubleOnes) {
+  const pardel_model& model = *entry_.model;
+  const int m = model.dim;
+  const std::size_t mm = static_cast<std::size_t>(m) * static_cast<std::size_t>(m);
+  std::mt19937 rng(4242u + static_cast<unsigned>(GetParam()));
+  for (int d = 0; d < model.ndiscretizations; ++d) {
+    const pardel_discretization& disc = model.discretizations[d];
+    SCOPED_TRACE(disc.name);
+    const bool interior = lag_.discretizations[d].interior_points > 0;
+    EXPECT_EQ(disc.grad_extended != nullptr, !interior);
+    EXPECT_EQ(disc.full_extended != nullptr, !interior && model.order >= 2);
+    if (!disc.grad_extended) continue;
+    const Point x = random_point(model, rng);
+    const Values full = run_full(disc, m, x);
+    std::vector<double> gLd(2), gD1(2 * m), gD2(2 * m);
+    disc.grad_extended(x.h, x.t0, x.t1, x.q0.data(), x.q1.data(), x.p.data(), gLd.data(), gD1.data(), gD2.data());
+    auto high = [](const std::vector<double>& pairs) {
+      std::vector<double> h(pairs.size() / 2);
+      for (std::size_t i = 0; i < h.size(); ++i) {
+        h[i] = pairs[2 * i];
+        EXPECT_LE(std::fabs(pairs[2 * i + 1]), 0.5 * std::fabs(std::nextafter(h[i], INFINITY) - h[i])) << i;
+      }
+      return h;
+    };
+    expect_close(high(gLd), {full.Ld}, 1e-12, "grad_extended Ld");
+    expect_close(high(gD1), full.D1, 1e-12, "grad_extended D1");
+    expect_close(high(gD2), full.D2, 1e-12, "grad_extended D2");
+    if (!disc.full_extended) continue;
+    std::vector<double> Ld(2), D1(2 * m), D2(2 * m), D11(2 * mm), D12(2 * mm), D22(2 * mm);
+    disc.full_extended(x.h, x.t0, x.t1, x.q0.data(), x.q1.data(), x.p.data(), Ld.data(), D1.data(), D2.data(),
+                       D11.data(), D12.data(), D22.data());
+    expect_close(high(D11), full.D11, 1e-12, "full_extended D11");
+    expect_close(high(D12), full.D12, 1e-12, "full_extended D12");
+    expect_close(high(D22), full.D22, 1e-12, "full_extended D22");
+    // hi + lo against hi + lo: the difference of the pairs, relative to the largest entry.
+    auto pair_diff = [](const std::vector<double>& a, const std::vector<double>& b, const char* what) {
+      double scale = 0, diff = 0;
+      for (std::size_t i = 0; i + 1 < a.size(); i += 2) {
+        scale = std::max(scale, std::fabs(b[i]));
+        diff = std::max(diff, std::fabs((a[i] - b[i]) + (a[i + 1] - b[i + 1])));
+      }
+#if defined(PD_HAVE_QUADMATH)
+      const double rel = 1e-24;  // __float128: 113 significand bits
+#else
+      const double rel = 1e-15;  // long double: 64
+#endif
+      EXPECT_LE(diff, rel * std::max(scale, 1e-300)) << what;
+    };
+    pair_diff(Ld, gLd, "full_extended Ld vs grad_extended");
+    pair_diff(D1, gD1, "full_extended D1 vs grad_extended");
+    pair_diff(D2, gD2, "full_extended D2 vs grad_extended");
   }
 }
 
