@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "pardel_codegen/discretize.hpp"
 #include "pardel_codegen/lag_parser.hpp"
@@ -312,19 +313,15 @@ std::string ir_to_json(const ModelIR& ir) {
       write_kernel(j, d.kernels[k], "      ");
       j << (k + 1 < d.kernels.size() ? ",\n" : "\n");
     }
-    j << "     ],\n     \"extended_kernel\": ";
-    if (d.extended) {
-      j << "\n";
-      write_kernel(j, *d.extended, "      ");
-    } else {
-      j << "null";
-    }
-    j << ",\n     \"extended_full_kernel\": ";
-    if (d.extended_full) {
-      j << "\n";
-      write_kernel(j, *d.extended_full, "      ");
-    } else {
-      j << "null";
+    j << "     ]";
+    for (const auto& [key, kernel] : {std::pair{"extended_kernel", &d.extended}, {"extended_full_kernel", &d.extended_full}}) {
+      j << ",\n     \"" << key << "\": ";
+      if (*kernel) {
+        j << "\n";
+        write_kernel(j, **kernel, "      ");
+      } else {
+        j << "null";
+      }
     }
     j << ",\n     \"interval_kernels\": [";
     for (std::size_t k = 0; k < d.interval_kernels.size(); ++k) {
