@@ -283,7 +283,9 @@ struct Options {
   int accuracy_max_N = 1 << 20;  ///< the largest N an adaptive solve may use
   /** After a converged solve in one process: iterative refinement with the DEL residual evaluated
    *  by the discretization's extended-precision kernel (pardel_discretization::grad_extended) and
-   *  the Hessian at the solution, which removes the round-off error that grows like eps N^(2 order)
+   *  the Hessian at the solution, which removes the round-off error that grows like eps N^(2 order);
+   *  where that double Hessian is too ill-conditioned, Newton corrections with the Hessian in
+   *  quadruple precision (pardel_discretization::full_extended, models of order >= 2)
    *  (Summary::refinement_note says whether it ran and what it changed). Not over MPI ranks. */
   Refinement iterative_refinement = Refinement::automatic;
   /** Checks the options against their bounds (option_bound); on failure writes a message naming
@@ -416,8 +418,9 @@ struct Summary {
   std::string grid_note;
   /** Iterative refinement (Options::iterative_refinement): corrections applied (0: none), the
    *  largest change of a node value they made in all, and one line on what happened ("2
-   *  corrections, largest node change 3.1e-07, DEL residual in extended precision 2.0e-03 ->
-   *  4.1e-12", or why it did not run); the note is empty where refinement was off. */
+   *  corrections, largest node change 3.1e-07 (the first 3.0e-07; DEL residual in extended
+   *  precision 2.0e-03 at the solve's point)", with how many used the Hessian in extended
+   *  precision, or why it did not run); the note is empty where refinement was off. */
   int refinement_steps = 0;
   double refinement_change = 0;
   std::string refinement_note;
