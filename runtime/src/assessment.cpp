@@ -322,10 +322,10 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
   }
 }
 
-template <int D>
-void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out, double* const* work) {
+void assess_minimum(Context& ctx, double lambda_max, const std::function<void(const double* b, double* x)>& solve,
+                    PointAssessment& out, double* const* work) {
   out = PointAssessment{};
-  out.lambda_max = H.gershgorin_bound();
+  out.lambda_max = lambda_max;
   const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
   const std::size_t dz = static_cast<std::size_t>(ctx.dim);
   out.positive = static_cast<long>(n) - fixed_components(ctx);
@@ -342,9 +342,9 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
   op.free = ctx.is_free.data() + dz;
   // An interruption after convergence stops the assessment at its next block solve.
   struct Interrupted {};
-  op.solve = [&H, &ctx](const double* b, double* x) {
+  op.solve = [&solve, &ctx](const double* b, double* x) {
     if (ctx.keep_going && !ctx.keep_going()) throw Interrupted{};
-    H.solve_ldlt(b, x);
+    solve(b, x);
   };
   op.reduce = [](double*, int) {};
   if (work)
@@ -356,17 +356,6 @@ void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessm
     out.note = "not assessed: interrupted during the assessment of the converged point";
   }
 }
-
-template void assess_positive_definite<1>(Context&, BlockTridiagonal<1>&, PointAssessment&,
-                                          double* const*);
-template void assess_positive_definite<2>(Context&, BlockTridiagonal<2>&, PointAssessment&,
-                                          double* const*);
-template void assess_positive_definite<4>(Context&, BlockTridiagonal<4>&, PointAssessment&,
-                                          double* const*);
-template void assess_positive_definite<6>(Context&, BlockTridiagonal<6>&, PointAssessment&,
-                                          double* const*);
-template void assess_positive_definite<Eigen::Dynamic>(Context&, BlockTridiagonal<Eigen::Dynamic>&, PointAssessment&,
-                                                       double* const*);
 
 bool classify_indefinite(PointAssessment& out) {
   if (out.negative > 0) {
@@ -400,7 +389,7 @@ void assess(Context& ctx, PointAssessment& out) {
     if (!std::isfinite(v)) return;
   for (double v : ctx.D22)
     if (!std::isfinite(v)) return;
-  dispatch_dim(ctx.dim, [&](auto D) { assess_dim<decltype(D)::value>(ctx, out); });
+  dispatch_dim_cold(ctx.dim, [&](auto D) { assess_dim<decltype(D)::value>(ctx, out); });
 }
 
 bool lagrangian_regular(const Context& ctx, std::string* message) {

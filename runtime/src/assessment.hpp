@@ -31,12 +31,20 @@ inline PointAssessment not_assessed(Termination termination) {
   return out;
 }
 
-/** Assesses ctx.q given H, the unshifted Hessian there, already factored by block LDL^T (positive
- *  definite): a minimum, with its smallest eigenvalues. `work` as LanczosOperator::work (optional).
- *  Instantiated for the block sizes of dispatch_dim. */
+/** Assesses ctx.q given the unshifted Hessian there, positive definite, through lambda_max (its
+ *  Gershgorin bound) and solve (x = H^-1 b): a minimum, with its smallest eigenvalues. `work` as
+ *  LanczosOperator::work (optional). */
+void assess_minimum(Context& ctx, double lambda_max, const std::function<void(const double* b, double* x)>& solve,
+                    PointAssessment& out, double* const* work = nullptr);
+
+/** assess_minimum given H, the unshifted Hessian at ctx.q, already factored by block LDL^T. Inline,
+ *  so that it is compiled with the caller's block size (the one-process Newton's, in newton.cpp)
+ *  and assessment.cpp needs no instantiation per block size. */
 template <int D>
 void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out,
-                              double* const* work = nullptr);
+                              double* const* work = nullptr) {
+  assess_minimum(ctx, H.gershgorin_bound(), [&H](const double* b, double* x) { H.solve_ldlt(b, x); }, out, work);
+}
 
 /** A positive definite Hessian's inverse, as the Lanczos iteration of smallest_eigenvalues sees it:
  *  n unknowns (this rank's, over ranks) of dim components per node, unknown 0 at node first_node

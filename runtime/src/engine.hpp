@@ -283,6 +283,16 @@ auto dispatch_dim(int dim, F&& f) {
   }
 }
 
+/** dispatch_dim for code that runs once per solve or on request, not per iteration (the assessment
+ *  of a point that no Newton factorization serves): calls f with Eigen::Dynamic (-1) for every dim,
+ *  one instantiation to compile instead of five. Blocks of a dynamic size cost more per block
+ *  operation than fixed ones, so a solver's iteration keeps dispatch_dim (docs/benchmarks.md,
+ *  "A fast first build"). */
+template <class F>
+auto dispatch_dim_cold(int /*dim*/, F&& f) {
+  return f(std::integral_constant<int, -1>{});
+}
+
 }  // namespace pardel::detail
 
 #endif  // PARDEL_RUNTIME_ENGINE_HPP
