@@ -296,7 +296,8 @@ void refine_solution(Context& ctx, const Options& options, Summary& summary) {
     return;
   }
   const std::vector<double> start = ctx.q;
-  const Phase plain = dispatch_dim(ctx.dim, [&](auto D) { return double_phase<decltype(D)::value>(ctx, options); });
+  const Phase plain =
+      dispatch_dim_cold(ctx.dim, [&](auto D) { return double_phase<decltype(D)::value>(ctx, options); });
   Phase wide;
   const bool extended = !plain.settled && ctx.disc->full_extended;
   if (extended) wide = extended_phase(ctx, options);
