@@ -310,7 +310,8 @@ void refine_solution(Context& ctx, const Options& options, Summary& summary) {
   const double eps = std::numeric_limits<double>::epsilon();
   const double q_max = std::max(max_abs(start, 0, start.size()), std::numeric_limits<double>::min());
   if (steps == 0) {
-    if (options.iterative_refinement == Refinement::automatic && plain.first <= kRefinementThreshold * eps * q_max)
+    if (options.iterative_refinement == Refinement::automatic && plain.failure.empty() &&
+        plain.first <= kRefinementThreshold * eps * q_max)
       return;  // nothing to say: round-off does not matter here
     if (!plain.failure.empty() && !extended) {
       summary.refinement_note = "not run: " + plain.failure;
@@ -324,17 +325,14 @@ void refine_solution(Context& ctx, const Options& options, Summary& summary) {
     summary.refinement_note = buf;
     return;
   }
+  char wide_part[80] = "";
   if (wide.steps > 0)
-    std::snprintf(buf, sizeof buf,
-                  "%d correction%s (%d with the Hessian in extended precision), largest node change %.2e (the "
-                  "first %.2e; DEL residual in extended precision %.2e at the solve's point)",
-                  steps, steps == 1 ? "" : "s", wide.steps, change, plain.steps > 0 ? plain.first : wide.first,
-                  plain.failure.empty() ? plain.residual : wide.residual);
-  else
-    std::snprintf(buf, sizeof buf,
-                  "%d correction%s, largest node change %.2e (the first %.2e; DEL residual in extended precision "
-                  "%.2e at the solve's point)",
-                  steps, steps == 1 ? "" : "s", change, plain.first, plain.residual);
+    std::snprintf(wide_part, sizeof wide_part, " (%d with the Hessian in extended precision)", wide.steps);
+  std::snprintf(buf, sizeof buf,
+                "%d correction%s%s, largest node change %.2e (the first %.2e; DEL residual in extended precision "
+                "%.2e at the solve's point)",
+                steps, steps == 1 ? "" : "s", wide_part, change, plain.steps > 0 ? plain.first : wide.first,
+                plain.failure.empty() ? plain.residual : wide.residual);
   summary.refinement_note = buf;
   eval_full(ctx, ctx.q);
   compute_residual(ctx);
