@@ -8,7 +8,8 @@ pkgs=(build-essential cmake ninja-build pkg-config
       python3-venv python3-setuptools python3-wheel
       libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libfmt-dev libssl-dev
       libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev
-      libopenmpi-dev openmpi-bin clang-14 libclang-rt-14-dev)
+      libopenmpi-dev openmpi-bin clang-14 libclang-rt-14-dev
+      python3-sphinx doxygen)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -25,7 +25,7 @@ const std::vector<std::string>& kernel_variants();
 /** One generated function. */
 struct KernelIR {
   std::string variant;   ///< "full", "sweep", "grad", "action" or "clock"
-  std::string function;  ///< the C symbol: <model>_<disc-ident>_<variant>, or <model>_clock
+  std::string function;  ///< the C symbol: `<model>_<disc-ident>_<variant>`, or `<model>_clock`
   std::vector<std::string> unused_inputs;  ///< kernel arguments the code never reads
   KernelCode code;
 };

@@ -1,0 +1,22 @@
+# Sphinx configuration of the pardel reference: the Python package pardel (autodoc) with a link to
+# the C++ headers' Doxygen pages. Built by tools/docs/build.sh, which puts the build folder's
+# package on PYTHONPATH (pardel imports its compiled core, so the module must be built first).
+import pardel
+
+project = "pardel"
+version = release = pardel.__version__
+extensions = ["sphinx.ext.autodoc"]
+# The docstrings are prose: one order for members, as written, and the signatures' type hints
+# shown in the signatures themselves.
+autodoc_member_order = "bysource"
+autodoc_typehints = "signature"
+autodoc_default_options = {"members": True, "show-inheritance": True}
+# `text` in the docstrings names code (a command, a key, an argument): shown as literal text.
+default_role = "literal"
+nitpicky = False
+exclude_patterns = ["README*"]
+html_theme = "alabaster"
+html_static_path = []
+templates_path = []
+# The docstrings' quotes and dashes are code ("--set", "converged"): kept as written.
+smartquotes = False
