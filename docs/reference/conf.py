@@ -13,10 +13,9 @@ autodoc_typehints = "signature"
 autodoc_default_options = {"members": True, "show-inheritance": True}
 # `text` in the docstrings names code (a command, a key, an argument): shown as literal text.
 default_role = "literal"
+# Not nitpicky: the type hints name NumPy's, SymPy's and typing's classes, which this reference
+# does not document (no intersphinx: the build reads nothing from the network).
 nitpicky = False
-exclude_patterns = ["README*"]
 html_theme = "alabaster"
-html_static_path = []
-templates_path = []
 # The docstrings' quotes and dashes are code ("--set", "converged"): kept as written.
 smartquotes = False
