@@ -24,6 +24,7 @@ fuel, previous = [], None
 for T in values:
     r = pardel.solve(model, q0=[0, 0], qN=[6, 5], T=T, N=200, guess=None if previous is None else previous.q)
     print("T = %5.2f: %s" % (T, r))
+    assert r.converged
     fuel.append(r.cost)
     previous = r
 
