@@ -6,8 +6,8 @@ import pardel
 project = "pardel"
 version = release = pardel.__version__
 extensions = ["sphinx.ext.autodoc"]
-# The docstrings are prose: one order for members, as written, and the signatures' type hints
-# shown in the signatures themselves.
+# Members in the order of the source, and the type hints
+# shown in the signatures (not repeated in the descriptions).
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
 autodoc_default_options = {"members": True, "show-inheritance": True}
