@@ -24,6 +24,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -36,6 +37,7 @@
 #include <vector>
 
 #include "pardel/memory.hpp"
+#include "pardel/app/checkpoint.hpp"
 #include "pardel/app/outputs.hpp"
 #include "pardel/model_loader.hpp"
 #include "pardel/pardel.hpp"
@@ -44,6 +46,7 @@
 #endif
 #include "pardel/app/scene.hpp"
 #include "pardel/app/sweep.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 namespace py = pybind11;
 using namespace pardel;
@@ -322,9 +325,12 @@ std::string without_generated_position(const std::string& message, const std::st
   return source + ": " + std::regex_replace(rest, position, "", std::regex_constants::format_first_only);
 }
 
-/** A scene from pardel.solve's arguments: the model (a bundled name or a .lag path), then the
- *  keyword arguments of kArguments (None values are left out). */
-Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments) {
+/** The scene text (TOML) of pardel.solve's arguments: the model (a bundled name or a .lag path),
+ *  then the keyword arguments of kArguments (None values are left out). `complete`: the options
+ *  outside kArguments' scene keys are written as scene keys too (solver.history_every,
+ *  solver.divergence_factor, solver.refine.settle), so that the text alone gives the solve's
+ *  options (what a checkpoint records); solver.refine.settle needs solver.refine.start_N. */
+std::string scene_text(const std::string& model_spec, const py::dict& arguments, bool complete) {
   const std::vector<std::string> names = argument_names();
   for (const auto& item : arguments) {
     const std::string key = py::str(item.first).cast<std::string>();
@@ -393,15 +399,39 @@ Scene scene_from_arguments(const std::string& model_spec, const py::dict& argume
         insert(*table, key, value, name);
     }
   }
+  if (complete) {
+    const auto given = [&arguments](const char* name) {
+      return arguments.contains(name) && !arguments[name].is_none();
+    };
+    if (given("history_every")) insert(subtable(root, "solver"), "history_every", arguments["history_every"], "history_every");
+    if (given("divergence_factor"))
+      insert(subtable(root, "solver"), "divergence_factor", arguments["divergence_factor"], "divergence_factor");
+    if (given("refine_settle")) {
+      if (!given("refine_start_N"))
+        throw InputError("checkpoint: refine_settle is recorded in a checkpoint's scene as solver.refine.settle, "
+                         "which needs refine_start_N; give refine_start_N too, or no checkpoint");
+      insert(subtable(subtable(root, "solver"), "refine"), "settle", arguments["refine_settle"], "refine_settle");
+    }
+  }
   std::ostringstream text;
   text << root;
+  return text.str();
+}
+
+/** Parses scene text made by scene_text (named "pardel.solve" in messages, without positions in
+ *  the generated text). */
+Scene parse_generated_scene(const std::string& text) {
   const std::string source = "pardel.solve";
-  Scene scene;
   try {
-    scene = app::parse_scene(text.str(), source, {}, resolve_spec, bundled_model_names());
+    return app::parse_scene(text, source, {}, resolve_spec, bundled_model_names());
   } catch (const SceneError& error) {
     throw SceneError(without_generated_position(error.what(), source));
   }
+}
+
+/** A scene from pardel.solve's arguments (scene_text, then the options outside the scene schema). */
+Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments) {
+  Scene scene = parse_generated_scene(scene_text(model_spec, arguments, false));
   // Options outside the scene schema.
   auto number = [&arguments](const char* name, auto* target) {
     if (arguments.contains(name) && !arguments[name].is_none())
@@ -496,21 +526,52 @@ py::dict result_dict(const Scene& scene, const Summary& summary, const Trajector
   return result;
 }
 
+/** Where a solve writes its checkpoint when it is interrupted (pardel::app's checkpoint files). */
+struct CheckpointPlan {
+  std::string dir;         ///< the folder of checkpoint.json ("" : no checkpoint)
+  std::string scene_text;  ///< pardel.solve's scene, written as DIR/scene.toml ("" : scene_file is one)
+  std::string scene_file;  ///< the scene file that was read, absolute
+  std::vector<std::string> overrides;  ///< with which it was read
+  int threads = -1;        ///< threads given besides the scene (-1: none)
+};
+
+/** The name of the scene file pardel.solve's checkpoints record, beside checkpoint.json. */
+constexpr const char* kCheckpointScene = "scene.toml";
+
+/** Makes the checkpoint folder (with its parents) before the solve, so that a folder that cannot
+ *  be made is reported before the work; CheckpointError naming it otherwise. */
+void make_checkpoint_folder(const std::string& dir) {
+  try {
+    app::create_output_folder(dir);
+  } catch (const std::exception& error) {
+    std::string message = error.what();
+    const std::string output = "cannot create output folder";
+    const std::size_t at = message.find(output);
+    if (at != std::string::npos) message.replace(at, output.size(), "cannot create the checkpoint folder");
+    throw app::CheckpointError(message);
+  }
+}
+
 /**
- * Solves a scene with the GIL released. Every recorded iteration calls `on_iteration` (with the
- * GIL) when given, and at most every 50 ms checks Python's signals; a pending exception
- * (KeyboardInterrupt from Ctrl-C, or one raised by on_iteration) stops the solve, which ends
- * `interrupted`, and is raised once the result is complete.
+ * Solves a scene with the GIL released, from `trajectory` or, with `resume_from`, from an
+ * interrupted solve's state. Every recorded iteration calls `on_iteration` (with the GIL) when
+ * given, and at most every 50 ms checks Python's signals; a pending exception (KeyboardInterrupt
+ * from Ctrl-C, or one raised by on_iteration) stops the solve, which ends `interrupted`. With
+ * `plan.dir`, an interrupted solve writes its checkpoint there and any other end removes it
+ * (app::update_checkpoint, as `pardel solve`). The result dictionary (result_dict) holds besides
+ * "checkpoint_written" and "pending": the exception that stopped the solve (None if none), which
+ * the package raises, with "pending_trace" its traceback.
  */
-py::dict solve_scene(Scene scene, const py::object& guess, const py::object& guess_t, const py::object& on_iteration,
-                     const py::object& threads) {
-  if (!threads.is_none()) scene.options.threads = threads.cast<int>();
+py::dict run_solve(Scene& scene, Trajectory trajectory, const py::object& on_iteration,
+                   const SolverState* resume_from, const CheckpointPlan& plan, const std::string& checkpoint_path) {
   {
     const MemoryEstimate memory = estimate_solve_memory(scene.problem, scene.options, false);
     const std::string refusal = memory_refusal(scene.problem, scene.options, memory, machine_memory());
     if (!refusal.empty()) throw InputError(fmt::format("{}: {}", scene.path, refusal));
   }
-  Trajectory trajectory = initial_trajectory(scene, guess, guess_t);
+  // Taken before the solve: what a checkpoint of this solve records of its model.
+  const std::string digest = plan.dir.empty() ? "" : app::model_digest(*scene.model, scene.model_path);
+  if (!plan.dir.empty()) make_checkpoint_folder(plan.dir);
 
   std::unique_ptr<py::error_already_set> pending;
   bool stopped_by_callback = false;
@@ -552,6 +613,7 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
     pending = std::make_unique<py::error_already_set>();
     return false;
   };
+  scene.options.resume_from = resume_from;
   Summary summary;
   {
     py::gil_scoped_release release;
@@ -559,11 +621,99 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
   }
   scene.options.on_iteration = nullptr;
   scene.options.keep_going = nullptr;
-  if (pending) throw std::move(*pending);
-  if (summary.termination == Termination::invalid_input)
+  scene.options.resume_from = nullptr;
+  if (summary.termination == Termination::invalid_input) {
+    if (pending) throw std::move(*pending);
+    // A state that does not fit the scene: the checkpoint's fault, named as `pardel solve --resume` names it.
+    if (resume_from) throw app::CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
     throw InputError(fmt::format("{}: error: {}", scene.path, summary.message));
+  }
 
-  return result_dict(scene, summary, trajectory, stopped_by_callback);
+  bool written = false;
+  if (!plan.dir.empty()) {
+    std::string scene_file = plan.scene_file;
+    const bool keep = summary.termination == Termination::interrupted && summary.state.valid;
+    try {
+      if (!plan.scene_text.empty()) {
+        std::error_code ec;
+        scene_file = std::filesystem::absolute(std::filesystem::path(plan.dir) / kCheckpointScene, ec)
+                         .lexically_normal()
+                         .string();
+        if (keep) app::write_file_atomic(scene_file, plan.scene_text);
+      }
+      written = app::update_checkpoint(plan.dir, summary, scene_file, plan.overrides, plan.threads, *scene.model,
+                                       digest);
+    } catch (const app::CheckpointError&) {
+      throw;
+    } catch (const std::exception& error) {
+      throw app::CheckpointError(fmt::format("{}: error: the checkpoint could not be written: {}",
+                                             (std::filesystem::path(plan.dir) / app::checkpoint_file_name()).string(),
+                                             error.what()));
+    }
+  }
+  py::dict result = result_dict(scene, summary, trajectory, stopped_by_callback);
+  result["checkpoint_written"] = written;
+  result["pending"] = pending && pending->value() ? pending->value() : py::none();
+  result["pending_trace"] = pending && pending->trace() ? pending->trace() : py::none();
+  return result;
+}
+
+/** The coordinate names of a scene's model (for pardel.Result). */
+std::vector<std::string> scene_coords(const Scene& scene) {
+  return std::vector<std::string>(scene.model->coords, scene.model->coords + scene.model->ncoords);
+}
+
+/**
+ * pardel.solve_scene: solves a scene from `guess` (None: the scene's guess). `checkpoint` (None:
+ * none) names the folder of the checkpoint an interrupted solve writes; it records `scene_text`
+ * (pardel.solve's scene, written beside it) when given, else the scene file `scene_file` read with
+ * `overrides`, and `threads`.
+ */
+py::dict solve_scene(Scene scene, const py::object& guess, const py::object& guess_t, const py::object& on_iteration,
+                     const py::object& threads, const py::object& checkpoint, const py::object& scene_text,
+                     const py::object& scene_file, const std::vector<std::string>& overrides) {
+  if (!threads.is_none()) scene.options.threads = threads.cast<int>();
+  CheckpointPlan plan;
+  if (!checkpoint.is_none()) {
+    plan.dir = checkpoint.cast<std::string>();
+    if (plan.dir.empty()) throw app::CheckpointError("checkpoint: an empty path was given; name a folder");
+    if (!scene_text.is_none()) {
+      plan.scene_text = scene_text.cast<std::string>();
+    } else {
+      plan.scene_file = scene_file.cast<std::string>();
+      plan.overrides = overrides;
+    }
+    plan.threads = threads.is_none() ? -1 : threads.cast<int>();
+  }
+  Trajectory trajectory = initial_trajectory(scene, guess, guess_t);
+  return run_solve(scene, std::move(trajectory), on_iteration, nullptr, plan, "");
+}
+
+/**
+ * pardel.resume: continues the interrupted solve whose checkpoint is DIR/checkpoint.json, as
+ * `pardel solve --resume DIR` does: the scene is read again from its recorded path with its
+ * recorded overrides, checked against the checkpoint (app::check_resumable; a checkpoint without
+ * the model's digest issues its warning as a UserWarning), and solved from the recorded state with
+ * the recorded threads unless `threads` is given. An interruption writes the checkpoint again into
+ * DIR; any other end removes it. The result dictionary also holds "coords", the model's.
+ */
+py::dict resume_checkpoint(const std::string& dir, const py::object& threads, const py::object& on_iteration) {
+  if (dir.empty()) throw app::CheckpointError("checkpoint: an empty path was given; name a folder");
+  const std::string checkpoint_path = (std::filesystem::path(dir) / app::checkpoint_file_name()).string();
+  const app::Checkpoint resumed = app::read_checkpoint(dir);
+  Scene scene = app::load_scene(resumed.scene_path, resumed.overrides, resolve_spec, bundled_model_names());
+  const std::string digest = app::model_digest(*scene.model, scene.model_path);
+  const std::string warning = app::check_resumable(resumed, checkpoint_path, scene, digest);
+  if (!warning.empty() && PyErr_WarnEx(PyExc_UserWarning, warning.c_str(), 1) != 0) throw py::error_already_set();
+  CheckpointPlan plan;
+  plan.dir = dir;
+  plan.scene_file = resumed.scene_path;
+  plan.overrides = resumed.overrides;
+  plan.threads = threads.is_none() ? resumed.threads : threads.cast<int>();
+  if (plan.threads >= 0) scene.options.threads = plan.threads;
+  py::dict result = run_solve(scene, Trajectory{}, on_iteration, &resumed.state, plan, checkpoint_path);
+  result["coords"] = scene_coords(scene);
+  return result;
 }
 
 /**
@@ -905,6 +1055,7 @@ PYBIND11_MODULE(_pardel, m) {
   static py::exception<InputError> input_error(m, "PardelError", PyExc_ValueError);
   static py::exception<SceneError> scene_error(m, "SceneError", input_error.ptr());
   static py::exception<ModelLoadError> model_error(m, "ModelError", input_error.ptr());
+  static py::exception<app::CheckpointError> checkpoint_error(m, "CheckpointError", input_error.ptr());
   g_model_warning = PyErr_NewExceptionWithDoc(
       "pardel.ModelWarning",
       "A warning of the generator about a model compiled from a .lag file (a W = d2L/dq'dq' singular "
@@ -919,6 +1070,8 @@ PYBIND11_MODULE(_pardel, m) {
       raise_message(scene_error, e.what());
     } catch (const ModelLoadError& e) {
       raise_message(model_error, e.what());
+    } catch (const app::CheckpointError& e) {
+      raise_message(checkpoint_error, e.what());
     } catch (const InputError& e) {
       raise_message(input_error, e.what());
     }
@@ -981,8 +1134,31 @@ PYBIND11_MODULE(_pardel, m) {
         return raising_interrupts([&] { return load_scene(path, overrides); });
       },
       py::arg("path"), py::arg("overrides"));
+  m.def(
+      "scene_text_from_arguments",
+      [](const std::string& model, const py::dict& arguments) {
+        return raising_interrupts([&] { return scene_text(model, arguments, true); });
+      },
+      py::arg("model"), py::arg("arguments"));
+  m.def(
+      "scene_from_text",
+      [](const std::string& text) {
+        return raising_interrupts([&] {
+          Scene scene = parse_generated_scene(text);
+          std::string error;
+          if (!scene.options.is_valid(&error)) throw InputError(error);
+          return scene;
+        });
+      },
+      py::arg("text"));
   m.def("solve_scene", &solve_scene, py::arg("scene"), py::arg("guess"), py::arg("guess_t"), py::arg("on_iteration"),
-        py::arg("threads"));
+        py::arg("threads"), py::arg("checkpoint"), py::arg("scene_text"), py::arg("scene_file"), py::arg("overrides"));
+  m.def(
+      "resume",
+      [](const std::string& path, const py::object& threads, const py::object& on_iteration) {
+        return raising_interrupts([&] { return resume_checkpoint(path, threads, on_iteration); });
+      },
+      py::arg("path"), py::arg("threads"), py::arg("on_iteration"));
   m.def(
       "run_sweep",
       [](const std::string& path, const std::vector<std::string>& overrides, int threads, const std::string& out) {

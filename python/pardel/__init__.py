@@ -54,7 +54,7 @@ if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
     os.environ["OMP_WAIT_POLICY"] = "passive"
 
 from . import _pardel  # noqa: E402
-from ._pardel import ModelError, ModelWarning, PardelError, SceneError  # noqa: E402
+from ._pardel import CheckpointError, ModelError, ModelWarning, PardelError, SceneError  # noqa: E402
 
 # The compiled core's exceptions, described for help().
 PardelError.__doc__ = ("A bad value given to pardel (a ValueError): the message starts with the function and names "
@@ -63,6 +63,10 @@ SceneError.__doc__ = ("A scene pardel's scene reader refuses (a PardelError): th
                       "FILE:LINE:COL: error: ..., or --set KEY=VALUE: error: ... for an override.")
 ModelError.__doc__ = ("A model that cannot be loaded (a PardelError): a malformed or irregular .lag (the generator's "
                       "FILE:LINE:COL: error: ... with its caret line), a failed compile, or a cache folder refused.")
+CheckpointError.__doc__ = ("A checkpoint that cannot be written or resumed (a PardelError): the message is "
+                           "`pardel solve --resume`'s FOLDER/checkpoint.json: error: ... (missing, truncated or "
+                           "corrupted, of another scene or model, not fitting the scene), or names a checkpoint "
+                           "folder that cannot be made.")
 
 # The version of project(pardel VERSION ...) in the top-level CMakeLists.txt, compiled into the core
 # (also what `pardel --version` prints and what pip records for the package).
@@ -79,8 +83,9 @@ if _INSTALLED_TOOLCHAIN:
     _pardel.set_loader_toolchain(**_INSTALLED_TOOLCHAIN)
 
 __all__ = [
-    "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError", "ModelWarning",
-    "model", "model_from_sympy", "models", "solve", "load_scene", "solve_scene", "check", "kernels", "lag_cache_dir",
+    "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError", "ModelWarning", "CheckpointError",
+    "Interrupted", "model", "model_from_sympy", "models", "solve", "resume", "load_scene", "solve_scene", "check",
+    "kernels", "lag_cache_dir",
     "sweep", "SweepResult", "SweepVariant", "SweepSolution", "solve_batch", "BatchResult",
 ]
 
@@ -286,6 +291,11 @@ class Scene:
 
     def __init__(self, core: _pardel.Scene) -> None:
         self._core = core
+        # What a checkpoint of its solve records: the scene file (absolute bytes) and overrides it
+        # was read with (load_scene), or the scene text pardel.solve made; None for neither.
+        self._file: Optional[bytes] = None
+        self._overrides: List[str] = []
+        self._text: Optional[str] = None
         self.info = core.info()
         self.model = self.info["model"].name
         self.N = self.info["N"]
@@ -298,7 +308,9 @@ def load_scene(path: PathArg, overrides: Sequence[str] = ()) -> Scene:
     """Reads a scene file; `overrides` are "key.path=value" strings, as `pardel solve --set` takes."""
     _check_path("pardel.load_scene", "path", path)
     overrides = _check_overrides("pardel.load_scene", "overrides", overrides)
-    return Scene(_pardel.load_scene(os.fsencode(path), overrides))  # bytes: a path need not be UTF-8
+    scene = Scene(_pardel.load_scene(os.fsencode(path), overrides))  # bytes: a path need not be UTF-8
+    scene._file, scene._overrides = os.path.abspath(os.fsencode(path)), list(overrides)
+    return scene
 
 
 class Result:
@@ -315,7 +327,8 @@ class Result:
     extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
     solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
     wall_seconds, model (the model's name), coords (its coordinate names), stopped_by_callback
-    (whether on_iteration stopped the solve), summary (the whole summary.json dictionary);
+    (whether on_iteration stopped the solve), checkpoint (the folder of the checkpoint this
+    interrupted solve wrote, or None), summary (the whole summary.json dictionary);
     converged (status == "converged") and coordinate(name). A Result pickles whole.
     """
 
@@ -346,6 +359,7 @@ class Result:
     wall_seconds: float
     model: str
     stopped_by_callback: bool
+    checkpoint: Optional[str]
     summary: Dict[str, Any]
 
     def __init__(self, raw: Dict[str, Any], model_coords: Sequence[str]) -> None:
@@ -379,6 +393,7 @@ class Result:
         self.wall_seconds = s["wall_seconds"]
         self.model = s["model"]
         self.stopped_by_callback = raw["stopped_by_callback"]
+        self.checkpoint = None
 
     @property
     def converged(self) -> bool:
@@ -399,6 +414,64 @@ class Result:
             _number_text(self.cost, "%.6g"), (self.point or {}).get("kind"))
 
     __str__ = __repr__
+
+
+class Interrupted(KeyboardInterrupt):
+    """A solve stopped by Ctrl-C (SIGINT) or by a KeyboardInterrupt raised in on_iteration: a
+    KeyboardInterrupt that carries what the solve had reached. result: the Result of the stopped
+    solve (status "interrupted" and its last iterate, or the status it had reached when the stop
+    came after it ended, e.g. during the point assessment of a converged solve); checkpoint: the
+    folder of the checkpoint it wrote (solve's or solve_scene's checkpoint argument, or resume's
+    folder), which pardel.resume continues, or None."""
+
+    result: "Result"
+    checkpoint: Optional[str]
+
+    def __init__(self, where: str, result: "Result", checkpoint: Optional[str]) -> None:
+        text = "%s: interrupted at iteration %d (status %s, residual %s); the last iterate is this exception's .result" % (
+            where, result.iterations, result.status, _number_text(result.residual, "%.3g"))
+        if checkpoint is not None:
+            text += "; checkpoint written to %s: continue with pardel.resume(%r)" % (checkpoint, checkpoint)
+        super().__init__(text)
+        self.result = result
+        self.checkpoint = checkpoint
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        return (_interrupted, (str(self), self.result, self.checkpoint))
+
+
+def _interrupted(text, result, checkpoint):
+    """Interrupted as pickled: its message, result and checkpoint."""
+    error = Interrupted.__new__(Interrupted)
+    KeyboardInterrupt.__init__(error, text)
+    error.result, error.checkpoint = result, checkpoint
+    return error
+
+
+def _finish(where, raw, coords, checkpoint):
+    """The Result of a solve of the compiled core (raw), or the exception that stopped it raised:
+    a KeyboardInterrupt as Interrupted carrying the result, any other as it was raised."""
+    result = Result(raw, coords)
+    result.checkpoint = checkpoint if raw["checkpoint_written"] else None
+    pending = raw["pending"]
+    if pending is None:
+        return result
+    if isinstance(pending, KeyboardInterrupt):
+        raise Interrupted(where, result, result.checkpoint) from pending
+    if raw["pending_trace"] is not None:
+        raise pending.with_traceback(raw["pending_trace"])
+    raise pending
+
+
+def _checkpoint_path(where, checkpoint):
+    """The checkpoint argument checked: None, or a folder path (str, bytes or os.PathLike)."""
+    if checkpoint is None:
+        return None
+    _check_path(where, "checkpoint", checkpoint)
+    path = os.fspath(checkpoint)
+    if path in ("", b""):
+        raise PardelError("%s: checkpoint must name a folder, got %r" % (where, path))
+    return path
 
 
 def _number_text(value, form):
@@ -610,13 +683,21 @@ def _guess_arrays(guess, where="pardel.solve_scene", name="guess"):
 
 
 def solve_scene(scene: Scene, guess: Guess = None, threads: Optional[int] = None,
-                on_iteration: Optional[OnIteration] = None) -> Result:
-    """Solves a scene (from load_scene) as `pardel solve` does, without writing files.
+                on_iteration: Optional[OnIteration] = None, checkpoint: Optional[PathArg] = None) -> Result:
+    """Solves a scene (from load_scene) as `pardel solve` does, without writing files other than
+    its checkpoint.
 
     guess: None (the scene's guess), an (M+1) x dim array or a previous Result (resampled to the
     scene's N when M differs). on_iteration(iteration, N, residual, action): called after each
-    recorded iteration; returning False stops the solve (status "interrupted"). Ctrl-C stops it
-    too and raises KeyboardInterrupt.
+    recorded iteration; returning False stops the solve (status "interrupted",
+    stopped_by_callback). Ctrl-C stops it too and raises pardel.Interrupted (a KeyboardInterrupt)
+    whose .result is the stopped solve's Result; an exception raised by on_iteration is raised as
+    it is.
+    checkpoint: a folder (made if missing). A solve that ends "interrupted" (Ctrl-C, on_iteration)
+    writes FOLDER/checkpoint.json there, the checkpoint of `pardel solve` recording the scene file,
+    its overrides and threads (Result.checkpoint and Interrupted.checkpoint name the folder), which
+    pardel.resume(FOLDER) and `pardel solve --resume FOLDER` continue; a solve that ends any other
+    way removes FOLDER/checkpoint.json.
     """
     where = "pardel.solve_scene"
     _check_scene(where, "scene", scene)
@@ -624,13 +705,17 @@ def solve_scene(scene: Scene, guess: Guess = None, threads: Optional[int] = None
     if threads is not None:
         threads = _check_option(where, "threads", threads)
     _check_callback(where, "on_iteration", on_iteration)
-    raw = _pardel.solve_scene(scene._core, q, t, on_iteration, threads)
-    return Result(raw, scene.info["model"].info()["coords"])
+    path = _checkpoint_path(where, checkpoint)
+    if path is not None and scene._text is None and scene._file is None:
+        raise PardelError("%s: checkpoint needs a scene from pardel.load_scene (a checkpoint records its file)" % where)
+    raw = _pardel.solve_scene(scene._core, q, t, on_iteration, threads, None if path is None else os.fsencode(path),
+                              scene._text if path is not None else None, scene._file, scene._overrides)
+    return _finish(where, raw, scene.info["model"].info()["coords"], path)
 
 
 def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLike] = None, T: Optional[float] = None,
           N: Optional[int] = None, *, guess: Guess = None, on_iteration: Optional[OnIteration] = None,
-          **options: Any) -> Result:
+          checkpoint: Optional[PathArg] = None, **options: Any) -> Result:
     """Solves one boundary-value problem.
 
     model: a bundled name, a .lag path, .lag text or a Model. q0, qN: boundary points (dim values:
@@ -644,14 +729,54 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
     vertices), clock, method, tol, rtol, max_iterations, damping, newton_substeps, newton_shift,
     linear_solver, device ("cpu" or "cuda": docs/gpu.md), threads, refine_start_N, refine_factor,
     clock_update_every, error_estimate (True/False), extrapolate (True/False); and history_every, refine_settle, divergence_factor of
-    pardel::Options. guess and on_iteration: as in solve_scene.
+    pardel::Options. guess and on_iteration: as in solve_scene; Ctrl-C raises pardel.Interrupted
+    (a KeyboardInterrupt) whose .result is the stopped solve's Result.
+    checkpoint: a folder (made if missing). A solve that ends "interrupted" (Ctrl-C, on_iteration)
+    writes there the scene of these arguments, FOLDER/scene.toml, and the checkpoint of `pardel
+    solve`, FOLDER/checkpoint.json, recording it; pardel.resume(FOLDER) (or `pardel solve --resume
+    FOLDER`) continues the solve to the iterates of an uninterrupted one. A solve that ends any other
+    way removes FOLDER/checkpoint.json. With a checkpoint, refine_settle needs refine_start_N.
     A wrong type raises TypeError, a missing argument too; unknown options and bad values raise
     PardelError (a ValueError); each names the argument.
     """
     arguments = _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options)
+    path = _checkpoint_path("pardel.solve", checkpoint)
     spec = _model_spec(model)
-    scene = Scene(_pardel.scene_from_arguments(os.fsencode(spec), arguments))
-    return solve_scene(scene, guess=guess, on_iteration=on_iteration)
+    if path is None:
+        scene = Scene(_pardel.scene_from_arguments(os.fsencode(spec), arguments))
+    else:  # the options all in the scene text, which the checkpoint records (a model's path absolute)
+        if spec.endswith(".lag") or "/" in spec:
+            spec = os.path.abspath(spec)
+        text = _pardel.scene_text_from_arguments(os.fsencode(spec), arguments)
+        scene = Scene(_pardel.scene_from_text(text))
+        scene._text = text
+    return solve_scene(scene, guess=guess, on_iteration=on_iteration, checkpoint=path)
+
+
+def resume(path: PathArg, *, threads: Optional[int] = None, on_iteration: Optional[OnIteration] = None) -> Result:
+    """Continues the interrupted solve whose checkpoint is PATH/checkpoint.json (written by
+    pardel.solve or pardel.solve_scene with checkpoint=PATH, or by `pardel solve` into its output
+    folder PATH), as `pardel solve --resume PATH` does: the recorded scene is read again with its
+    recorded overrides and the solve continues from the recorded state to the iterates, and the
+    Result, of the uninterrupted solve (wall times aside).
+
+    threads: the solve's threads (None: those recorded). on_iteration: as in solve_scene. An
+    interruption writes the checkpoint into PATH again (Ctrl-C raises pardel.Interrupted carrying
+    the Result); any other end removes PATH/checkpoint.json, so a finished solve is not resumed
+    twice. A checkpoint that is missing, truncated, corrupted or edited, whose scene file or model
+    changed since, or whose state does not fit its scene raises pardel.CheckpointError (a
+    PardelError) naming PATH/checkpoint.json and the problem; a recorded scene that cannot be read
+    raises pardel.SceneError.
+    """
+    where = "pardel.resume"
+    path = _checkpoint_path(where, path)
+    if path is None:
+        raise TypeError("%s: path must be a path (str or os.PathLike), got None" % where)
+    if threads is not None:
+        threads = _check_option(where, "threads", threads)
+    _check_callback(where, "on_iteration", on_iteration)
+    raw = _pardel.resume(os.fsencode(path), threads, on_iteration)
+    return _finish(where, raw, raw["coords"], path)
 
 
 class BatchResult:

@@ -281,15 +281,6 @@ struct SolveArgs {
   std::string certificate = "inertia";  ///< "full": also the seed's certificate (pardel check's)
 };
 
-/** FNV-1a hash of a file's bytes (how a checkpoint recognizes its scene). */
-std::string file_hash(const std::string& path) {
-  try {
-    return fnv1a_hex(pardel::read_regular_file(path, pardel::FileLimits::scene, "scene file"));
-  } catch (const pardel::FileError& error) {
-    throw SceneError(error.what());
-  }
-}
-
 /** What a solve was doing, for the message of an out-of-memory failure. */
 std::string g_solve_context = "solving";
 
@@ -319,31 +310,8 @@ int run_solve_unguarded(const SolveArgs& args) {
   // Taken before the solve: what a checkpoint of this solve records of its model.
   const std::string digest = model_digest(*scene.model, scene.model_path);
   if (resume) {
-    const std::string hash = file_hash(scene_path);
-    if (hash != resumed.scene_hash)
-      throw CheckpointError(fmt::format("{}: error: the scene file {} changed since the checkpoint was written "
-                                        "(hash {} then, {} now); the checkpoint cannot be resumed",
-                                        checkpoint_path, scene_path, resumed.scene_hash, hash));
-    if (resumed.model != scene.model->name || resumed.dim != scene.model->dim)
-      throw CheckpointError(fmt::format("{}: error: the checkpoint is of model {} (dim {}), the scene now resolves to "
-                                        "{} (dim {})",
-                                        checkpoint_path, resumed.model, resumed.dim, scene.model->name,
-                                        scene.model->dim));
-    // The scene may name the same model whose .lag (or, compiled in, whose kernels) changed.
-    if (resumed.model_digest.empty()) {
-      if (pardel::mpi::world_rank() == 0)
-        std::fprintf(stderr, "%s: warning: written by an earlier pardel without the model's digest; a change of "
-                             "model %s since then cannot be detected\n",
-                     checkpoint_path.c_str(), scene.model->name);
-    } else if (digest != resumed.model_digest) {
-      throw CheckpointError(fmt::format(
-          "{}: error: the model {} changed since the checkpoint was written ({}; digest {} then, {} now); the "
-          "checkpoint cannot be resumed",
-          checkpoint_path, scene.model->name,
-          scene.model_path.empty() ? "its kernels compiled into this pardel differ"
-                                   : "its file " + scene_model_source(scene) + " was edited",
-          resumed.model_digest, digest));
-    }
+    const std::string warning = check_resumable(resumed, checkpoint_path, scene, digest);
+    if (!warning.empty() && pardel::mpi::world_rank() == 0) std::fprintf(stderr, "%s\n", warning.c_str());
   }
   const int threads = args.threads >= 0 ? args.threads : resume ? resumed.threads : -1;
   if (threads >= 0) scene.options.threads = threads;
@@ -406,21 +374,9 @@ int run_solve_unguarded(const SolveArgs& args) {
   const SolveOutputs outputs =
       write_solve_outputs(scene, summary, trajectory, out_dir, extra, args.certificate == "full");
   const pardel_model& model = *scene.model;
-  if (summary.termination == Termination::interrupted && summary.state.valid) {
-    Checkpoint checkpoint;
-    checkpoint.scene_path = resume ? scene_path : fs::absolute(scene_path, ec).lexically_normal().string();
-    checkpoint.scene_hash = file_hash(checkpoint.scene_path);
-    checkpoint.overrides = overrides;
-    checkpoint.threads = threads;
-    checkpoint.model = model.name;
-    checkpoint.dim = model.dim;
-    checkpoint.model_digest = digest;
-    checkpoint.state = summary.state;
-    write_checkpoint(out_dir, checkpoint);
-  } else {
-    // A finished solve leaves no checkpoint behind that could resume it again.
-    fs::remove(fs::path(out_dir) / checkpoint_file_name(), ec);
-  }
+  update_checkpoint(out_dir, summary,
+                    resume ? scene_path : fs::absolute(scene_path, ec).lexically_normal().string(), overrides,
+                    threads, model, digest);
   if (!args.no_plot && outputs.have_trajectory) run_plot_script(config::plot_script, out_dir, "plots");
   if (!args.quiet) {
     print_solve_report(scene, summary, trajectory, outputs.certificate, out_dir,

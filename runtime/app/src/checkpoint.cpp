@@ -12,6 +12,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "pardel/app/outputs.hpp"
 #include "pardel/app/trajectory_io.hpp"
 #include "pardel/regular_file.hpp"
 
@@ -395,6 +396,63 @@ Checkpoint read_checkpoint(const std::string& dir) {
 
 void write_checkpoint(const std::string& dir, const Checkpoint& checkpoint) {
   write_file_atomic((std::filesystem::path(dir) / checkpoint_file_name()).string(), checkpoint_json(checkpoint));
+}
+
+std::string scene_file_hash(const std::string& path) {
+  try {
+    return fnv1a_hex(pardel::read_regular_file(path, pardel::FileLimits::scene, "scene file"));
+  } catch (const pardel::FileError& error) {
+    throw SceneError(error.what());
+  }
+}
+
+std::string check_resumable(const Checkpoint& checkpoint, const std::string& checkpoint_path, const Scene& scene,
+                            const std::string& digest) {
+  const std::string hash = scene_file_hash(checkpoint.scene_path);
+  if (hash != checkpoint.scene_hash)
+    throw CheckpointError(fmt::format("{}: error: the scene file {} changed since the checkpoint was written "
+                                      "(hash {} then, {} now); the checkpoint cannot be resumed",
+                                      checkpoint_path, checkpoint.scene_path, checkpoint.scene_hash, hash));
+  if (checkpoint.model != scene.model->name || checkpoint.dim != scene.model->dim)
+    throw CheckpointError(fmt::format("{}: error: the checkpoint is of model {} (dim {}), the scene now resolves to "
+                                      "{} (dim {})",
+                                      checkpoint_path, checkpoint.model, checkpoint.dim, scene.model->name,
+                                      scene.model->dim));
+  // The scene may name the same model whose .lag (or, compiled in, whose kernels) changed.
+  if (checkpoint.model_digest.empty())
+    return fmt::format("{}: warning: written by an earlier pardel without the model's digest; a change of model {} "
+                       "since then cannot be detected",
+                       checkpoint_path, scene.model->name);
+  if (digest != checkpoint.model_digest)
+    throw CheckpointError(fmt::format(
+        "{}: error: the model {} changed since the checkpoint was written ({}; digest {} then, {} now); the "
+        "checkpoint cannot be resumed",
+        checkpoint_path, scene.model->name,
+        scene.model_path.empty() ? "its kernels compiled into this pardel differ"
+                                 : "its file " + scene_model_source(scene) + " was edited",
+        checkpoint.model_digest, digest));
+  return "";
+}
+
+bool update_checkpoint(const std::string& dir, const Summary& summary, const std::string& scene_path,
+                       const std::vector<std::string>& overrides, int threads, const pardel_model& model,
+                       const std::string& digest) {
+  if (summary.termination == Termination::interrupted && summary.state.valid) {
+    Checkpoint checkpoint;
+    checkpoint.scene_path = scene_path;
+    checkpoint.scene_hash = scene_file_hash(scene_path);
+    checkpoint.overrides = overrides;
+    checkpoint.threads = threads;
+    checkpoint.model = model.name;
+    checkpoint.dim = model.dim;
+    checkpoint.model_digest = digest;
+    checkpoint.state = summary.state;
+    write_checkpoint(dir, checkpoint);
+    return true;
+  }
+  std::error_code ec;
+  std::filesystem::remove(std::filesystem::path(dir) / checkpoint_file_name(), ec);
+  return false;
 }
 
 }  // namespace pardel::app

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "pardel/app/scene.hpp"
 #include "pardel/kernel_abi.h"
 #include "pardel/pardel.hpp"
 
@@ -70,6 +71,32 @@ Checkpoint read_checkpoint(const std::string& dir);
 
 /** Writes DIR/checkpoint.json atomically (temporary file + rename); throws std::runtime_error. */
 void write_checkpoint(const std::string& dir, const Checkpoint& checkpoint);
+
+/** FNV-1a 64 of a scene file's bytes (how a checkpoint recognizes its scene), read as users' files
+ *  are read (pardel/regular_file.hpp); a file that cannot be read throws SceneError. */
+std::string scene_file_hash(const std::string& path);
+
+/**
+ * Checks that `checkpoint`, read from `checkpoint_path`, continues `scene`, loaded again from the
+ * checkpoint's scene path and overrides: the scene file unchanged since (its hash), the same model
+ * name and dim, and the same model (`digest`: model_digest of the scene's model). Throws
+ * CheckpointError "CHECKPOINT_PATH: error: ..." naming what differs. Returns a warning (without a
+ * line break) for a checkpoint written without the model's digest, whose model cannot be checked;
+ * "" otherwise.
+ */
+std::string check_resumable(const Checkpoint& checkpoint, const std::string& checkpoint_path, const Scene& scene,
+                            const std::string& digest);
+
+/**
+ * After a solve that may write checkpoints into `dir`: a solve that ended `interrupted` with its
+ * state (Summary::state) writes DIR/checkpoint.json recording `scene_path` (the scene file, whose
+ * hash it takes now), `overrides`, `threads`, the model and `digest`, and returns true; a solve
+ * that ended any other way removes DIR/checkpoint.json, so that a finished solve cannot be resumed
+ * again, and returns false. Throws std::runtime_error when the file cannot be written.
+ */
+bool update_checkpoint(const std::string& dir, const Summary& summary, const std::string& scene_path,
+                       const std::vector<std::string>& overrides, int threads, const pardel_model& model,
+                       const std::string& digest);
 
 }  // namespace pardel::app
 
