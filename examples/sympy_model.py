@@ -43,7 +43,7 @@ q0, qN, T, N = [0.3, -0.2], [0.5, 0.4], 0.5, 100
 results = {d: pardel.solve(model, q0=q0, qN=qN, T=T, N=N, discretization=d) for d in model.discretizations}
 
 # The independent truth: SymPy's Euler-Lagrange equations d/dt dL/dq' = dL/dq, solved for the
-# accelerations and integrated by SciPy's collocation solver to a tolerance far below the
+# accelerations and integrated by SciPy's collocation solver to a tolerance (1e-10) below the
 # discretization errors.
 Ls = L.subs(defaults)
 equations = sp.euler_equations(Ls, [a, b], t)
