@@ -571,6 +571,10 @@ py::dict run_solve(Scene& scene, Trajectory trajectory, const py::object& on_ite
   }
   // Taken before the solve: what a checkpoint of this solve records of its model.
   const std::string digest = plan.dir.empty() ? "" : app::model_digest(*scene.model, scene.model_path);
+  // The runtime continues no adaptive solve from a state: a checkpoint of one could not be resumed.
+  if (!plan.dir.empty() && scene.options.accuracy > 0 && !resume_from)
+    throw app::CheckpointError("checkpoint: an adaptive solve (accuracy) cannot be resumed from a state, so it takes "
+                               "no checkpoint; solve without checkpoint");
   if (!plan.dir.empty()) make_checkpoint_folder(plan.dir);
 
   std::unique_ptr<py::error_already_set> pending;

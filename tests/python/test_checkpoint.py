@@ -269,6 +269,37 @@ def test_checkpoint_of_another_model(spring_lag, tmp_path):
     assert "was edited" in message
 
 
+def fnv1a(data):
+    """FNV-1a 64 of bytes as 16 hex digits (the checksum of a checkpoint's body)."""
+    h = 14695981039346656037
+    for byte in data:
+        h = ((h ^ byte) * 1099511628211) % 2**64
+    return "%016x" % h
+
+
+def compact(body):
+    return json.dumps(body, separators=(",", ":"), sort_keys=True, ensure_ascii=False).encode()
+
+
+def test_checkpoint_whose_state_does_not_fit_its_scene(written):
+    # A well-formed checkpoint (its checksum made again) whose state is of another method than its scene's.
+    path = written / "checkpoint.json"
+    checkpoint = json.loads(path.read_text())
+    assert fnv1a(compact(checkpoint["body"])) == checkpoint["checksum"]
+    assert checkpoint["body"]["state"]["method"] == "jacobi-newton"
+    checkpoint["body"]["state"]["method"] = "newton"
+    checkpoint["checksum"] = fnv1a(compact(checkpoint["body"]))
+    path.write_text(json.dumps(checkpoint))
+    assert ": error: resume: " in resume_error(written)
+    assert (written / "checkpoint.json").is_file()  # refused, not removed
+
+
+def test_an_adaptive_solve_takes_no_checkpoint(tmp_path):
+    with pytest.raises(pardel.CheckpointError, match=r"an adaptive solve \(accuracy\) cannot be resumed"):
+        pardel.solve("fuel_nav", q0=[0, 0], qN=[6, 5], T=30, accuracy=1e-6, checkpoint=tmp_path / "ck")
+    assert not (tmp_path / "ck").exists()
+
+
 def test_checkpoint_folder_that_cannot_be_made(spring, tmp_path):
     (tmp_path / "file").write_text("x")
     with pytest.raises(pardel.CheckpointError, match="cannot create the checkpoint folder"):
