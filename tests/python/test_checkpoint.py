@@ -208,6 +208,38 @@ def test_the_command_line_resumes_a_checkpoint_of_python(tmp_path):
     assert not (folder / "checkpoint.json").exists()
 
 
+@pytest.mark.skipif(not os.environ.get("PARDEL_CLI"), reason="the command line is not built")
+def test_python_resumes_a_checkpoint_of_the_command_line(tmp_path):
+    # fuel_nav by jacobi-newton on N = 1000 to tol 1e-14: minutes unless stopped.
+    scene_file = tmp_path / "fuel.toml"
+    scene_file.write_text('model = "fuel_nav"\n[grid]\nT = 30.0\nN = 1000\n[boundary]\nq0 = [0, 0]\n'
+                          'qN = [6, 5]\n[solver]\nmethod = "jacobi-newton"\ntol = 1e-14\nthreads = 1\n'
+                          'error_estimate = false\n')
+    out = tmp_path / "out"
+    cli = subprocess.Popen([os.environ["PARDEL_CLI"], "solve", str(scene_file), "--out", str(out), "--quiet",
+                            "--no-plot"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        while not out.exists() and cli.poll() is None:  # the folder is made just before the solve starts
+            threading.Event().wait(0.05)
+        threading.Event().wait(0.5)
+        cli.send_signal(signal.SIGINT)
+        _, stderr = cli.communicate(timeout=100)
+    finally:
+        if cli.poll() is None:
+            cli.kill()
+            cli.wait()
+    assert cli.returncode == 6, stderr  # interrupted, checkpoint written
+    stopped_at = json.loads((out / "summary.json").read_text())["iterations"]
+    k = stopped_at + 20
+    resumed = pardel.resume(out, on_iteration=stop_at(k))
+    straight = pardel.solve_scene(pardel.load_scene(scene_file), on_iteration=stop_at(k))
+    assert resumed.status == straight.status == "interrupted"
+    assert resumed.iterations == straight.iterations >= k
+    np.testing.assert_array_equal(resumed.q, straight.q)
+    np.testing.assert_array_equal(resumed.history["residual"], straight.history["residual"])
+    assert resumed.checkpoint == str(out) and (out / "checkpoint.json").is_file()
+
+
 # --- hostile checkpoints -------------------------------------------------------------------------
 
 @pytest.fixture
