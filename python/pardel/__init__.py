@@ -464,13 +464,14 @@ def _finish(where, raw, coords, checkpoint):
 
 
 def _checkpoint_path(where, checkpoint):
-    """The checkpoint argument checked: None, or a folder path (str, bytes or os.PathLike)."""
+    """The checkpoint argument checked: None, or a folder path (str, bytes or os.PathLike), as a str
+    (os.fsdecode: a path that is not UTF-8 keeps its bytes through os.fsencode)."""
     if checkpoint is None:
         return None
     _check_path(where, "checkpoint", checkpoint)
-    path = os.fspath(checkpoint)
-    if path in ("", b""):
-        raise PardelError("%s: checkpoint must name a folder, got %r" % (where, path))
+    path = os.fsdecode(os.fspath(checkpoint))
+    if path == "":
+        raise PardelError("%s: checkpoint must name a folder, got ''" % where)
     return path
 
 
@@ -699,7 +700,11 @@ def solve_scene(scene: Scene, guess: Guess = None, threads: Optional[int] = None
     pardel.resume(FOLDER) and `pardel solve --resume FOLDER` continue; a solve that ends any other
     way removes FOLDER/checkpoint.json.
     """
-    where = "pardel.solve_scene"
+    return _solve_scene("pardel.solve_scene", scene, guess, threads, on_iteration, checkpoint)
+
+
+def _solve_scene(where, scene, guess, threads, on_iteration, checkpoint):
+    """solve_scene's work; `where` names the function called in messages."""
     _check_scene(where, "scene", scene)
     q, t = _guess_arrays(guess, where)
     if threads is not None:
@@ -750,7 +755,7 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
         text = _pardel.scene_text_from_arguments(os.fsencode(spec), arguments)
         scene = Scene(_pardel.scene_from_text(text))
         scene._text = text
-    return solve_scene(scene, guess=guess, on_iteration=on_iteration, checkpoint=path)
+    return _solve_scene("pardel.solve", scene, guess, None, on_iteration, path)
 
 
 def resume(path: PathArg, *, threads: Optional[int] = None, on_iteration: Optional[OnIteration] = None) -> Result:

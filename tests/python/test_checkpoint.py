@@ -129,7 +129,8 @@ def test_keyboard_interrupt_from_the_callback_carries_the_partial_result(spring,
     assert error.result.status == "interrupted" and error.result.iterations == 12
     assert not error.result.stopped_by_callback
     assert error.result.q.shape == (N + 1, 2) and error.checkpoint == str(folder) == error.result.checkpoint
-    assert "iteration 12" in str(error) and "pardel.resume" in str(error)
+    assert str(error).startswith("pardel.solve: interrupted at iteration 12 (status interrupted, residual ")
+    assert str(error).endswith("continue with pardel.resume(%r)" % str(folder))
     # the last iterate is the twelfth iterate of the same solve stopped there by the callback
     reference = pardel.solve(spring, method="jacobi-newton", on_iteration=stop_at(12), **PROBLEM)
     np.testing.assert_array_equal(error.result.q, reference.q)
