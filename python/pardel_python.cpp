@@ -8,7 +8,8 @@
  * compiles run with the GIL released and stop at Ctrl-C (solves through Options::on_iteration);
  * results come back as NumPy arrays and summary.json's dictionary (as text).
  * Sweeps are pardel::app's (`pardel sweep` without its command line): the variants run on a worker
- * thread while the calling thread watches for Ctrl-C.
+ * thread while the calling thread watches for Ctrl-C. Checkpoints are pardel::app's too (the files,
+ * checks and messages of `pardel solve` and `pardel solve --resume`).
  */
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
