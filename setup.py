@@ -94,7 +94,8 @@ class CMakeBuild(build_ext):
     def configure(self, cmake, build_dir):
         os.makedirs(build_dir, exist_ok=True)
         configure = [cmake, "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
-                     "-DPARDEL_BUILD_TESTS=OFF", "-DPARDEL_BUILD_BENCHMARKS=OFF", "-DPARDEL_BUILD_PYTHON=ON",
+                     "-DPARDEL_CLI_ONLY=OFF", "-DPARDEL_BUILD_TESTS=OFF", "-DPARDEL_BUILD_BENCHMARKS=OFF",
+                     "-DPARDEL_BUILD_PYTHON=ON",
                      "-DPython3_EXECUTABLE=" + sys.executable]
         if not os.path.exists(os.path.join(build_dir, "CMakeCache.txt")) and shutil.which("ninja"):
             configure += ["-G", "Ninja"]

@@ -227,6 +227,10 @@ class Method_ {
 std::unique_ptr<Method_> make_jacobi(const Options& options, int dim);
 std::unique_ptr<Method_> make_jacobi_newton(const Options& options, int dim);
 std::unique_ptr<Method_> make_newton(const Options& options, int dim);
+/** Newton's method for one block size D of dispatch_dim; each size is its own translation unit
+ *  (runtime/src/newton_block_size.cpp.in), so that the sizes compile in parallel. */
+template <int D>
+std::unique_ptr<Method_> make_newton_sized(const Options& options);
 std::unique_ptr<Method_> make_hybrid(const Options& options, int dim);
 std::unique_ptr<Method_> make_stationary_newton(const Options& options, int dim);
 
@@ -271,7 +275,8 @@ inline double component_target(const Options& options, const Context& ctx, int i
 int resolve_threads(int requested);
 
 /** Calls f with an integral constant D in {1,2,4,6} equal to dim (the sizes of the bundled models),
- *  or Eigen::Dynamic (-1) for other sizes; each fixed size is one more instantiation to compile. */
+ *  or Eigen::Dynamic (-1) for other sizes; each fixed size is one more instantiation to compile.
+ *  runtime/CMakeLists.txt lists the same sizes for Newton's per-size sources. */
 template <class F>
 auto dispatch_dim(int dim, F&& f) {
   switch (dim) {

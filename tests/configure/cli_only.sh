@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Checks README's first command's configuration (-DPARDEL_CLI_ONLY=ON) without building it: the
+# `pardel` target compiles no CUDA, MPI, test, benchmark or Python source and does not run the
+# generator over the bundled models; the folder keeps no cached MPI or CUDA switch of its own, so
+# that -DPARDEL_CLI_ONLY=OFF on the same folder configures the full build again, with the MPI parts
+# wherever the full configuration of this machine has them.
+# Usage: cli_only.sh SOURCE_DIR FULL_BUILD_DIR WORK_DIR
+set -euo pipefail
+src=$1 full=$2 work=$3
+rm -rf "$work"
+fail() { echo "cli_only.sh: $*" >&2; exit 1; }
+
+cmake -S "$src" -B "$work" -G Ninja -DCMAKE_BUILD_TYPE=Release -DPARDEL_CLI_ONLY=ON > "$work.log" 2>&1 ||
+  { cat "$work.log"; fail "configure with -DPARDEL_CLI_ONLY=ON failed"; }
+commands=$(ninja -C "$work" -t commands pardel)
+[ -n "$commands" ] || fail "the target pardel has no build commands"
+grep -q -- "src/newton.cpp" <<<"$commands" || fail "the runtime is not part of the target pardel"
+grep -q -- "generated/fuel_nav.cpp" <<<"$commands" || fail "the committed fuel_nav kernel is not compiled"
+for unwanted in nvcc '\.cu ' decomposition.cpp '/tests/' '/benchmarks/' pardel_python.cpp 'pardel-gen .*\.lag'; do
+  if grep -qE -- "$unwanted" <<<"$commands"; then
+    grep -E -- "$unwanted" <<<"$commands" | head -3 >&2
+    fail "the target pardel builds or runs '$unwanted' under -DPARDEL_CLI_ONLY=ON"
+  fi
+done
+for key in PARDEL_WITH_MPI PARDEL_WITH_CUDA PARDEL_REGENERATE; do
+  if grep -q "^$key:" "$work/CMakeCache.txt"; then fail "-DPARDEL_CLI_ONLY=ON cached $key"; fi
+done
+
+# The same folder back to a full configuration: its switches are those of the full build folder.
+cmake -S "$src" -B "$work" -DPARDEL_CLI_ONLY=OFF > "$work.log" 2>&1 ||
+  { cat "$work.log"; fail "configure with -DPARDEL_CLI_ONLY=OFF failed"; }
+for key in PARDEL_WITH_MPI PARDEL_WITH_CUDA PARDEL_REGENERATE PARDEL_BUILD_TESTS PARDEL_BUILD_PYTHON; do
+  want=$(grep "^$key:" "$full/CMakeCache.txt" | cut -d= -f2)
+  got=$(grep "^$key:" "$work/CMakeCache.txt" | cut -d= -f2)
+  [ "$want" = "$got" ] || fail "$key is '$got' after -DPARDEL_CLI_ONLY=OFF, '$want' in the full build folder"
+done
+targets=$(ninja -C "$work" -t targets all)
+grep -q "^test_cli_pardel:" <<<"$targets" || fail "no test targets after -DPARDEL_CLI_ONLY=OFF"
+rm -rf "$work" "$work.log"
+echo "cli_only.sh: ok"
