@@ -1,5 +1,5 @@
 """pardel from Python: solve the discrete Euler-Lagrange boundary-value problems of variational
-integrators from NumPy arrays, with the bundled models, .lag files or .lag text.
+integrators from NumPy arrays, with the bundled models, .lag files or .lag text. Example::
 
     import pardel
     r = pardel.solve("fuel_nav", q0=[0, 0], qN=[6, 5], T=30, N=200)
