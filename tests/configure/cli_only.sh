@@ -16,11 +16,16 @@ commands=$(ninja -C "$work" -t commands pardel)
 [ -n "$commands" ] || fail "the target pardel has no build commands"
 grep -q -- "src/newton.cpp" <<<"$commands" || fail "the runtime is not part of the target pardel"
 grep -q -- "generated/fuel_nav.cpp" <<<"$commands" || fail "the committed fuel_nav kernel is not compiled"
-for unwanted in nvcc '\.cu ' decomposition.cpp '/tests/' '/benchmarks/' pardel_python.cpp 'pardel-gen .*\.lag'; do
-  if grep -qE -- "$unwanted" <<<"$commands"; then
-    grep -E -- "$unwanted" <<<"$commands" | head -3 >&2
-    fail "the target pardel builds or runs '$unwanted' under -DPARDEL_CLI_ONLY=ON"
+unwanted() {  # grep's mode (-E or -F), then the pattern
+  if grep -q "$1" -- "$2" <<<"$commands"; then
+    grep "$1" -- "$2" <<<"$commands" | head -3 >&2
+    fail "the target pardel builds or runs '$2' under -DPARDEL_CLI_ONLY=ON"
   fi
+}
+unwanted -E 'nvcc|\.cu( |$)'
+unwanted -E 'pardel-gen .*\.lag'
+for source in src/mpi/decomposition.cpp pardel_python.cpp "-c $src/tests/" "-c $src/tools/benchmarks/"; do
+  unwanted -F "$source"
 done
 for key in PARDEL_WITH_MPI PARDEL_WITH_CUDA PARDEL_REGENERATE; do
   if grep -q "^$key:" "$work/CMakeCache.txt"; then fail "-DPARDEL_CLI_ONLY=ON cached $key"; fi
