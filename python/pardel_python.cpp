@@ -331,7 +331,8 @@ std::string without_generated_position(const std::string& message, const std::st
  *  outside kArguments' scene keys are written as scene keys too (solver.history_every,
  *  solver.divergence_factor, solver.refine.settle), so that the text alone gives the solve's
  *  options (what a checkpoint records); solver.refine.settle needs solver.refine.start_N. */
-std::string scene_text(const std::string& model_spec, const py::dict& arguments, bool complete) {
+std::string scene_text(const std::string& model_spec, const py::dict& arguments, bool complete,
+                       const ModelHandle* loaded = nullptr) {
   const std::vector<std::string> names = argument_names();
   for (const auto& item : arguments) {
     const std::string key = py::str(item.first).cast<std::string>();
@@ -345,7 +346,7 @@ std::string scene_text(const std::string& model_spec, const py::dict& arguments,
       throw InputError(message);
     }
   }
-  const ModelHandle handle = load_model(model_spec);
+  const ModelHandle handle = loaded ? *loaded : load_model(model_spec);
   const pardel_model& model = *handle.model;
 
   toml::table root;
@@ -420,19 +421,27 @@ std::string scene_text(const std::string& model_spec, const py::dict& arguments,
 }
 
 /** Parses scene text made by scene_text (named "pardel.solve" in messages, without positions in
- *  the generated text). */
-Scene parse_generated_scene(const std::string& text) {
+ *  the generated text); `loaded`, when given, is the model the text names as `model_spec`. */
+Scene parse_generated_scene(const std::string& text, const std::string& model_spec = {},
+                            const ModelHandle* loaded = nullptr) {
   const std::string source = "pardel.solve";
+  const app::ModelResolver resolve = [&](const std::string& spec) {
+    return loaded && spec == model_spec ? loaded->model : resolve_spec(spec);
+  };
   try {
-    return app::parse_scene(text, source, {}, resolve_spec, bundled_model_names());
+    return app::parse_scene(text, source, {}, resolve, bundled_model_names());
   } catch (const SceneError& error) {
     throw SceneError(without_generated_position(error.what(), source));
   }
 }
 
-/** A scene from pardel.solve's arguments (scene_text, then the options outside the scene schema). */
-Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments) {
-  Scene scene = parse_generated_scene(scene_text(model_spec, arguments, false));
+/** A scene from pardel.solve's arguments (scene_text, then the options outside the scene schema).
+ *  `loaded`: the model a pardel.Model holds for model_spec, used instead of resolving the spec again
+ *  (for a .lag path that is reading, hashing and checking the file and its cached library: about
+ *  0.5 ms a call). */
+Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments,
+                           const ModelHandle* loaded = nullptr) {
+  Scene scene = parse_generated_scene(scene_text(model_spec, arguments, false, loaded), model_spec, loaded);
   // Options outside the scene schema.
   auto number = [&arguments](const char* name, auto* target) {
     if (arguments.contains(name) && !arguments[name].is_none())
@@ -1129,10 +1138,10 @@ PYBIND11_MODULE(_pardel, m) {
       py::arg("spec"));
   m.def(
       "scene_from_arguments",
-      [](const std::string& model, const py::dict& arguments) {
-        return raising_interrupts([&] { return scene_from_arguments(model, arguments); });
+      [](const std::string& model, const py::dict& arguments, const ModelHandle* loaded) {
+        return raising_interrupts([&] { return scene_from_arguments(model, arguments, loaded); });
       },
-      py::arg("model"), py::arg("arguments"));
+      py::arg("model"), py::arg("arguments"), py::arg("loaded") = nullptr);
   m.def(
       "load_scene",
       [](const std::string& path, const std::vector<std::string>& overrides) {

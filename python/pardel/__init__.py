@@ -748,7 +748,9 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
     path = _checkpoint_path("pardel.solve", checkpoint)
     spec = _model_spec(model)
     if path is None:
-        scene = Scene(_pardel.scene_from_arguments(os.fsencode(spec), arguments))
+        # a Model solves with the model it holds (its .lag file is not read again)
+        loaded = model._handle if isinstance(model, Model) else None
+        scene = Scene(_pardel.scene_from_arguments(os.fsencode(spec), arguments, loaded))
     else:  # the options all in the scene text, which the checkpoint records (a model's path absolute)
         if spec.endswith(".lag") or "/" in spec:
             spec = os.path.abspath(spec)
@@ -921,7 +923,7 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
     else:
         base_params = None
     arguments = _solve_arguments(m, q0[0], qN[0], T, N, None, None, dict(options, params=base_params, threads=threads), where)
-    scene = Scene(_pardel.scene_from_arguments(os.fsencode(m.spec), arguments))
+    scene = Scene(_pardel.scene_from_arguments(os.fsencode(m.spec), arguments, m._handle))
     if guess is not None:
         guess = batch_of(guess, 2)
     if named:  # the scene's params (defaults and scalars), with the per-problem columns given

@@ -32,6 +32,26 @@ def test_lag_text_and_file_give_the_same_model(spring_lag, tmp_path):
     np.testing.assert_array_equal(r1.q, r2.q)
 
 
+def test_a_model_object_solves_with_its_compiled_model_and_a_path_reads_the_file_again(spring_lag, tmp_path):
+    path = tmp_path / "spring.lag"
+    path.write_text(spring_lag)
+    model = pardel.model(str(path))
+    before = pardel.solve(model, q0=[0, 0], qN=[1, 2], T=1, N=10)
+    # The file now holds another model (stiffer x spring) and then a malformed one: the Model keeps
+    # solving the one it compiled; the path and a new Model see the file as it is now.
+    path.write_text(spring_lag.replace("param a = 1.5", "param a = 2.5"))
+    np.testing.assert_array_equal(pardel.solve(model, q0=[0, 0], qN=[1, 2], T=1, N=10).q, before.q)
+    batch = pardel.solve_batch(model, q0=[[0, 0]], qN=[[1, 2]], T=1, N=10)
+    np.testing.assert_array_equal(batch[0].q, before.q)
+    stiffer = pardel.solve(str(path), q0=[0, 0], qN=[1, 2], T=1, N=10)
+    assert pardel.model(str(path)).params["a"] == 2.5
+    assert np.max(np.abs(stiffer.q[:, 0] - before.q[:, 0])) > 1e-2
+    path.write_text("model broken\norder 1\ncoords x\nL = x'^2 +\n")
+    np.testing.assert_array_equal(pardel.solve(model, q0=[0, 0], qN=[1, 2], T=1, N=10).q, before.q)
+    with pytest.raises(pardel.ModelError, match="spring.lag"):
+        pardel.solve(str(path), q0=[0, 0], qN=[1, 2], T=1, N=10)
+
+
 def test_kernels_match_finite_differences(spring_lag):
     q0, q1, h = [0.3, -0.2], [0.5, 0.1], 0.1
     k = pardel.kernels(spring_lag, "midpoint", h, 0.0, h, q0, q1, params={"a": 2.0})
