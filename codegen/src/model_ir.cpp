@@ -1,11 +1,12 @@
 /**
  * @file model_ir.cpp
  * Builds the IR of a model (discrete Lagrangian, its first and second derivatives, CSE per
- * kernel variant) and writes it, and its operation counts, as JSON or text.
+ * kernel variant) and writes it, and its operation counts, as JSON (nlohmann-json) or text.
  */
 #include "pardel_codegen/model_ir.hpp"
 
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -30,6 +31,7 @@ const std::vector<std::string>& kernel_variants() {
 namespace {
 
 using GiNaC::ex;
+using Json = nlohmann::ordered_json;  // keys in the order they are set
 
 std::vector<KernelInput> kernel_inputs(const KernelSymbols& s) {
   std::vector<KernelInput> in;
@@ -98,50 +100,76 @@ std::size_t utf8_length(const std::string& s, std::size_t i) {
   return 0;
 }
 
-/** A JSON string literal of `s`. A byte that is not part of valid UTF-8 (a file name in another
- *  encoding) is written as the lone surrogate U+DC00 + byte, as Python's surrogateescape decodes
- *  it, so that render.py gets the original bytes back (`encode("utf-8", "surrogateescape")`). */
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (std::size_t i = 0; i < s.size();) {
-    const unsigned char c = static_cast<unsigned char>(s[i]);
+/*
+ * Bytes that are not UTF-8. A file name in another encoding (the IR's "source") is written with
+ * each byte that is not part of valid UTF-8 as the lone surrogate U+DC00 + byte, as Python's
+ * surrogateescape decodes it, so that render.py gets the original bytes back
+ * (`encode("utf-8", "surrogateescape")`). nlohmann-json writes valid UTF-8 only, so such a byte
+ * enters the JSON value as a mark, NUL and the byte's two hex digits, which the dump writes as
+ * `\u0000` and those digits; dump() turns that escape into `\udcXX`. A NUL of the text itself is
+ * marked too (as `00`), so that every `\u0000` in the dump is a mark.
+ */
+Json text(const std::string& s) {
+  bool plain = true;
+  for (std::size_t i = 0; i < s.size() && plain;) {
     const std::size_t n = utf8_length(s, i);
-    char buf[8];
-    if (n == 0) {
-      std::snprintf(buf, sizeof buf, "\\u%04x", 0xdc00u + c);
-      out += buf;
-    } else if (c == '"') {
-      out += "\\\"";
-    } else if (c == '\\') {
-      out += "\\\\";
-    } else if (c < 0x20 || c == 0x7f) {
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out.append(s, i, n);
-    }
-    i += n == 0 ? 1 : n;
+    plain = n != 0 && s[i] != '\0';
+    i += n;
   }
-  return out + "\"";
+  if (plain) return s;
+  std::string marked;
+  for (std::size_t i = 0; i < s.size();) {
+    const std::size_t n = utf8_length(s, i);
+    if (n == 0 || s[i] == '\0') {
+      char hex[3];
+      std::snprintf(hex, sizeof hex, "%02x", static_cast<unsigned char>(s[i]));
+      marked += '\0';
+      marked += hex;
+      i += 1;
+    } else {
+      marked.append(s, i, n);
+      i += n;
+    }
+  }
+  return marked;
 }
 
-void write_kernel(std::ostringstream& j, const KernelIR& k, const std::string& indent) {
-  j << indent << "{\"variant\": " << json_string(k.variant) << ", \"function\": " << json_string(k.function)
-    << ",\n" << indent << " \"ops_before_cse\": " << k.code.ops_before << ", \"ops_after_cse\": " << k.code.ops_after
-    << ",\n" << indent << " \"unused_inputs\": [";
-  for (std::size_t i = 0; i < k.unused_inputs.size(); ++i) j << (i ? ", " : "") << json_string(k.unused_inputs[i]);
-  j << "],\n" << indent << " \"temporaries\": [";
-  for (std::size_t i = 0; i < k.code.temporaries.size(); ++i) {
-    j << (i ? ",\n" : "\n") << indent << "  {\"name\": " << json_string(k.code.temporaries[i].name)
-      << ", \"expr\": " << json_string(k.code.temporaries[i].expr) << "}";
+/** JSON text of `j` (indented by 2, UTF-8) with the marks of text() as their escapes. */
+std::string dump(const Json& j) {
+  const std::string out = j.dump(2);
+  std::string unmarked;
+  unmarked.reserve(out.size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (out[i] != '\\') {
+      unmarked += out[i];
+    } else if (out.compare(i, 6, "\\u0000") == 0 && i + 8 <= out.size()) {
+      const std::string digits = out.substr(i + 6, 2);  // "00": a NUL of the text itself
+      unmarked += digits == "00" ? std::string("\\u0000") : "\\udc" + digits;
+      i += 7;
+    } else {  // any other escape: its backslash and the character after it
+      unmarked += out[i];
+      if (i + 1 < out.size()) unmarked += out[++i];
+    }
   }
-  j << "],\n" << indent << " \"outputs\": [";
-  for (std::size_t i = 0; i < k.code.outputs.size(); ++i) {
-    j << (i ? ",\n" : "\n") << indent << "  {\"target\": " << json_string(k.code.outputs[i].name)
-      << ", \"expr\": " << json_string(k.code.outputs[i].expr) << "}";
-  }
-  j << "]}";
+  return unmarked + "\n";
 }
+
+Json kernel_json(const KernelIR& k) {
+  Json j;
+  j["variant"] = text(k.variant);
+  j["function"] = text(k.function);
+  j["ops_before_cse"] = k.code.ops_before;
+  j["ops_after_cse"] = k.code.ops_after;
+  j["unused_inputs"] = Json::array();
+  for (const std::string& name : k.unused_inputs) j["unused_inputs"].push_back(text(name));
+  j["temporaries"] = Json::array();
+  for (const auto& t : k.code.temporaries) j["temporaries"].push_back(Json{{"name", text(t.name)}, {"expr", text(t.expr)}});
+  j["outputs"] = Json::array();
+  for (const auto& o : k.code.outputs) j["outputs"].push_back(Json{{"target", text(o.name)}, {"expr", text(o.expr)}});
+  return j;
+}
+
+Json optional_kernel_json(const std::optional<KernelIR>& k) { return k ? kernel_json(*k) : Json(nullptr); }
 
 }  // namespace
 
@@ -274,73 +302,43 @@ ModelIR build_model_ir(const LagModel& model, const std::string& source_name, co
 
 std::string ir_to_json(const ModelIR& ir) {
   const LagModel& m = ir.model;
-  std::ostringstream j;
-  j << "{\n";
-  j << "  \"format\": \"pardel-ir\",\n";
-  j << "  \"format_version\": 1,\n";
-  j << "  \"generator\": " << json_string(std::string("pardel-gen ") + generator_version()) << ",\n";
-  j << "  \"generator_version\": " << json_string(generator_version()) << ",\n";
-  j << "  \"abi_version\": " << PARDEL_KERNEL_ABI_VERSION << ",\n";
-  j << "  \"model\": {\n";
-  j << "    \"name\": " << json_string(m.name) << ",\n";
-  j << "    \"source\": " << json_string(ir.source_name) << ",\n";
-  j << "    \"order\": " << m.order << ",\n";
-  j << "    \"ncoords\": " << m.ncoords() << ",\n";
-  j << "    \"dim\": " << m.dim() << ",\n";
-  j << "    \"coords\": [";
-  for (std::size_t i = 0; i < m.coords.size(); ++i) j << (i ? ", " : "") << json_string(m.coords[i]);
-  j << "],\n    \"params\": [";
-  for (std::size_t i = 0; i < m.params.size(); ++i) {
-    j << (i ? ", " : "") << "{\"name\": " << json_string(m.params[i].name)
-      << ", \"default\": " << json_string(c_double_literal(m.params[i].default_value)) << "}";
+  Json j;
+  j["format"] = "pardel-ir";
+  j["format_version"] = 1;
+  j["generator"] = text(std::string("pardel-gen ") + generator_version());
+  j["generator_version"] = text(generator_version());
+  j["abi_version"] = PARDEL_KERNEL_ABI_VERSION;
+  Json& model = j["model"];
+  model["name"] = text(m.name);
+  model["source"] = text(ir.source_name);
+  model["order"] = m.order;
+  model["ncoords"] = m.ncoords();
+  model["dim"] = m.dim();
+  model["coords"] = Json::array();
+  for (const std::string& c : m.coords) model["coords"].push_back(text(c));
+  model["params"] = Json::array();
+  for (const auto& p : m.params) {
+    model["params"].push_back(Json{{"name", text(p.name)}, {"default", text(c_double_literal(p.default_value))}});
   }
-  j << "],\n";
-  j << "    \"time_dependent\": " << (m.time_dependent() ? "true" : "false") << ",\n";
-  j << "    \"cost\": ";
-  if (m.cost_name.empty()) {
-    j << "null\n";
-  } else {
-    j << "{\"name\": " << json_string(m.cost_name) << ", \"kind\": " << json_string(m.cost_kind) << "}\n";
+  model["time_dependent"] = m.time_dependent();
+  model["cost"] = m.cost_name.empty() ? Json(nullptr) : Json{{"name", text(m.cost_name)}, {"kind", text(m.cost_kind)}};
+  j["discretizations"] = Json::array();
+  for (const DiscretizationIR& d : ir.discretizations) {
+    Json disc;
+    disc["name"] = text(d.spec.name);
+    disc["ident"] = text(d.spec.ident);
+    disc["consistency_order"] = d.spec.consistency_order;
+    disc["interior_dim"] = d.interior_dim;
+    disc["kernels"] = Json::array();
+    for (const KernelIR& k : d.kernels) disc["kernels"].push_back(kernel_json(k));
+    disc["extended_kernel"] = optional_kernel_json(d.extended);
+    disc["extended_full_kernel"] = optional_kernel_json(d.extended_full);
+    disc["interval_kernels"] = Json::array();
+    for (const KernelIR& k : d.interval_kernels) disc["interval_kernels"].push_back(kernel_json(k));
+    j["discretizations"].push_back(std::move(disc));
   }
-  j << "  },\n";
-  j << "  \"discretizations\": [";
-  for (std::size_t i = 0; i < ir.discretizations.size(); ++i) {
-    const DiscretizationIR& d = ir.discretizations[i];
-    j << (i ? ",\n" : "\n") << "    {\"name\": " << json_string(d.spec.name) << ", \"ident\": " << json_string(d.spec.ident)
-      << ", \"consistency_order\": " << d.spec.consistency_order << ", \"interior_dim\": " << d.interior_dim
-      << ",\n     \"kernels\": [\n";
-    for (std::size_t k = 0; k < d.kernels.size(); ++k) {
-      write_kernel(j, d.kernels[k], "      ");
-      j << (k + 1 < d.kernels.size() ? ",\n" : "\n");
-    }
-    j << "     ]";
-    for (const auto& [key, kernel] : {std::pair{"extended_kernel", &d.extended}, {"extended_full_kernel", &d.extended_full}}) {
-      j << ",\n     \"" << key << "\": ";
-      if (*kernel) {
-        j << "\n";
-        write_kernel(j, **kernel, "      ");
-      } else {
-        j << "null";
-      }
-    }
-    j << ",\n     \"interval_kernels\": [";
-    for (std::size_t k = 0; k < d.interval_kernels.size(); ++k) {
-      j << (k ? ",\n" : "\n");
-      write_kernel(j, d.interval_kernels[k], "      ");
-    }
-    j << "]}";
-  }
-  j << "],\n";
-  j << "  \"clock\": ";
-  if (ir.clock) {
-    j << "\n";
-    write_kernel(j, *ir.clock, "    ");
-    j << "\n";
-  } else {
-    j << "null\n";
-  }
-  j << "}\n";
-  return j.str();
+  j["clock"] = optional_kernel_json(ir.clock);
+  return dump(j);
 }
 
 std::string stats_table(const ModelIR& ir) {
@@ -366,17 +364,18 @@ std::string stats_table(const ModelIR& ir) {
 }
 
 std::string stats_json(const ModelIR& ir) {
-  std::ostringstream j;
-  j << "{\"model\": " << json_string(ir.model.name) << ", \"source\": " << json_string(ir.source_name)
-    << ", \"op_convention\": \"each binary + - * /, each unary minus and each function call is one operation\""
-    << ", \"kernels\": [";
-  bool first = true;
+  Json j;
+  j["model"] = text(ir.model.name);
+  j["source"] = text(ir.source_name);
+  j["op_convention"] = "each binary + - * /, each unary minus and each function call is one operation";
+  j["kernels"] = Json::array();
   auto row = [&](const std::string& disc, const KernelIR& k) {
-    j << (first ? "\n" : ",\n") << "  {\"discretization\": " << json_string(disc) << ", \"variant\": "
-      << json_string(k.variant) << ", \"function\": " << json_string(k.function)
-      << ", \"ops_before_cse\": " << k.code.ops_before << ", \"ops_after_cse\": " << k.code.ops_after
-      << ", \"temporaries\": " << k.code.temporaries.size() << "}";
-    first = false;
+    j["kernels"].push_back(Json{{"discretization", text(disc)},
+                                {"variant", text(k.variant)},
+                                {"function", text(k.function)},
+                                {"ops_before_cse", k.code.ops_before},
+                                {"ops_after_cse", k.code.ops_after},
+                                {"temporaries", k.code.temporaries.size()}});
   };
   for (const DiscretizationIR& d : ir.discretizations) {
     for (const KernelIR& k : d.kernels) {
@@ -385,8 +384,7 @@ std::string stats_json(const ModelIR& ir) {
     for (const KernelIR& k : d.interval_kernels) row(d.spec.name, k);
   }
   if (ir.clock) row("", *ir.clock);
-  j << "\n]}\n";
-  return j.str();
+  return dump(j);
 }
 
 namespace {
