@@ -1,7 +1,9 @@
 // Tests of the pardel-gen command and the render script as a flow: exit codes, diagnostics on
-// stderr, no partial output on error, byte-identical output across runs, banners, --stats.
+// stderr, no partial output on error, byte-identical output across runs, banners, --stats, and the
+// IR's free text (the source name) read back by Python's json module and by nlohmann-json.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -9,8 +11,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -24,6 +28,36 @@ std::string read_file(const std::string& path) {
 bool exists(const std::string& path) {
   struct stat st;
   return ::stat(path.c_str(), &st) == 0;
+}
+
+/** `bytes` as lowercase hex digits, two per byte. */
+std::string hex(const std::string& bytes) {
+  std::string out;
+  char buf[3];
+  for (unsigned char c : bytes) {
+    std::snprintf(buf, sizeof buf, "%02x", c);
+    out += buf;
+  }
+  return out;
+}
+
+/** The C string literal render.py writes for `bytes`: '"' and '\\' escaped, printable ASCII but
+ *  '?' as is, every other byte as three octal digits. */
+std::string c_literal(const std::string& bytes) {
+  std::string out = "\"";
+  char buf[8];
+  for (unsigned char c : bytes) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c >= 0x20 && c < 0x7f && c != '?') {
+      out += static_cast<char>(c);
+    } else {
+      std::snprintf(buf, sizeof buf, "\\%03o", c);
+      out += buf;
+    }
+  }
+  return out + "\"";
 }
 
 /** A scratch folder of its own for each test. */
@@ -40,6 +74,34 @@ class PardelGen : public ::testing::Test {
   int run(const std::string& command) {
     int status = std::system(command.c_str());
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  /** Runs `argv` without a shell, so that its arguments may hold any byte but NUL, with stdout
+   *  and stderr into the scratch folder; returns its exit status. */
+  int run_argv(const std::vector<std::string>& argv) {
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      const int out = ::open((dir_ + "/stdout").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+      const int err = ::open((dir_ + "/stderr").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+      if (out < 0 || err < 0 || ::dup2(out, 1) < 0 || ::dup2(err, 2) < 0) ::_exit(127);
+      std::vector<char*> args;
+      for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      ::execv(args[0], args.data());
+      ::_exit(127);
+    }
+    int status = 0;
+    if (pid < 0 || ::waitpid(pid, &status, 0) != pid) return -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  /** Whether Python's json module reads the IR at `ir` with model.source equal to `bytes` (its
+   *  lone surrogates taken back to bytes as render.py does, with surrogateescape). */
+  bool python_reads_source(const std::string& ir, const std::string& bytes) {
+    const std::string script =
+        "import json, sys\n"
+        "with open(sys.argv[1], encoding=\"utf-8\") as f:\n"
+        "    source = json.load(f)[\"model\"][\"source\"]\n"
+        "sys.exit(0 if source.encode(\"utf-8\", \"surrogateescape\").hex() == sys.argv[2] else 3)\n";
+    return run_argv({PARDEL_PYTHON_PATH, "-c", script, ir, hex(bytes)}) == 0;
   }
   int gen(const std::string& args) {
     return run(std::string(PARDEL_GEN_PATH) + " " + args + " > '" + dir_ + "/stdout' 2> '" + dir_ + "/stderr'");
@@ -167,6 +229,42 @@ TEST_F(PardelGen, RenderWritesHeaderAndSourceDeterministically) {
   EXPECT_NE(read_file(dir_ + "/a/cgtest_order2.hpp").find("#include \"pardel/kernel_abi.h\""), std::string::npos);
   EXPECT_NE(read_file(dir_ + "/a/cgtest_order2.cpp").find("extern \"C\" const pardel_model cgtest_order2_model"),
             std::string::npos);
+}
+
+// The source name is the IR's only free text (.lag names are C identifiers): every character JSON
+// escapes, every control character, DEL and UTF-8 of 2, 3 and 4 bytes survive the IR, read back by
+// Python's json module and by nlohmann-json, and reach the rendered model's source string.
+TEST_F(PardelGen, IrKeepsEveryJsonSpecialCharacterOfTheSourceName) {
+  std::string name = "dir/\"quoted\" back\\slash/";
+  for (char c = 1; c < 0x20; ++c) name += c;
+  name += "\x7f caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x98\x80 \\u0000 \\n/m.lag";
+  const std::string ir = dir_ + "/m.json";
+  ASSERT_EQ(run_argv({PARDEL_GEN_PATH, model("cgtest_order2"), "-o", ir, "--source-name", name}), 0)
+      << read_file(dir_ + "/stderr");
+  EXPECT_TRUE(python_reads_source(ir, name)) << read_file(dir_ + "/stderr");
+  const nlohmann::json j = nlohmann::json::parse(read_file(ir), nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << "nlohmann-json cannot read the IR";
+  EXPECT_EQ(j["model"]["source"].get<std::string>(), name);
+  EXPECT_EQ(j["model"]["name"].get<std::string>(), "cgtest_order2");
+  ASSERT_EQ(run_argv({PARDEL_PYTHON_PATH, PARDEL_RENDER_SCRIPT_PATH, ir, "--out-dir", dir_ + "/o"}), 0)
+      << read_file(dir_ + "/stderr");
+  EXPECT_NE(read_file(dir_ + "/o/cgtest_order2.cpp").find("    " + c_literal(name) + ",\n"), std::string::npos)
+      << c_literal(name);
+}
+
+// A source name that is not UTF-8 (a file name in another encoding): its bytes are written as the
+// lone surrogates of Python's surrogateescape and come back unchanged in the rendered source string.
+TEST_F(PardelGen, IrKeepsTheBytesOfASourceNameThatIsNotUtf8) {
+  const std::string name = "mod\xe8le/\xff\xc3(\xed\xa0\x80)\xf4\x90\x80\x80 ok\xc3\xa9.lag";
+  const std::string ir = dir_ + "/m.json";
+  ASSERT_EQ(run_argv({PARDEL_GEN_PATH, model("cgtest_order2"), "-o", ir, "--source-name", name}), 0)
+      << read_file(dir_ + "/stderr");
+  EXPECT_NE(read_file(ir).find("\"source\": \"mod\\udce8le/\\udcff\\udcc3("), std::string::npos) << read_file(ir);
+  EXPECT_TRUE(python_reads_source(ir, name)) << read_file(dir_ + "/stderr");
+  ASSERT_EQ(run_argv({PARDEL_PYTHON_PATH, PARDEL_RENDER_SCRIPT_PATH, ir, "--out-dir", dir_ + "/o"}), 0)
+      << read_file(dir_ + "/stderr");
+  EXPECT_NE(read_file(dir_ + "/o/cgtest_order2.cpp").find("    " + c_literal(name) + ",\n"), std::string::npos)
+      << c_literal(name);
 }
 
 TEST_F(PardelGen, RenderRejectsAMalformedIr) {
