@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Checks README's first command's configuration (-DPARDEL_CLI_ONLY=ON) without building it: the
 # `pardel` target compiles no CUDA, MPI, test, benchmark or Python source and does not run the
-# generator over the bundled models; the folder keeps no cached MPI or CUDA switch of its own, so
+# generator over the bundled models, but builds the generator the model loader runs on .lag files; the folder keeps no cached MPI or CUDA switch of its own, so
 # that -DPARDEL_CLI_ONLY=OFF on the same folder configures the full build again, with the MPI parts
 # wherever the full configuration of this machine has them.
 # Usage: cli_only.sh SOURCE_DIR FULL_BUILD_DIR WORK_DIR
@@ -16,6 +16,8 @@ commands=$(ninja -C "$work" -t commands pardel)
 [ -n "$commands" ] || fail "the target pardel has no build commands"
 grep -q -- "src/newton.cpp" <<<"$commands" || fail "the runtime is not part of the target pardel"
 grep -q -- "generated/fuel_nav.cpp" <<<"$commands" || fail "the committed fuel_nav kernel is not compiled"
+grep -q -- "codegen/pardel_gen.cpp" <<<"$commands" ||
+  fail "pardel-gen, which the model loader runs on a scene's own .lag file, is not built"
 unwanted() {  # grep's mode (-E or -F), then the pattern
   if grep -q "$1" -- "$2" <<<"$commands"; then
     grep "$1" -- "$2" <<<"$commands" | head -3 >&2
