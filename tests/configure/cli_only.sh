@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Checks README's first command's configuration (-DPARDEL_CLI_ONLY=ON) without building it: the
 # `pardel` target compiles no CUDA, MPI, test, benchmark or Python source and does not run the
-# generator over the bundled models, but builds the generator the model loader runs on .lag files; the folder keeps no cached MPI or CUDA switch of its own, so
-# that -DPARDEL_CLI_ONLY=OFF on the same folder configures the full build again, with the MPI parts
-# wherever the full configuration of this machine has them.
+# generator over the bundled models, but builds the generator that the model loader runs on .lag
+# files; the folder keeps no cached MPI or CUDA switch of its own, so that -DPARDEL_CLI_ONLY=OFF on
+# the same folder configures the full build again, with the MPI parts wherever the full
+# configuration of this machine has them.
 # Usage: cli_only.sh SOURCE_DIR FULL_BUILD_DIR WORK_DIR
 set -euo pipefail
 src=$1 full=$2 work=$3
