@@ -3,12 +3,12 @@
 # `pardel` target compiles no CUDA, MPI, test, benchmark or Python source and does not run the
 # generator over the bundled models, but builds the generator that the model loader runs on .lag
 # files; the folder keeps no cached MPI or CUDA switch of its own, so that -DPARDEL_CLI_ONLY=OFF on
-# the same folder configures the full build again, with the MPI parts wherever the full
-# configuration of this machine has them.
-# Usage: cli_only.sh SOURCE_DIR FULL_BUILD_DIR WORK_DIR
+# the same folder configures the full build again, with the switches of a default configuration
+# on this machine.
+# Usage: cli_only.sh SOURCE_DIR WORK_DIR
 set -euo pipefail
-src=$1 full=$2 work=$3
-rm -rf "$work"
+src=$1 work=$2
+rm -rf "$work" "$work.default"
 fail() { echo "cli_only.sh: $*" >&2; exit 1; }
 
 cmake -S "$src" -B "$work" -G Ninja -DCMAKE_BUILD_TYPE=Release -DPARDEL_CLI_ONLY=ON > "$work.log" 2>&1 ||
@@ -34,15 +34,18 @@ for key in PARDEL_WITH_MPI PARDEL_WITH_CUDA PARDEL_REGENERATE; do
   if grep -q "^$key:" "$work/CMakeCache.txt"; then fail "-DPARDEL_CLI_ONLY=ON cached $key"; fi
 done
 
-# The same folder back to a full configuration: its switches are those of the full build folder.
+# The same folder back to a full configuration: its switches are those of a folder configured
+# without PARDEL_CLI_ONLY (what this machine detects: MPI, CUDA, GiNaC, pybind11).
 cmake -S "$src" -B "$work" -DPARDEL_CLI_ONLY=OFF > "$work.log" 2>&1 ||
   { cat "$work.log"; fail "configure with -DPARDEL_CLI_ONLY=OFF failed"; }
+cmake -S "$src" -B "$work.default" -G Ninja -DCMAKE_BUILD_TYPE=Release > "$work.log" 2>&1 ||
+  { cat "$work.log"; fail "the default configuration failed"; }
 for key in PARDEL_WITH_MPI PARDEL_WITH_CUDA PARDEL_REGENERATE PARDEL_BUILD_TESTS PARDEL_BUILD_PYTHON; do
-  want=$(grep "^$key:" "$full/CMakeCache.txt" | cut -d= -f2)
+  want=$(grep "^$key:" "$work.default/CMakeCache.txt" | cut -d= -f2)
   got=$(grep "^$key:" "$work/CMakeCache.txt" | cut -d= -f2)
-  [ "$want" = "$got" ] || fail "$key is '$got' after -DPARDEL_CLI_ONLY=OFF, '$want' in the full build folder"
+  [ "$want" = "$got" ] || fail "$key is '$got' after -DPARDEL_CLI_ONLY=OFF, '$want' in a default configuration"
 done
 targets=$(ninja -C "$work" -t targets all)
 grep -q "^test_cli_pardel:" <<<"$targets" || fail "no test targets after -DPARDEL_CLI_ONLY=OFF"
-rm -rf "$work" "$work.log"
+rm -rf "$work" "$work.default" "$work.log"
 echo "cli_only.sh: ok"

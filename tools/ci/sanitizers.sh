@@ -67,13 +67,15 @@ cmake --build "$build_dir" -j "$jobs" --target "${available[@]}"
 built=$(date +%s)
 
 # The ctest tests whose program was built (ctest would report the others as not built); the Python
-# module's tests and the package test (labels python, package) need targets this job does not build.
+# module's tests, the package test and the HTML reference (labels python, package, docs) need
+# targets this job does not build, and the configuration test (label configure) runs no compiled
+# code of pardel's.
 tests=$(ctest --test-dir "$build_dir" --show-only=json-v1 | /usr/bin/python3 -c '
 import json, os, sys
 info = json.load(sys.stdin)
 picked = [str(i + 1) for i, t in enumerate(info["tests"])
           if t.get("command") and os.path.exists(t["command"][0])
-          and not any(p["name"] == "LABELS" and {"sanitizer_slow", "python", "package"} & set(p["value"])
+          and not any(p["name"] == "LABELS" and {"sanitizer_slow", "python", "package", "docs", "configure"} & set(p["value"])
                       for p in t.get("properties", []))]
 print(",".join(picked))')
 if [ -z "$tests" ]; then
