@@ -703,28 +703,78 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
   return run_solve(scene, std::move(trajectory), on_iteration, nullptr, plan, "");
 }
 
+/** pardel.resume's solver options as `pardel solve --resume DIR --set solver.KEY=VALUE` overrides
+ *  (their scene keys from kArguments; history_every, divergence_factor and refine_settle as the
+ *  scene keys a checkpoint records). An option of the problem (T, N, q0, params, ...) is refused:
+ *  a warm start keeps the recorded problem and changes how it is solved. */
+std::vector<std::string> warm_start_overrides(const py::dict& options) {
+  static const std::vector<std::pair<std::string, std::string>> recorded = {
+      {"history_every", "solver.history_every"},
+      {"divergence_factor", "solver.divergence_factor"},
+      {"refine_settle", "solver.refine.settle"}};
+  std::vector<std::string> names, out;
+  for (const auto& a : kArguments)
+    if (a.first != "threads") names.push_back(a.first);
+  for (const auto& item : options) {
+    const std::string name = py::str(item.first).cast<std::string>();
+    if (item.second.is_none()) continue;
+    std::string key;
+    for (const auto& a : kArguments)
+      if (a.first == name && name != "threads") key = a.second;
+    for (const auto& r : recorded)
+      if (r.first == name) key = r.second;
+    if (key.empty()) {
+      std::string message = fmt::format("unknown option '{}'", name);
+      const std::string suggestion = app::nearest_name(name, names);
+      if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
+      throw InputError(message);
+    }
+    if (key.rfind("solver.", 0) != 0)
+      throw InputError(fmt::format("{}: changes the problem (scene key {}); only solver options may change a "
+                                   "resumed solve (a warm start from its iterate)",
+                                   name, key));
+    toml::table value;
+    if ((name == "error_estimate" || name == "extrapolate") && py::isinstance<py::bool_>(item.second))
+      value.insert_or_assign("v", item.second.cast<bool>());
+    else
+      insert(value, "v", item.second, name);
+    std::ostringstream text;
+    text << value["v"];
+    out.push_back(key + "=" + text.str());
+  }
+  return out;
+}
+
 /**
  * pardel.resume: continues the interrupted solve whose checkpoint is DIR/checkpoint.json, as
  * `pardel solve --resume DIR` does: the scene is read again from its recorded path with its
  * recorded overrides, checked against the checkpoint (app::check_resumable; a checkpoint without
  * the model's digest issues its warning as a UserWarning), and solved from the recorded state with
- * the recorded threads unless `threads` is given. An interruption writes the checkpoint again into
- * DIR; any other end removes it. The result dictionary also holds "coords", the model's.
+ * the recorded threads unless `threads` is given. Solver `options` (pardel.solve's names) make it a
+ * warm start from the recorded iterate with those options, as `--resume DIR --set solver.KEY=VALUE`
+ * does; the checkpoint an interruption writes then records them too. An interruption writes the
+ * checkpoint again into DIR; any other end removes it. The result dictionary also holds "coords",
+ * the model's.
  */
-py::dict resume_checkpoint(const std::string& dir, const py::object& threads, const py::object& on_iteration) {
+py::dict resume_checkpoint(const std::string& dir, const py::object& threads, const py::object& on_iteration,
+                           const py::dict& options) {
   if (dir.empty()) throw app::CheckpointError("checkpoint: an empty path was given; name a folder");
+  const std::vector<std::string> warm = warm_start_overrides(options);
   const std::string checkpoint_path = (std::filesystem::path(dir) / app::checkpoint_file_name()).string();
   const app::Checkpoint resumed = app::read_checkpoint(dir);
-  Scene scene = app::load_scene(resumed.scene_path, resumed.overrides, resolve_spec, bundled_model_names());
+  std::vector<std::string> overrides = resumed.overrides;
+  overrides.insert(overrides.end(), warm.begin(), warm.end());
+  Scene scene = app::load_scene(resumed.scene_path, overrides, resolve_spec, bundled_model_names());
   const std::string digest = app::model_digest(*scene.model, scene.model_path);
   const std::string warning = app::check_resumable(resumed, checkpoint_path, scene, digest);
   if (!warning.empty() && PyErr_WarnEx(PyExc_UserWarning, warning.c_str(), 1) != 0) throw py::error_already_set();
   CheckpointPlan plan;
   plan.dir = dir;
   plan.scene_file = resumed.scene_path;
-  plan.overrides = resumed.overrides;
+  plan.overrides = overrides;
   plan.threads = threads.is_none() ? resumed.threads : threads.cast<int>();
   if (plan.threads >= 0) scene.options.threads = plan.threads;
+  scene.options.warm_start = !warm.empty();
   py::dict result = run_solve(scene, Trajectory{}, on_iteration, &resumed.state, plan, checkpoint_path);
   result["coords"] = scene_coords(scene);
   return result;
@@ -1169,10 +1219,10 @@ PYBIND11_MODULE(_pardel, m) {
         py::arg("threads"), py::arg("checkpoint"), py::arg("scene_text"), py::arg("scene_file"), py::arg("overrides"));
   m.def(
       "resume",
-      [](const std::string& path, const py::object& threads, const py::object& on_iteration) {
-        return raising_interrupts([&] { return resume_checkpoint(path, threads, on_iteration); });
+      [](const std::string& path, const py::object& threads, const py::object& on_iteration, const py::dict& options) {
+        return raising_interrupts([&] { return resume_checkpoint(path, threads, on_iteration, options); });
       },
-      py::arg("path"), py::arg("threads"), py::arg("on_iteration"));
+      py::arg("path"), py::arg("threads"), py::arg("on_iteration"), py::arg("options") = py::dict());
   m.def(
       "run_sweep",
       [](const std::string& path, const std::vector<std::string>& overrides, int threads, const std::string& out) {

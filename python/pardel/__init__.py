@@ -760,15 +760,20 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
     return _solve_scene("pardel.solve", scene, guess, None, on_iteration, path)
 
 
-def resume(path: PathArg, *, threads: Optional[int] = None, on_iteration: Optional[OnIteration] = None) -> Result:
+def resume(path: PathArg, *, threads: Optional[int] = None, on_iteration: Optional[OnIteration] = None,
+           **options: Any) -> Result:
     """Continues the interrupted solve whose checkpoint is PATH/checkpoint.json (written by
     pardel.solve or pardel.solve_scene with checkpoint=PATH, or by `pardel solve` into its output
     folder PATH), as `pardel solve --resume PATH` does: the recorded scene is read again with its
     recorded overrides and the solve continues from the recorded state to the iterates, and the
     Result, of the uninterrupted solve (wall times aside).
 
-    threads: the solve's threads (None: those recorded). on_iteration: as in solve_scene. An
-    interruption writes the checkpoint into PATH again (Ctrl-C raises pardel.Interrupted carrying
+    threads: the solve's threads (None: those recorded). on_iteration: as in solve_scene. Solver
+    options of pardel.solve (method, tol, rtol, max_iterations, linear_solver, ...) make it a warm
+    start instead, as `pardel solve --resume PATH --set solver.KEY=VALUE` does: the recorded
+    problem solved from the recorded iterate with those options (another method, a tighter
+    tolerance), the checkpoint of a new interruption recording them; an option of the problem (T,
+    N, q0, params, ...) raises PardelError. An interruption writes the checkpoint into PATH again (Ctrl-C raises pardel.Interrupted carrying
     the Result); any other end removes PATH/checkpoint.json, so a finished solve is not resumed
     twice. A checkpoint that is missing, truncated, corrupted or edited, whose scene file or model
     changed since, or whose state does not fit its scene raises pardel.CheckpointError (a
@@ -782,7 +787,7 @@ def resume(path: PathArg, *, threads: Optional[int] = None, on_iteration: Option
     if threads is not None:
         threads = _check_option(where, "threads", threads)
     _check_callback(where, "on_iteration", on_iteration)
-    raw = _pardel.resume(os.fsencode(path), threads, on_iteration)
+    raw = _pardel.resume(os.fsencode(path), threads, on_iteration, _checked_options(where, options))
     return _finish(where, raw, raw["coords"], path)
 
 
@@ -960,6 +965,14 @@ def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options, where="p
         raise PardelError("%s: T must be > 0, got %s" % (where, _shown(T)))
     _guess_arrays(guess, where)
     _check_callback(where, "on_iteration", on_iteration)
+    arguments.update(_checked_options(where, options))
+    return arguments
+
+
+def _checked_options(where, options):
+    """Keyword options of pardel.solve checked (types, NaN, the runtime's option bounds) as plain
+    values; None values left out, unknown names left to the core."""
+    arguments = {}
     for name, value in options.items():
         if value is None:
             continue

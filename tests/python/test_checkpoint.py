@@ -2,12 +2,14 @@
 pardel.solve_scene(..., checkpoint=FOLDER) write `pardel solve`'s checkpoint when a solve is
 interrupted, pardel.resume(FOLDER) continues it to the iterates of an uninterrupted solve (checked
 bit for bit, and against the exact solution of the discrete recursion), `pardel solve --resume`
-continues it too, and the partial result of an interrupted solve is the .result of
-pardel.Interrupted. Damaged, foreign and mismatched checkpoints raise pardel.CheckpointError
+continues it too, solver options given to pardel.resume make it the command line's warm start
+(`--resume --set solver.KEY=VALUE`), and the partial result of an interrupted solve is the .result
+of pardel.Interrupted. Damaged, foreign and mismatched checkpoints raise pardel.CheckpointError
 naming the file."""
 import json
 import os
 import pickle
+import shutil
 import signal
 import subprocess
 import threading
@@ -239,6 +241,63 @@ def test_python_resumes_a_checkpoint_of_the_command_line(tmp_path):
     np.testing.assert_array_equal(resumed.q, straight.q)
     np.testing.assert_array_equal(resumed.history["residual"], straight.history["residual"])
     assert resumed.checkpoint == str(out) and (out / "checkpoint.json").is_file()
+
+
+# --- warm starts: the recorded problem from the recorded iterate with other solver options ------
+
+@pytest.fixture
+def sweeps_stopped(tmp_path):
+    """A folder holding the checkpoint of fuel_nav by jacobi-newton interrupted at iteration 50."""
+    folder = tmp_path / "ck"
+    stopped = pardel.solve("fuel_nav", method="jacobi-newton", on_iteration=stop_at(50), checkpoint=folder, **FUEL)
+    assert stopped.status == "interrupted" and stopped.iterations == 50
+    return folder
+
+
+def test_warm_start_with_another_method_reaches_the_same_minimum(sweeps_stopped, tmp_path):
+    cold = pardel.solve("fuel_nav", method="newton", **FUEL)
+    copy = tmp_path / "copy"
+    shutil.copytree(sweeps_stopped, copy)
+    warm = pardel.resume(sweeps_stopped, method="newton", rtol=1e-12)
+    assert warm.status == "converged" and warm.point["kind"] == "minimum"
+    np.testing.assert_allclose(warm.q, cold.q, rtol=0, atol=1e-8)
+    assert warm.cost == pytest.approx(cold.cost, rel=1e-12)
+    assert not (sweeps_stopped / "checkpoint.json").exists()
+    if os.environ.get("PARDEL_CLI"):  # the command line's warm start from the same checkpoint
+        run = subprocess.run([os.environ["PARDEL_CLI"], "solve", "--resume", str(copy), "--set", "solver.method=newton",
+                              "--set", "solver.rtol=1e-12", "--quiet", "--no-plot"],
+                             capture_output=True, text=True, timeout=100)
+        assert run.returncode == 0, run.stderr
+        summary = json.loads((copy / "summary.json").read_text())
+        assert summary["iterations"] == warm.iterations and summary["residual"] == warm.residual
+        rows = np.loadtxt(copy / "trajectory.csv", delimiter=",", skiprows=1)  # k, t, x, y, x', y'
+        np.testing.assert_array_equal(rows[:, 2:4], warm.q)
+
+
+def test_a_warm_start_interrupted_again_records_its_options(sweeps_stopped, tmp_path):
+    copy = tmp_path / "copy"
+    shutil.copytree(sweeps_stopped, copy)
+    straight = pardel.resume(copy, method="newton")
+    stopped = pardel.resume(sweeps_stopped, method="newton", on_iteration=stop_at(53))
+    assert stopped.status == "interrupted" and stopped.checkpoint == str(sweeps_stopped)
+    assert "solver.method=" in (sweeps_stopped / "checkpoint.json").read_text()
+    resumed = pardel.resume(sweeps_stopped)  # newton again, as recorded
+    assert_same_solve(resumed, straight)
+
+
+@pytest.mark.parametrize("options,error,match", [
+    (dict(T=5.0), pardel.PardelError, "T: changes the problem"),
+    (dict(N=100), pardel.PardelError, "N: changes the problem"),
+    (dict(q0=[1, 1]), pardel.PardelError, "q0: changes the problem"),
+    (dict(params={"wind": 1.0}), pardel.PardelError, "params: changes the problem"),
+    (dict(methd="newton"), pardel.PardelError, "did you mean 'method'"),
+    (dict(rtol="tight"), TypeError, "pardel.resume: rtol must be a number"),
+    (dict(method="newtn"), pardel.SceneError, "newtn"),
+])
+def test_a_warm_start_refuses_what_changes_the_problem(sweeps_stopped, options, error, match):
+    with pytest.raises(error, match=match):
+        pardel.resume(sweeps_stopped, **options)
+    assert (sweeps_stopped / "checkpoint.json").is_file()  # the refusal leaves the checkpoint
 
 
 # --- hostile checkpoints -------------------------------------------------------------------------
