@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -137,6 +138,70 @@ TEST_F(ModelLoaderTest, NewModelIsUsable) {
   const double ld = model->discretizations[0].action(h, 0, h, q0, q1, p);
   const double va = 2.0, vb = 1.0, am = 1.1, bm = 0.05;
   EXPECT_NEAR(ld, h * (0.5 * (va * va + vb * vb) - 1.0 * (am - bm) * (am - bm)), 1e-13);
+}
+
+/** The cache folders of the entries compiled for the model `name` (model_name.txt). */
+int entries_of(const std::string& name) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(PARDEL_TEST_CACHE_DIR)) {
+    std::ifstream in(entry.path() / "model_name.txt");
+    std::string text;
+    if (in && std::getline(in, text) && text == name) ++count;
+  }
+  return count;
+}
+
+/** Appends a line to a file and moves its modification time a minute on (so that the change
+ *  shows on every file system clock). */
+void touch(const fs::path& file, const std::string& line) {
+  std::ofstream(file, std::ios::app) << line;
+  fs::last_write_time(file, fs::last_write_time(file) + std::chrono::minutes(1));
+}
+
+TEST_F(ModelLoaderTest, ACachedModelIsCompiledAgainWhenATemplateOrAKernelHeaderChanges) {
+  if (!pardel::can_compile_lag_files()) GTEST_SKIP() << "this build has no generator";
+  // A copy of the toolchain's render script, templates and kernel headers, to change.
+  const pardel::LoaderToolchain original = pardel::loader_toolchain();
+  const fs::path copy = fs::path(PARDEL_TEST_CACHE_DIR).parent_path() / "toolchain_copy";
+  fs::remove_all(copy);
+  fs::create_directories(copy / "codegen");
+  const fs::path codegen = fs::path(original.render_script).parent_path();
+  fs::copy_file(original.render_script, copy / "codegen" / fs::path(original.render_script).filename());
+  fs::copy(codegen / "templates", copy / "codegen" / "templates", fs::copy_options::recursive);
+  fs::copy(original.abi_include, copy / "include", fs::copy_options::recursive);
+  pardel::LoaderToolchain changed = original;
+  changed.render_script = (copy / "codegen" / fs::path(original.render_script).filename()).string();
+  changed.abi_include = (copy / "include").string();
+  pardel::set_loader_toolchain(changed);
+
+  const fs::path lag = write_lag("stamp_oscillator.lag",
+                                 "model stamp_oscillator\ncoords x\nparam w = 1.25\n"
+                                 "L = x'^2/2 - w^2*x^2/2\ndiscretizations trapezoid\n");
+  const pardel_model* first = pardel::resolve_model(lag.string());
+  ASSERT_NE(first, nullptr);
+  const int before = entries_of("stamp_oscillator");
+  EXPECT_EQ(pardel::resolve_model(lag.string()), first);  // unchanged: the same entry
+  EXPECT_EQ(entries_of("stamp_oscillator"), before);
+
+  touch(copy / "codegen" / "templates" / "model.cpp.j2", "{# a template changed since #}\n");
+  const pardel_model* second = pardel::resolve_model(lag.string());
+  ASSERT_NE(second, nullptr);
+  EXPECT_NE(second, first);
+  EXPECT_EQ(entries_of("stamp_oscillator"), before + 1);
+
+  touch(copy / "include" / "pardel" / "condensation.hpp", "// a kernel header changed since\n");
+  const pardel_model* third = pardel::resolve_model(lag.string());
+  ASSERT_NE(third, nullptr);
+  EXPECT_NE(third, second);
+  EXPECT_EQ(entries_of("stamp_oscillator"), before + 2);
+  // Each compile is the same model: the trapezoid action, checked by hand.
+  const double h = 0.2, q0[] = {0.5}, q1[] = {0.7}, p[] = {1.25};
+  const double v = (0.7 - 0.5) / h;
+  const double expected = h * (v * v / 2 - 1.25 * 1.25 * (0.5 * 0.5 + 0.7 * 0.7) / 4);
+  for (const pardel_model* m : {first, second, third})
+    EXPECT_NEAR(m->discretizations[0].action(h, 0, h, q0, q1, p), expected, 1e-14);
+  pardel::set_loader_toolchain(original);
+  fs::remove_all(copy);
 }
 
 }  // namespace

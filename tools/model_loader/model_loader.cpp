@@ -16,6 +16,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -575,6 +576,33 @@ bool can_compile_lag_files() {
 #endif
 }
 
+#ifdef PARDEL_LOADER_GEN
+/** What a cache entry's code depends on besides the .lag text, the generator and the compiler: the
+ *  render script, its templates and the kernel headers (ABI, condensation, extended precision),
+ *  each as its path, size and modification time, so that a changed template or header compiles
+ *  the model again instead of loading code that the old one wrote. */
+static std::string toolchain_stamp(const LoaderToolchain& tools) {
+  std::vector<fs::path> files{tools.render_script};
+  const auto add_folder = [&files](const fs::path& dir) {
+    std::error_code ec;
+    for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+      if (it->is_regular_file(ec)) files.push_back(it->path());
+  };
+  add_folder(fs::path(tools.render_script).parent_path() / "templates");
+  add_folder(fs::path(tools.abi_include) / "pardel");
+  std::sort(files.begin(), files.end());
+  std::string stamp;
+  for (const fs::path& file : files) {
+    std::error_code size_error, time_error;
+    const auto size = fs::file_size(file, size_error);
+    const auto time = fs::last_write_time(file, time_error);
+    stamp += file.string() + '\0' + (size_error ? "-" : std::to_string(size)) + '\0' +
+             (time_error ? "-" : std::to_string(time.time_since_epoch().count())) + '\0';
+  }
+  return stamp;
+}
+#endif
+
 const pardel_model* resolve_model(const std::string& name_or_path) {
   if (!looks_like_path(name_or_path)) {
     if (const pardel_model* model = find_model(name_or_path)) return model;
@@ -605,9 +633,11 @@ const pardel_model* resolve_model(const std::string& name_or_path) {
   const auto generator_time = fs::last_write_time(tools.generator, time_error);
   if (time_error)
     throw ModelLoadError("cannot compile '" + name_or_path + "': no generator at " + tools.generator);
-  // The entry's name: a digest of the text, the generator (its path and time) and the compiler.
+  // The entry's name: a digest of the text, the generator (its path and time), the compiler, and
+  // the render script, templates and kernel headers (toolchain_stamp).
   const std::string key = sha256_hex(content + '\0' + tools.generator + '\0' + tools.compiler + '\0' +
-                                     std::to_string(generator_time.time_since_epoch().count()))
+                                     std::to_string(generator_time.time_since_epoch().count()) + '\0' +
+                                     toolchain_stamp(tools))
                               .substr(0, 32);
   if (auto it = loaded.find(key); it != loaded.end()) return it->second;
 
