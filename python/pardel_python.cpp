@@ -240,6 +240,13 @@ const std::vector<std::pair<std::string, std::string>> kArguments = {
     {"divergence_factor", ""},
 };
 
+/** The scene keys under which a checkpoint's scene records the options that kArguments keeps
+ *  outside the scene schema (scene_text's complete text; pardel.resume's warm start). */
+const std::vector<std::pair<std::string, std::string>> kRecordedArguments = {
+    {"history_every", "solver.history_every"},
+    {"divergence_factor", "solver.divergence_factor"},
+    {"refine_settle", "solver.refine.settle"}};
+
 std::vector<std::string> argument_names() {
   std::vector<std::string> names;
   for (const auto& a : kArguments) names.push_back(a.first);
@@ -297,6 +304,15 @@ void insert(toml::table& table, const std::string& key, const py::handle& value,
 toml::table& subtable(toml::table& root, const std::string& key) {
   if (!root.contains(key)) root.insert(key, toml::table{});
   return *root.get_as<toml::table>(key);
+}
+
+/** The table under `root` that holds the dotted scene key `key` ([solver.refine] for
+ *  solver.refine.start_N), made where missing; `key` is left as its last part. */
+toml::table& dotted_table(toml::table& root, std::string& key) {
+  toml::table* table = &root;
+  for (std::size_t dot; (dot = key.find('.')) != std::string::npos; key = key.substr(dot + 1))
+    table = &subtable(*table, key.substr(0, dot));
+  return *table;
 }
 
 /** Splits a boundary vector (dim values: coords, then derivatives) into the scene's keys
@@ -391,28 +407,26 @@ std::string scene_text(const std::string& model_spec, const py::dict& arguments,
       insert(guess, "points", value, "polyline");
     } else {
       // a dotted scene key: [grid] T, [solver] tol, [solver.refine] start_N, ...
-      toml::table* table = &root;
       std::string key = a.second;
-      for (std::size_t dot; (dot = key.find('.')) != std::string::npos; key = key.substr(dot + 1))
-        table = &subtable(*table, key.substr(0, dot));
+      toml::table& table = dotted_table(root, key);
       if ((name == "error_estimate" || name == "extrapolate") && py::isinstance<py::bool_>(value))
-        table->insert_or_assign(key, value.cast<bool>());  // the scene's true or false
+        table.insert_or_assign(key, value.cast<bool>());  // the scene's true or false
       else
-        insert(*table, key, value, name);
+        insert(table, key, value, name);
     }
   }
   if (complete) {
     const auto given = [&arguments](const char* name) {
       return arguments.contains(name) && !arguments[name].is_none();
     };
-    if (given("history_every")) insert(subtable(root, "solver"), "history_every", arguments["history_every"], "history_every");
-    if (given("divergence_factor"))
-      insert(subtable(root, "solver"), "divergence_factor", arguments["divergence_factor"], "divergence_factor");
-    if (given("refine_settle")) {
-      if (!given("refine_start_N"))
-        throw InputError("checkpoint: refine_settle is recorded in a checkpoint's scene as solver.refine.settle, "
-                         "which needs refine_start_N; give refine_start_N too, or no checkpoint");
-      insert(subtable(subtable(root, "solver"), "refine"), "settle", arguments["refine_settle"], "refine_settle");
+    if (given("refine_settle") && !given("refine_start_N"))
+      throw InputError("checkpoint: refine_settle is recorded in a checkpoint's scene as solver.refine.settle, "
+                       "which needs refine_start_N; give refine_start_N too, or no checkpoint");
+    for (const auto& r : kRecordedArguments) {
+      if (!given(r.first.c_str())) continue;
+      std::string key = r.second;
+      toml::table& table = dotted_table(root, key);
+      insert(table, key, arguments[r.first.c_str()], r.first);
     }
   }
   std::ostringstream text;
@@ -704,14 +718,9 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
 }
 
 /** pardel.resume's solver options as `pardel solve --resume DIR --set solver.KEY=VALUE` overrides
- *  (their scene keys from kArguments; history_every, divergence_factor and refine_settle as the
- *  scene keys a checkpoint records). An option of the problem (T, N, q0, params, ...) is refused:
+ *  (their scene keys from kArguments and kRecordedArguments). An option of the problem (T, N, q0, params, ...) is refused:
  *  a warm start keeps the recorded problem and changes how it is solved. */
 std::vector<std::string> warm_start_overrides(const py::dict& options) {
-  static const std::vector<std::pair<std::string, std::string>> recorded = {
-      {"history_every", "solver.history_every"},
-      {"divergence_factor", "solver.divergence_factor"},
-      {"refine_settle", "solver.refine.settle"}};
   std::vector<std::string> names, out;
   for (const auto& a : kArguments)
     if (a.first != "threads") names.push_back(a.first);
@@ -721,7 +730,7 @@ std::vector<std::string> warm_start_overrides(const py::dict& options) {
     std::string key;
     for (const auto& a : kArguments)
       if (a.first == name && name != "threads") key = a.second;
-    for (const auto& r : recorded)
+    for (const auto& r : kRecordedArguments)
       if (r.first == name) key = r.second;
     if (key.empty()) {
       std::string message = fmt::format("unknown option '{}'", name);
