@@ -217,6 +217,13 @@ class Method_ {
     (void)out;
     return false;
   }
+  /** Whether the unshifted Hessian of the action at the full evaluation in ctx is positive
+   *  definite, by the method's own factorization (the trust-region Newton of trust_region.hpp
+   *  answers it, for the hybrid's switch); false for a method without one. */
+  virtual bool hessian_positive_definite(const Context& ctx) {
+    (void)ctx;
+    return false;
+  }
   /** The method's own state between two iterations (checkpoint and resume); none by default. */
   virtual std::vector<double> save_state() const { return {}; }
   /** Restores what save_state() returned, after reset(); false if it does not fit this method. */
@@ -231,7 +238,12 @@ std::unique_ptr<Method_> make_newton(const Options& options, int dim);
  *  (runtime/src/newton_block_size.cpp.in), so that the sizes compile in parallel. */
 template <int D>
 std::unique_ptr<Method_> make_newton_sized(const Options& options);
-std::unique_ptr<Method_> make_hybrid(const Options& options, int dim);
+class Partition;
+/** Jacobi-Newton sweeps, then `newton` (a whole-system Newton, which answers
+ *  hessian_positive_definite) once the Hessian is positive definite; `partition` reduces the
+ *  residual of its check over the processes (iteration.hpp). */
+std::unique_ptr<Method_> make_hybrid(const Options& options, int dim, Partition& partition,
+                                     std::unique_ptr<Method_> newton);
 std::unique_ptr<Method_> make_stationary_newton(const Options& options, int dim);
 
 /** The residual that counts as converged at the context's iterate: Options::tol when set, else

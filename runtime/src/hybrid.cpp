@@ -1,23 +1,25 @@
 /**
  * @file hybrid.cpp
  * Jacobi-Newton sweeps until the Hessian of the action is positive definite at the iterate
- * (checked every few sweeps by the block LDL^T of the certificate), then globalized Newton.
+ * (checked every few sweeps by the factorization of the whole-system Newton it then switches to),
+ * then that globalized Newton: the same class in one process and over MPI ranks, whose Newton
+ * (the topology's, topology.hpp) factors the Hessian by block LDL^T or cyclic reduction in one
+ * process and by the Schur-complement split over ranks.
  */
-#include "block_tridiagonal.hpp"
 #include "engine.hpp"
+#include "iteration.hpp"
 
 namespace pardel::detail {
 namespace {
 
-template <int D>
-class Hybrid : public Method_ {
+class Hybrid final : public Method_ {
  public:
-  explicit Hybrid(const Options& o) : sweeps_(make_jacobi_newton(o, D < 0 ? 9 : D)), newton_(make_newton(o, D < 0 ? 9 : D)) {}
+  Hybrid(const Options& o, int dim, Partition& partition, std::unique_ptr<Method_> newton)
+      : partition_(partition), sweeps_(make_jacobi_newton(o, dim)), newton_(std::move(newton)) {}
 
   void reset(Context& ctx) override {
     sweeps_->reset(ctx);
     newton_->reset(ctx);
-    H_.resize(ctx.N, ctx.dim);
     newton_mode_ = false;
     since_check_ = check_every;
   }
@@ -27,12 +29,10 @@ class Hybrid : public Method_ {
   StepOutcome iterate(Context& ctx, long iteration) override {
     if (!newton_mode_ && ++since_check_ >= check_every) {
       since_check_ = 0;
+      // Newton's full evaluation (residual and action over all processes), which its first step reads.
       eval_full(ctx, ctx.q);
-      compute_residual(ctx);
-      ctx.action = sum_action(ctx);
-      ctx.action_known = true;
-      H_.assemble(ctx, 0.0);
-      newton_mode_ = H_.factor_ldlt();
+      partition_.agree_on_residual(ctx, newton_->evaluate(ctx));
+      newton_mode_ = newton_->hessian_positive_definite(ctx);
     }
     return newton_mode_ ? newton_->iterate(ctx, iteration) : sweeps_->iterate(ctx, iteration);
   }
@@ -42,7 +42,7 @@ class Hybrid : public Method_ {
   }
   void times_changed() override { newton_->times_changed(); }
 
-  /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. */
+  /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. Collective. */
   std::vector<double> save_state() const override {
     std::vector<double> state = {newton_mode_ ? 1.0 : 0.0, static_cast<double>(since_check_)};
     const std::vector<double> newton = newton_->save_state();
@@ -60,18 +60,17 @@ class Hybrid : public Method_ {
 
  private:
   static constexpr int check_every = 10;
+  Partition& partition_;
   std::unique_ptr<Method_> sweeps_, newton_;
-  BlockTridiagonal<D> H_;
   bool newton_mode_ = false;
   int since_check_ = 0;
 };
 
 }  // namespace
 
-std::unique_ptr<Method_> make_hybrid(const Options& options, int dim) {
-  return dispatch_dim(dim, [&](auto D) -> std::unique_ptr<Method_> {
-    return std::make_unique<Hybrid<decltype(D)::value>>(options);
-  });
+std::unique_ptr<Method_> make_hybrid(const Options& options, int dim, Partition& partition,
+                                     std::unique_ptr<Method_> newton) {
+  return std::make_unique<Hybrid>(options, dim, partition, std::move(newton));
 }
 
 }  // namespace pardel::detail

@@ -368,17 +368,6 @@ void Iteration::finish(Termination termination, std::string message) {
   s_.message = std::move(message);
 }
 
-void OneProcess::update_times(Context& ctx, Positions positions) { detail::update_times(ctx, positions); }
-
-void OneProcess::check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) {
-  *node = outcome.next_checked ? outcome.next_non_finite_node : first_non_finite_node(ctx, ctx.q_next);
-  *qmax = outcome.next_max_abs;
-  if (!outcome.next_checked)
-    for (double v : ctx.q_next) *qmax = std::max(*qmax, std::fabs(v));
-}
-
-double OneProcess::action(Context& ctx) { return action_at(ctx, ctx.q); }
-
 void Iteration::summarize() {
   s_.N = partition_.global_N(ctx_);
   s_.iterations = iteration_;

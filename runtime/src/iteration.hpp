@@ -1,9 +1,9 @@
 /**
  * @file iteration.hpp
  * Internal: the iteration at one grid, written once for a solve in one process and for one over
- * MPI ranks. A Partition says where the unknowns live (the trivial one: all here; the MPI one
- * supplies reductions, agreement on failures and the halo exchange); Iteration runs a Method_ on
- * it and ends it by named stopping rules, each setting the summary's status and message.
+ * MPI ranks. A Partition says where the unknowns live (the reductions, the agreement on failures
+ * and the halo exchange of a topology, topology.hpp); Iteration runs a Method_ on it and ends it
+ * by named stopping rules, each setting the summary's status and message.
  */
 #ifndef PARDEL_RUNTIME_ITERATION_HPP
 #define PARDEL_RUNTIME_ITERATION_HPP
@@ -137,14 +137,6 @@ class Iteration {
   double best_residual_ = std::numeric_limits<double>::infinity();
   long best_iteration_ = 0;
   bool have_initial_ = false;
-};
-
-/** The partition of a solve in one process: every node here. */
-class OneProcess final : public Partition {
- public:
-  void update_times(Context& ctx, Positions positions) override;
-  void check_next(const Context& ctx, const StepOutcome& outcome, int* node, double* qmax) override;
-  double action(Context& ctx) override;
 };
 
 }  // namespace pardel::detail

@@ -88,7 +88,7 @@ double method_bytes(Method method, bool cyclic, double N, int d) {
     case Method::jacobi_newton: return N + 1;  // node status
     case Method::automatic:
     case Method::newton: return newton_bytes(N, d, cyclic);
-    case Method::hybrid: return (N + 1) + newton_bytes(N, d, cyclic) + block_tridiagonal_bytes(N, d, false);
+    case Method::hybrid: return (N + 1) + newton_bytes(N, d, cyclic);  // its check factors Newton's Hessian
     case Method::stationary_newton: return newton_bytes(N, d, false) + std::max(N - 1, 0.0) * d * d * 8;  // pivot inverses
   }
   return 0;

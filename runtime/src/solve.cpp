@@ -1,11 +1,12 @@
 /**
  * @file solve.cpp
- * The solve in one process, for every method: validation, the loop over the levels of
- * coarse-to-fine refinement (levels.hpp: which grids, where each starts), resume and warm starts,
- * the result and the point assessment, around the iteration at each level (iteration.hpp:
- * node-time updates, stopping rules, history), and the error estimate of a converged solve
- * (error_estimate.hpp: Richardson against a coarser nested grid). A method only supplies
- * evaluate/iterate.
+ * The solve over a topology (topology.hpp: one process, or MPI ranks), for every method, written
+ * once: the method factory, validation, the loop over the levels of coarse-to-fine refinement
+ * (levels.hpp: which grids, where each starts), resume and warm starts, the result and the point
+ * assessment, around the iteration at each level (iteration.hpp: node-time updates, stopping
+ * rules, history); the automatic method's second attempt, and the error estimate of a converged
+ * solve (error_estimate.hpp: Richardson against a coarser nested grid). A method only supplies
+ * evaluate/iterate; pardel::solve is this solve over OneProcess.
  */
 #include <algorithm>
 #include <chrono>
@@ -20,125 +21,108 @@
 #include "engine.hpp"
 #include "error_estimate.hpp"
 #include "iteration.hpp"
-#include "iterative_refinement.hpp"
 #include "levels.hpp"
+#include "topology.hpp"
 
 namespace pardel {
+namespace detail {
+
+std::unique_ptr<Method_> make_method(const Options& options, int dim, Topology& topology, std::string* message) {
+  switch (options.method) {
+    case Method::jacobi: return make_jacobi(options, dim);
+    case Method::jacobi_newton: return make_jacobi_newton(options, dim);
+    case Method::automatic:
+    case Method::newton: return topology.make_newton(options, dim);
+    case Method::hybrid: return make_hybrid(options, dim, topology, topology.make_newton(options, dim));
+    case Method::stationary_newton: {
+      std::unique_ptr<Method_> method = topology.make_stationary_newton(options, dim);
+      if (!method) *message = "stationary-newton does not run over this topology";
+      return method;
+    }
+  }
+  *message = "unknown method";
+  return nullptr;
+}
+
+}  // namespace detail
+
 namespace {
 
 using detail::Context;
+using detail::Topology;
+using detail::TopologyFactory;
 
-/** Owns the context of a one-process solve (a base, so that it exists before Iteration's). */
-struct OwnedContext {
-  Context owned_ctx;
-  detail::OneProcess one_process;
-};
-
-/** A solve in one process: the levels of refinement, resume, capture and the result around the
- *  iteration at each level (iteration.hpp). */
-class Driver : private OwnedContext, public detail::Iteration {
+/** A solve over a topology: the levels of refinement, resume, capture and the result around the
+ *  iteration at each level (iteration.hpp). A level's context is the topology's. */
+class Driver : public detail::Iteration {
  public:
-  Driver(const Problem& problem, const Options& options, detail::Method_& method, Summary& summary)
-      : detail::Iteration(options, method, one_process, owned_ctx, summary), problem_(problem) {}
+  Driver(const Problem& problem, const Options& options, detail::Method_& method, Topology& topology,
+         Summary& summary)
+      : detail::Iteration(options, method, topology, topology.context(), summary),
+        problem_(problem),
+        topology_(topology) {}
 
-  /** Levels up to N allocate their arrays for N at once (Context::reserve_N). */
-  void reserve(int N) { ctx_.reserve_N = N; }
-
-  /** Sets up ctx_ at N from `from`; false (with the summary filled) on bad constraints. */
+  /** Sets up the level of N intervals from `from` (resampled to N when it lies on another grid);
+   *  false with the summary filled on bad constraints or a Lagrangian that is not regular. */
   bool enter_level(const Trajectory& from, int N) {
-    detail::setup_context(problem_, N, s_.threads, ctx_);
     const Trajectory& src = from.N == N ? from : (resampled_ = resample(problem_, from, N));
-    ctx_.q = src.q;
-    const std::size_t d = static_cast<std::size_t>(ctx_.dim);
-    for (std::size_t i = 0; i < d; ++i) {
-      ctx_.q[i] = problem_.q0[i];
-      ctx_.q[static_cast<std::size_t>(N) * d + i] = problem_.qN[i];
-    }
     std::string message;
-    if (!detail::apply_constraints(problem_, ctx_, &message)) {
-      s_.termination = Termination::invalid_input;
-      s_.message = message;
-      return false;
-    }
-    if (problem_.clock != ClockMode::none) {
-      if (src.t.size() == ctx_.t.size()) ctx_.t = src.t;
-      detail::update_times(ctx_, detail::Positions::follow_times);
-    }
+    const bool set = topology_.set_up(problem_, N, s_.threads, src, &message);
+    resampled_ = Trajectory{};
+    if (!set) return refuse(std::move(message));
+    if (problem_.clock != ClockMode::none) partition_.update_times(ctx_, detail::Positions::follow_times);
     if (!checked_regular_) {
       checked_regular_ = true;
-      if (!detail::lagrangian_regular(ctx_, &message)) {
-        s_.termination = Termination::invalid_input;
-        s_.message = message;
-        return false;
-      }
+      if (!topology_.lagrangian_regular(&message)) return refuse(std::move(message));
     }
     method_.reset(ctx_);
     return true;
   }
 
-  /** Sets up ctx_ from an interrupted solve's state (checked by check_state) instead of
+  /** Sets up the level of an interrupted solve's state (checked by check_state) instead of
    *  enter_level: the iterate, its node times, the method's state and every counter. */
   bool resume_level(const SolverState& st) {
-    detail::setup_context(problem_, st.N, s_.threads, ctx_);
-    ctx_.q = st.trajectory.q;
     std::string message;
-    if (!detail::apply_constraints(problem_, ctx_, &message)) {
-      s_.termination = Termination::invalid_input;
-      s_.message = "resume: " + message;
-      return false;
-    }
-    ctx_.t = st.trajectory.t;
-    if (problem_.clock == ClockMode::fixed_total_time)
-      for (int k = 0; k < ctx_.N; ++k) ctx_.hk[static_cast<std::size_t>(k)] = ctx_.t[k + 1] - ctx_.t[k];
+    if (!topology_.set_up_resumed(problem_, st, s_.threads, &message)) return refuse("resume: " + message);
     method_.reset(ctx_);
-    if (!method_.load_state(st.method_state)) {
-      s_.termination = Termination::invalid_input;
-      s_.message = detail::method_state_misfit(st);
-      return false;
-    }
+    if (!partition_.all(method_.load_state(st.method_state))) return refuse(detail::method_state_misfit(st));
     resume_counters(st);
     checked_regular_ = true;
     return true;
   }
 
-  /** Everything resume_level needs, at the current iterate (after an interruption). */
-  void capture(SolverState& st, int level) {
+  /** Everything resume_level needs, at the current iterate (after an interruption): the iterate
+   *  and its node times from `result` (which write_result gathered), the method's state in node
+   *  order; on the process that holds the result (the others' `st` stays empty). Collective. */
+  void capture(SolverState& st, int level, const Trajectory& result) {
+    std::vector<double> method_state = method_.save_state();
+    if (!topology_.holds_result()) return;
     capture_counters(st);
     st.level = level;
-    st.N = ctx_.N;
-    st.trajectory.N = ctx_.N;
-    st.trajectory.dim = ctx_.dim;
-    st.trajectory.t = ctx_.t;
-    st.trajectory.q = ctx_.q;
-    st.method_state = method_.save_state();
+    st.N = result.N;
+    st.trajectory = result;
+    st.method_state = std::move(method_state);
   }
 
+  /** The summary's numbers (the same on every process) and the iterate of the current level,
+   *  gathered where the result is held. Collective. */
   void write_result(Trajectory& out) {
-    out.N = ctx_.N;
-    out.dim = ctx_.dim;
-    out.t = ctx_.t;
-    out.q = ctx_.q;
+    topology_.gather(false, out);
     summarize();
   }
 
  private:
+  bool refuse(std::string message) {
+    s_.termination = Termination::invalid_input;
+    s_.message = std::move(message);
+    return false;
+  }
+
   const Problem& problem_;
+  Topology& topology_;
   Trajectory resampled_;
   bool checked_regular_ = false;
 };
-
-std::unique_ptr<detail::Method_> make_method(const Options& options, int dim, std::string* message) {
-  switch (options.method) {
-    case Method::jacobi: return detail::make_jacobi(options, dim);
-    case Method::jacobi_newton: return detail::make_jacobi_newton(options, dim);
-    case Method::automatic:
-    case Method::newton: return detail::make_newton(options, dim);
-    case Method::hybrid: return detail::make_hybrid(options, dim);
-    case Method::stationary_newton: return detail::make_stationary_newton(options, dim);
-  }
-  *message = "unknown method";
-  return nullptr;
-}
 
 /** What a solve_once does besides solving. */
 struct OnceFlags {
@@ -149,41 +133,78 @@ struct OnceFlags {
   Trajectory* coarser_level = nullptr;
 };
 
-/** One solve with the requested method (solve() may make two, and a third for the error estimate). */
-Summary solve_once(const Problem& problem, const Options& requested, Trajectory& trajectory,
-                   const OnceFlags& flags = {}) {
-  const auto start = std::chrono::steady_clock::now();
+/** The input checks of a solve of `requested` (resolved into `options`), the levels it visits
+ *  (refinement_levels, or problem.N alone) and the index of the first that fits the topology; false with `error` (the same verdict on every
+ *  process: a process refuses when any does). */
+bool check_input(const Problem& problem, const Options& requested, const Options& options,
+                 const Trajectory& trajectory, const OnceFlags& flags, Topology& topology, std::vector<int>& levels,
+                 std::size_t& first, std::string* error) {
   // The automatic method is Newton with grid sequencing (refinement_levels), and so is the
   // stationary Newton.
   const bool automatic = requested.method == Method::automatic || requested.method == Method::stationary_newton;
+  const SolverState* state = options.resume_from;
+  *error = topology.unsupported(problem, options);
+  bool valid = error->empty() && options.is_valid(error) && (state || validate(problem, trajectory, error));
+  if (valid) levels = flags.one_level ? std::vector<int>{problem.N} : detail::refinement_levels(problem, options, automatic);
+  first = static_cast<std::size_t>(
+      std::find_if(levels.begin(), levels.end(), [&](int n) { return topology.level_fits(n); }) - levels.begin());
+  if (valid && state) valid = detail::check_state(problem, options, *state, levels, error);
+  if (valid && state && !options.warm_start && static_cast<std::size_t>(state->level) < first) {
+    valid = false;
+    *error = "resume: refinement level " + std::to_string(state->level) + " with N = " + std::to_string(state->N) +
+             topology.level_misfit();
+  }
+  // Every process was given the same input; agree anyway, so that none iterates alone.
+  if (topology.all(valid)) return true;
+  if (valid) *error = "invalid input on another rank";
+  return false;
+}
+
+/** The point of a finished solve: from the method's own factorization where it holds one (Newton
+ *  stopped at a minimum), else from a new one, the method's storage released first so as not to
+ *  add to the peak memory. */
+void assess_point(const Options& options, const OnceFlags& flags, std::unique_ptr<detail::Method_>& method,
+                  Topology& topology, Summary& summary) {
+  // The assessment polls Options::keep_going.
+  topology.context().keep_going = options.keep_going;
+  if (!flags.assess) {
+    summary.point.note = "not assessed";
+  } else if (!detail::point_assessed(summary.termination)) {
+    summary.point = detail::not_assessed(summary.termination);
+  } else if (!method->assess(topology.context(), summary.point)) {
+    method.reset();
+    topology.assess(options, summary.point);
+  }
+}
+
+/** One solve with the requested method over a fresh topology of `make` (solve_over may make two,
+ *  and a third for the error estimate). */
+Summary solve_once(const Problem& problem, const Options& requested, Trajectory& trajectory, const OnceFlags& flags,
+                   const TopologyFactory& make) {
+  const auto start = std::chrono::steady_clock::now();
   Summary summary;
   const Options options = detail::resolved_options(requested, problem, summary);
-  std::string error;
+  auto finished = [&] {
+    summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return summary;
+  };
+  const std::unique_ptr<Topology> topology = make();
   const SolverState* resume = options.resume_from;
   const SolverState* warm = resume && options.warm_start ? resume : nullptr;
   if (warm) resume = nullptr;
-  if (!options.is_valid(&error) || (!resume && !warm && !validate(problem, trajectory, &error))) {
-    summary.termination = Termination::invalid_input;
-    summary.message = error;
-    return summary;
-  }
-  std::unique_ptr<detail::Method_> method = make_method(options, problem.model->dim, &error);
+  std::vector<int> levels;
+  std::size_t first = 0;
+  std::string error;
+  std::unique_ptr<detail::Method_> method;
+  if (check_input(problem, requested, options, trajectory, flags, *topology, levels, first, &error))
+    method = detail::make_method(options, problem.model->dim, *topology, &error);
   if (!method) {
     summary.termination = Termination::invalid_input;
     summary.message = error;
-    return summary;
+    return finished();
   }
-  const std::vector<int> levels =
-      flags.one_level ? std::vector<int>{problem.N} : detail::refinement_levels(problem, options, automatic);
-  if (resume || warm) {
-    if (!detail::check_state(problem, options, resume ? *resume : *warm, levels, &error)) {
-      summary.termination = Termination::invalid_input;
-      summary.message = error;
-      return summary;
-    }
-  }
-  Driver driver(problem, options, *method, summary);
-  driver.reserve(levels.back());
+  Driver driver(problem, options, *method, *topology, summary);
+  topology->reserve(levels.back());
   detail::LevelStarts starts(problem, options);
   if (resume) starts.previous() = resume->previous_level;
   detail::LevelSteps steps;
@@ -196,39 +217,37 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
   steps.enter = [&](int N) {
     return starts.enter(trajectory, N, [&driver](const Trajectory& from, int n) { return driver.enter_level(from, n); });
   };
+  steps.entered = [&](bool last) {
+    if (!last || !topology->releases_whole_trajectories()) return;
+    // From here on a process holds its share of the nodes; the one that holds the result keeps
+    // the previous level's solution that an interruption's state carries for Newton's extrapolation.
+    std::vector<double>().swap(trajectory.q);
+    std::vector<double>().swap(trajectory.t);
+    Trajectory previous = std::move(starts.previous());
+    starts.release();
+    if (topology->holds_result() && starts.extrapolates()) starts.previous() = std::move(previous);
+  };
   steps.run = [&](bool last) { return driver.run_level(last); };
   steps.settled = [&] {
-    const Context& ctx = driver.context();
-    starts.settled(Trajectory{ctx.N, ctx.dim, ctx.t, ctx.q});
+    // The level's solution on every process: the start of the next level.
+    Trajectory solution;
+    topology->gather(true, solution);
+    starts.settled(std::move(solution));
   };
-  const long l = detail::run_levels(levels, 0, resume, warm, steps);
-  if (l < 0) {
-    summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return summary;
-  }
-  if (summary.converged()) detail::refine_solution(driver.context(), options, summary);
+  const long l = detail::run_levels(levels, first, resume, warm, steps);
+  if (l < 0) return finished();
+  if (summary.converged()) topology->refine(options, summary);
   driver.write_result(trajectory);
   if (summary.termination == Termination::interrupted) {
-    driver.capture(summary.state, static_cast<int>(l));
-    if (starts.extrapolates()) summary.state.previous_level = starts.previous();
+    driver.capture(summary.state, static_cast<int>(l), trajectory);
+    if (topology->holds_result() && starts.extrapolates()) summary.state.previous_level = starts.previous();
   }
   // Nested iteration's levels below N were solved to the tolerance (a coarse level of the other
   // methods' refinement only settled): the last of them can serve the error estimate.
   if (flags.coarser_level && summary.converged() && levels.size() >= 2 && detail::whole_system_newton(options.method))
     *flags.coarser_level = std::move(starts.previous());
-  // What the returned point is (a converged one only): from Newton's factorization at a minimum
-  // where it stopped, else from a new one, the method's storage released first so as not to add
-  // to the peak memory.
-  driver.context().keep_going = options.keep_going;
-  if (!flags.assess) {
-    summary.point.note = "not assessed";
-  } else if (!detail::point_assessed(summary.termination)) {
-    summary.point = detail::not_assessed(summary.termination);
-  } else if (!method->assess(driver.context(), summary.point)) {
-    method.reset();
-    detail::assess(driver.context(), summary.point);
-  }
-  summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  assess_point(options, flags, method, *topology, summary);
+  finished();
   detail::note_stopped_level(problem, trajectory, summary);
   if (warm) detail::note_warm_start(*warm, summary);
   return summary;
@@ -279,19 +298,29 @@ Summary combined(Summary first, Summary second) {
 
 /** The solve without the error estimate: the automatic method minimizes first; where no minimum
  *  is found near the start and a saddle would do, Newton on the DEL residual tries again from the
- *  same start. *coarser_level: as OnceFlags::coarser_level, of the attempt whose result is returned. */
+ *  same start, where the topology runs it (where not, the message says why the second attempt was
+ *  not made). *coarser_level: as OnceFlags::coarser_level, of the attempt whose result is returned. */
 Summary solve_attempts(const Problem& problem, const Options& requested, Trajectory& trajectory,
-                       Trajectory* coarser_level) {
+                       Trajectory* coarser_level, const TopologyFactory& make) {
   OnceFlags flags;
   flags.coarser_level = coarser_level;
-  if (!saddles_answer(problem, requested)) return solve_once(problem, requested, trajectory, flags);
-  const Trajectory guess = trajectory;
-  Summary first = solve_once(problem, requested, trajectory, flags);
-  if (!failed_numerically(first)) return first;
+  if (!saddles_answer(problem, requested)) return solve_once(problem, requested, trajectory, flags, make);
   Options options = requested;
   options.method = Method::stationary_newton;
+  const std::string refusal = make()->unsupported(problem, options);
+  if (!refusal.empty()) {
+    // No copy of the guess: the second attempt is not made.
+    Summary first = solve_once(problem, requested, trajectory, flags, make);
+    if (failed_numerically(first))
+      first.message += "; Newton on the DEL residual (stationary-newton), the automatic method's second attempt "
+                       "for a model without a declared cost, was not made: " + refusal;
+    return first;
+  }
+  const Trajectory guess = trajectory;
+  Summary first = solve_once(problem, requested, trajectory, flags, make);
+  if (!failed_numerically(first)) return first;
   Trajectory second_trajectory = guess;
-  Summary second = solve_once(problem, options, second_trajectory, flags);
+  Summary second = solve_once(problem, options, second_trajectory, flags, make);
   if (second.termination == Termination::converged) trajectory = std::move(second_trajectory);
   return combined(std::move(first), std::move(second));
 }
@@ -304,8 +333,10 @@ Summary solve_attempts(const Problem& problem, const Options& requested, Traject
  * grid, no assessment and no estimate of its own; Options::keep_going interrupts it.
  */
 void estimate_error(const Problem& problem, const Options& requested, const Trajectory& level, Trajectory& trajectory,
-                    Summary& summary) {
+                    Summary& summary, const TopologyFactory& make) {
   if (!requested.error_estimate) return detail::not_estimated(summary, "switched off (error_estimate = false)");
+  const std::string not_here = make()->error_estimate_refusal();
+  if (!not_here.empty()) return detail::not_estimated(summary, not_here);
   if (!summary.converged())
     return detail::not_estimated(summary, std::string("the solve ended ") + to_string(summary.termination));
   if (problem.N < 4) return detail::not_estimated(summary, "N = " + std::to_string(problem.N) + " is below 4");
@@ -347,7 +378,7 @@ void estimate_error(const Problem& problem, const Options& requested, const Traj
   OnceFlags flags;
   flags.assess = false;
   flags.one_level = true;
-  const Summary coarse_summary = solve_once(coarse_problem, options, coarse, flags);
+  const Summary coarse_summary = solve_once(coarse_problem, options, coarse, flags, make);
   if (!coarse_summary.converged()) {
     const std::string grid = "N = " + std::to_string(coarse_problem.N);
     detail::not_estimated(summary, coarse_summary.termination == Termination::interrupted
@@ -365,12 +396,13 @@ void estimate_error(const Problem& problem, const Options& requested, const Traj
 
 }  // namespace
 
-Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
-  if (requested.device != Device::cpu) return detail::solve_on_device(problem, requested, trajectory);
-  if (requested.accuracy > 0) return detail::solve_adaptive(problem, requested, trajectory);
+namespace detail {
+
+Summary solve_over(const Problem& problem, const Options& requested, Trajectory& trajectory,
+                   const TopologyFactory& make) {
   Trajectory level;
-  Summary summary = solve_attempts(problem, requested, trajectory, &level);
-  estimate_error(problem, requested, level, trajectory, summary);
+  Summary summary = solve_attempts(problem, requested, trajectory, &level, make);
+  estimate_error(problem, requested, level, trajectory, summary, make);
   // Richardson's rule assumes an error C h^p with C independent of h; along the soft direction of
   // a nearly degenerate minimum the solutions of different grids move by more than that.
   if (std::isfinite(summary.error_estimate) && summary.point.nearly_degenerate)
@@ -378,6 +410,14 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
         "; caution: the point is a nearly degenerate minimum, whose trajectory is loosely determined, and the "
         "estimate can be far below the error";
   return summary;
+}
+
+}  // namespace detail
+
+Summary solve(const Problem& problem, const Options& requested, Trajectory& trajectory) {
+  if (requested.device != Device::cpu) return detail::solve_on_device(problem, requested, trajectory);
+  if (requested.accuracy > 0) return detail::solve_adaptive(problem, requested, trajectory);
+  return detail::solve_over(problem, requested, trajectory, [] { return std::make_unique<detail::OneProcess>(); });
 }
 
 double residual_norm(const Problem& problem, const Trajectory& trajectory) {

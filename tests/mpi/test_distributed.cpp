@@ -8,7 +8,8 @@
  * sequencing (those of one process, from the first that fits the ranks), the halo exchange and the
  * rank-order sum, the point assessment (kind, inertia and eigenvalue estimates), refusals (a
  * degenerate Lagrangian with the one-process message), a NaN or an
- * interruption on one rank ending every rank, and checkpoints: the state of an interrupted solve
+ * interruption on one rank ending every rank (its iterate not assessed, as in one process), the
+ * automatic method's second attempt (one process only, and the summary over ranks says so), and checkpoints: the state of an interrupted solve
  * over ranks is the one-process state, and resumed over ranks or in one process (so is a
  * one-process state over ranks) it ends as the uninterrupted solve. The
  * acceptance test (LargeGrid.*: pendulum at N = 10^6) runs separately under a ctest label.
@@ -967,11 +968,46 @@ TEST(Failure, NaNOnOneRankEndsEveryRankAsNonFinite) {
       EXPECT_EQ(b.dist.termination, pardel::Termination::non_finite) << b.dist.message;
       expect_bit_for_bit(b);
       EXPECT_EQ(b.one.message, b.dist.message);
+      // The iterate of a failed solve is no DEL solution: neither solve assesses it, for the same reason.
+      EXPECT_EQ(b.one.point.kind, pardel::PointKind::unknown);
+      EXPECT_EQ(b.dist.point.kind, pardel::PointKind::unknown);
+      EXPECT_EQ(b.dist.point.note, b.one.point.note);
+      EXPECT_NE(b.dist.point.note.find("not assessed: the solve ended non_finite"), std::string::npos)
+          << b.dist.point.note;
     } else {
       // Newton rejects the trial points with NaN and shortens its steps: it ends as one process does.
       EXPECT_EQ(b.dist.termination, b.one.termination) << b.one.message << " | " << b.dist.message;
     }
   }
+}
+
+TEST(Attempts, TheAutomaticMethodsSecondAttemptSaysWhyItIsNotMadeOverRanks) {
+  // The harmonic oscillator from 0 to 1 over omega T = 4 > pi: past its conjugate point the action
+  // is unbounded below and the only DEL solution is a saddle. The model declares no cost, so in
+  // one process the automatic method's minimizing Newton diverges and Newton on the DEL residual
+  // returns the saddle; over ranks that second attempt does not run, and the solve ends as the
+  // minimizing Newton alone does, saying why.
+  const auto problem = bundled_problem("harmonic", "trapezoid", 4.0, 200, {0.0}, {1.0});
+  ASSERT_EQ(problem.model->cost_name, nullptr);
+  pardel::Options automatic;
+  automatic.threads = 1;
+  const Both b = solve_both(problem, automatic, pardel::linear_guess(problem));
+  ASSERT_TRUE(b.one.converged()) << b.one.message;
+  EXPECT_EQ(b.one.method, pardel::Method::stationary_newton);
+  EXPECT_EQ(b.one.point.kind, pardel::PointKind::saddle);
+  if (world_size() < 2) return;
+  pardel::Options newton = automatic;
+  newton.method = pardel::Method::newton;
+  auto minimizing = pardel::linear_guess(problem);
+  const pardel::Summary first = pardel::solve(problem, newton, minimizing);
+  EXPECT_EQ(first.termination, pardel::Termination::diverged) << first.message;
+  EXPECT_EQ(b.dist.termination, first.termination) << b.dist.message;
+  EXPECT_EQ(b.dist.method, pardel::Method::newton);
+  EXPECT_NE(b.dist.message.find("the automatic method's second attempt for a model without a declared cost, was "
+                                "not made: solver.method = \"stationary-newton\" runs in one process only"),
+            std::string::npos)
+      << b.dist.message;
+  EXPECT_EQ(b.dist.point.kind, pardel::PointKind::unknown) << b.dist.point.note;
 }
 
 TEST(Failure, InterruptionOnOneRankStopsEveryRank) {
