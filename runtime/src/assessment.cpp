@@ -27,40 +27,8 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
   return buf;
 }
 
-/** Pivot eigenvalues below this fraction of their block's size count as zero. */
-constexpr double kZeroPivot = 1e-12;
 /** The budget of Lanczos steps for each of the two smallest eigenvalues at a minimum. */
 constexpr int kLanczosSteps = 24;
-
-/** Fixed components are identity rows of the assembled matrix: they add +1 eigenvalues that are
- *  not the action's; they are taken out of the counts. */
-long fixed_components(const Context& ctx) {
-  const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
-  const std::size_t dz = static_cast<std::size_t>(ctx.dim);
-  long fixed = 0;
-  for (std::size_t i = 0; i < n; ++i) fixed += ctx.is_free[dz + i] ? 0 : 1;
-  return fixed;
-}
-
-template <int D>
-void assess_dim(Context& ctx, PointAssessment& out) {
-  BlockTridiagonal<D> H;
-  H.resize(ctx.N, ctx.dim);
-  H.assemble(ctx, 0.0);
-  if (H.factor_ldlt()) {
-    assess_positive_definite(ctx, H, out);
-    return;
-  }
-  const auto in = H.inertia(kZeroPivot);
-  out.lambda_max = H.gershgorin_bound();
-  out.positive = in.positive - fixed_components(ctx);
-  out.negative = in.negative;
-  out.zero = in.zero;
-  if (!classify_indefinite(out)) {  // a failed Cholesky pivot that the inertia counts positive
-    out.kind = PointKind::degenerate;
-    out.note = "degenerate to working precision: the factorization of the Hessian failed";
-  }
-}
 
 /** Scales the rows, then the columns, of a d x d row-major block by their largest |entry| (a zero
  *  row or column is left as it is): a congruence of diagonal matrices, which keeps the rank. */
@@ -236,6 +204,14 @@ void start_vector(const LanczosOperator& op, int shape, double* v) {
 
 }  // namespace
 
+long fixed_components(const Context& ctx) {
+  const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
+  const std::size_t dz = static_cast<std::size_t>(ctx.dim);
+  long fixed = 0;
+  for (std::size_t i = 0; i < n; ++i) fixed += ctx.is_free[dz + i] ? 0 : 1;
+  return fixed;
+}
+
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive) {
   // lambda_1 by Lanczos on H^-1; its Ritz vector y by replaying that run, refined by one inverse
   // iteration; then lambda_2 by Lanczos on H^-1 restricted to the complement of y. The deflation
@@ -368,7 +344,7 @@ bool classify_indefinite(PointAssessment& out) {
   if (out.zero > 0) {
     out.kind = PointKind::degenerate;
     out.note = format("degenerate to working precision: the Hessian of the action has %.0f eigenvalue(s) that "
-                      "are zero within 1e-12 of its largest and no negative one; either the solution is not "
+                      "are zero within 1e-12 of its largest (Jacobi-scaled) and no negative one; either the solution is not "
                       "isolated (a family of trajectories, or a Lagrangian that does not determine the motion) "
                       "or the Hessian is too ill-conditioned for double precision to tell (high-order models "
                       "at large N)",
@@ -389,7 +365,12 @@ void assess(Context& ctx, PointAssessment& out) {
     if (!std::isfinite(v)) return;
   for (double v : ctx.D22)
     if (!std::isfinite(v)) return;
-  dispatch_dim_cold(ctx.dim, [&](auto D) { assess_dim<decltype(D)::value>(ctx, out); });
+  dispatch_dim_cold(ctx.dim, [&](auto D) {
+    BlockTridiagonal<decltype(D)::value> H;
+    H.resize(ctx.N, ctx.dim);
+    H.assemble(ctx, 0.0);
+    assess_hessian(ctx, H, false, out);
+  });
 }
 
 bool lagrangian_regular(const Context& ctx, std::string* message) {

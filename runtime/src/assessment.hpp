@@ -37,13 +37,52 @@ inline PointAssessment not_assessed(Termination termination) {
 void assess_minimum(Context& ctx, double lambda_max, const std::function<void(const double* b, double* x)>& solve,
                     PointAssessment& out, double* const* work = nullptr);
 
-/** assess_minimum given H, the unshifted Hessian at ctx.q, already factored by block LDL^T. Inline,
- *  so that it is compiled with the caller's block size (the one-process Newton's, in newton.cpp)
- *  and assessment.cpp needs no instantiation per block size. */
+/** Fixed components are identity rows of the assembled Hessian: +1 eigenvalues that are not the
+ *  action's, taken out of the counts. */
+long fixed_components(const Context& ctx);
+
+/** From the inertia in out.positive, negative and zero: a saddle or a degenerate point gets its
+ *  kind and note (true); a positive definite Hessian is left to the caller (false). */
+bool classify_indefinite(PointAssessment& out);
+
+/**
+ * The assessment of ctx.q from H, the unshifted Hessian there as assembled; `factored`: already
+ * factored by factor_ldlt() (Newton's last factorization, or the caller's). A minimum where the
+ * factorization's pivots are positive definite under the zero rule of inertia.hpp; otherwise the
+ * inertia by the elimination of every count (H.inertia()), so that a point's counts are those of
+ * the certificate. Inline, so that it is compiled with the caller's block size (the one-process
+ * Newton's, in newton.cpp) and assessment.cpp needs no instantiation per block size. `work` as
+ * LanczosOperator::work (optional).
+ */
+template <int D>
+void assess_hessian(Context& ctx, BlockTridiagonal<D>& H, bool factored, PointAssessment& out,
+                    double* const* work = nullptr) {
+  const auto solve = [&H](const double* b, double* x) { H.solve_ldlt(b, x); };
+  if ((factored || H.factor_ldlt()) && H.ldlt_definite_by_rule()) {
+    assess_minimum(ctx, H.gershgorin_bound(), solve, out, work);
+    return;
+  }
+  const Inertia in = H.inertia();
+  out = PointAssessment{};
+  out.lambda_max = H.gershgorin_bound();
+  out.positive = in.positive - fixed_components(ctx);
+  out.negative = in.negative;
+  out.zero = in.zero;
+  if (classify_indefinite(out)) return;
+  // Positive definite under the rule, though a pivot's Cholesky factor did not show it at once.
+  if (H.factor_ldlt()) {
+    assess_minimum(ctx, out.lambda_max, solve, out, work);
+    return;
+  }
+  out.kind = PointKind::degenerate;
+  out.note = "degenerate to working precision: the factorization of the Hessian failed";
+}
+
+/** assess_hessian given H already factored by block LDL^T at ctx.q (Newton's factorization). */
 template <int D>
 void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out,
                               double* const* work = nullptr) {
-  assess_minimum(ctx, H.gershgorin_bound(), [&H](const double* b, double* x) { H.solve_ldlt(b, x); }, out, work);
+  assess_hessian(ctx, H, true, out, work);
 }
 
 /** A positive definite Hessian's inverse, as the Lanczos iteration of smallest_eigenvalues sees it:
@@ -80,10 +119,6 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
 /** A positive definite Hessian's assessment from its smallest eigenvalues, out.positive and
  *  out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note. */
 void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out);
-
-/** From the inertia in out.positive, negative and zero: a saddle or a degenerate point gets its
- *  kind and note (true); a positive definite Hessian is left to the caller (false). */
-bool classify_indefinite(PointAssessment& out);
 
 /** False (with `message` naming the model and why) when D12 Ld is singular on every sampled
  *  interval of ctx.q: a degenerate Lagrangian whose DEL equations do not determine the motion. */

@@ -8,8 +8,9 @@
  *    are Cholesky-factored, so success certifies positive definiteness (Sylvester's law);
  *  - block cyclic reduction, O(N) work in O(log N) parallel levels; its pivots are those of an
  *    odd-even permutation of H, so success certifies positive definiteness just the same;
- *  - for an indefinite H, the same block elimination with each pivot inverted through its
- *    symmetric eigendecomposition (inertia(), factor_indefinite()).
+ *  - for an indefinite H, the same block elimination with each pivot that is not clearly
+ *    positive definite inverted through its symmetric eigendecomposition (inertia(),
+ *    factor_indefinite()), under the zero rule of inertia.hpp, which every inertia count shares.
  * All storage is allocated by resize(), reserve_cyclic_reduction() and the first
  * factor_indefinite() at a size; factorizations and solves do not allocate otherwise.
  */
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "engine.hpp"
+#include "inertia.hpp"
 
 namespace pardel::detail {
 
@@ -306,25 +308,18 @@ class BlockTridiagonal {
     return bound;
   }
 
-  /** Counts of positive, negative and zero eigenvalues. */
-  struct Inertia {
-    long positive = 0, negative = 0, zero = 0;
-  };
+  using Inertia = detail::Inertia;
 
   /**
-   * The inertia of H as assembled, by block elimination (Haynsworth: the inertia of H is the sum of
-   * the inertias of the pivots S_i = D_i - C_{i-1}^T S_{i-1}^{-1} C_{i-1}). Zero is judged in the
-   * Jacobi-scaled H~ = J H J, J = diag(|H_aa|^{-1/2}) (1 where a diagonal entry vanishes), whose
-   * inertia is H's (Sylvester's law) and whose rows have one size whatever the units of the
-   * coordinates: a coordinate whose terms are 10^12 times another's does not make the other's
-   * eigenvalues look like zeros. A pivot that is not positive definite is split by the symmetric
-   * eigendecomposition of its scaled form; an eigenvalue with |value| <= zero_tol * max(1, |H~|)
-   * (Gershgorin's bound of H~: the size of what the elimination rounds, so that a pivot lost to
-   * round-off in an ill-conditioned H is not taken for a sign) counts as zero and is left out of
-   * the elimination (a pseudo-inverse). Overwrites the LDL^T factorization (factor_ldlt() must be
-   * called again).
+   * The inertia of H as assembled, by block elimination (inertia.hpp: the sum of the inertias of
+   * the pivots S_i = D_i - C_{i-1}^T S_{i-1}^+ C_{i-1}, each under the zero rule there, judged in
+   * the Jacobi-scaled H~ = J H J). A pivot whose Cholesky factor shows every scaled eigenvalue
+   * above the rule's threshold is taken as it is; any other is split by the eigendecomposition of
+   * its scaled form, and its eigenvalues that count as zero are left out of the elimination (a
+   * pseudo-inverse). Overwrites the LDL^T factorization (factor_ldlt() must be called again).
+   * `zero_tol` is the rule's kZeroPivot; it is a parameter only for callers that still pass it.
    */
-  Inertia inertia(double zero_tol) { return eliminate(zero_tol, false); }
+  Inertia inertia(double zero_tol = kZeroPivot) { return eliminate(zero_tol, false); }
 
   /**
    * Block LDL^T of H as assembled when it may be indefinite: the elimination of inertia(), each
@@ -332,12 +327,34 @@ class BlockTridiagonal {
    * eigenvalue that counts as zero (H singular to working precision) or is not finite. Allocates
    * the inverses on its first call at a size (the stationary-point Newton only).
    */
-  bool factor_indefinite(double zero_tol, Inertia* inertia_out = nullptr) {
+  bool factor_indefinite(double zero_tol = kZeroPivot, Inertia* inertia_out = nullptr) {
     assign_within(inverse_, static_cast<std::size_t>(std::max(n_, 0)), diag_.capacity(), Mat::Zero(d_, d_));
     const Inertia in = eliminate(zero_tol, true);
     if (inertia_out) *inertia_out = in;
     indefinite_ = in.zero == 0;
     return indefinite_;
+  }
+
+  /**
+   * After a successful factor_ldlt(): whether its pivots are positive definite under the zero rule
+   * as the elimination of inertia() judges them (every pivot's Cholesky factor shows its scaled
+   * eigenvalues above the threshold), so that inertia() would count no zero and no negative
+   * eigenvalue. False leaves the decision to inertia(). Reads the factorization; changes nothing
+   * but the scaling's scratch.
+   */
+  bool ldlt_definite_by_rule() {
+    const double tiny = zero_threshold(jacobi_scaling());
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      const double* J = scaling_.data() + ii * static_cast<std::size_t>(d_);
+      bool ok;
+      if constexpr (D == Eigen::Dynamic)
+        ok = clearly_positive(Mat(llt_[ii].matrixL()), J, tiny);
+      else
+        ok = clearly_positive(true_factor(factor_[ii]), J, tiny);
+      if (!ok) return false;
+    }
+    return true;
   }
 
   int failed_block() const { return failed_; }
@@ -383,56 +400,39 @@ class BlockTridiagonal {
   Inertia eliminate(double zero_tol, bool keep) {
     Inertia in;
     indefinite_ = false;
-    const double size = std::max(1.0, jacobi_scaling());
+    const double tiny = zero_tol * std::max(1.0, jacobi_scaling());
+    Mat P = Mat::Zero(d_, d_);
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
       Mat S = diag_[ii];
       if (i > 0) S.noalias() -= off_[ii - 1].transpose() * W_[ii - 1];
       const double* J = scaling_.data() + ii * static_cast<std::size_t>(d_);
-      Mat L = S;
-      bool pd = false;
-      if constexpr (D != Eigen::Dynamic) pd = cholesky_in_place(L) && !tiny_cholesky_pivot(L, J, zero_tol * size);
-      if (pd) {
-        in.positive += d_;
-        W_[ii] = off_[ii];
-        cholesky_solve_columns(L, W_[ii]);
-        if (keep) {
-          inverse_[ii].setIdentity(d_, d_);
-          cholesky_solve_columns(L, inverse_[ii]);
+      if constexpr (D != Eigen::Dynamic) {
+        Mat& L = factor_[ii];
+        L = S;
+        if (cholesky_in_place(L) && clearly_positive(true_factor(L), J, tiny)) {
+          in.positive += d_;
+          W_[ii] = off_[ii];
+          cholesky_solve_columns(L, W_[ii]);
+          if (keep) {
+            inverse_[ii].setIdentity(d_, d_);
+            cholesky_solve_columns(L, inverse_[ii]);
+          }
+          continue;
         }
-        continue;
-      }
-      Mat St = S;  // the scaled pivot J S J: its inertia is S's
-      for (int a = 0; a < d_; ++a)
-        for (int b = 0; b < d_; ++b) St(a, b) *= J[a] * J[b];
-      Eigen::SelfAdjointEigenSolver<Mat> eig(St);
-      if (eig.info() != Eigen::Success) {
-        in.zero += d_;
-        W_[ii].setZero();
-        if (keep) inverse_[ii].setZero(d_, d_);
-        continue;
-      }
-      Vec inv = eig.eigenvalues();
-      for (int a = 0; a < d_; ++a) {
-        const double v = inv(a);
-        if (!std::isfinite(v) || std::fabs(v) <= zero_tol * size) {
-          ++in.zero;
-          inv(a) = 0;
-        } else {
-          if (v > 0) ++in.positive; else ++in.negative;
-          inv(a) = 1 / v;
-        }
-      }
-      // S^+ = J (V inv V^T) J from the scaled pivot's eigenvectors.
-      Mat V = eig.eigenvectors();
-      for (int a = 0; a < d_; ++a) V.row(a) *= J[a];
-      if (keep) {
-        inverse_[ii].noalias() = V * inv.asDiagonal() * V.transpose();
-        W_[ii].noalias() = inverse_[ii] * off_[ii];
       } else {
-        const Mat VtC = V.transpose() * off_[ii];
-        W_[ii] = V * (inv.asDiagonal() * VtC);
+        Eigen::LLT<Mat>& llt = llt_[ii];
+        llt.compute(S);
+        if (llt.info() == Eigen::Success && finite_positive_diag(llt) && clearly_positive(Mat(llt.matrixL()), J, tiny)) {
+          in.positive += d_;
+          W_[ii] = llt.solve(off_[ii]);
+          if (keep) inverse_[ii] = llt.solve(Mat::Identity(d_, d_));
+          continue;
+        }
       }
+      split_pivot(S, J, tiny, in, P);
+      W_[ii].noalias() = P * off_[ii];
+      if (keep) inverse_[ii] = P;
     }
     return in;
   }
@@ -443,10 +443,7 @@ class BlockTridiagonal {
     const std::size_t d = static_cast<std::size_t>(d_), n = static_cast<std::size_t>(std::max(n_, 0));
     assign_within(scaling_, n * d, diag_.capacity() * d, 1.0);
     for (std::size_t i = 0; i < n; ++i)
-      for (int a = 0; a < d_; ++a) {
-        const double h = std::fabs(diag_[i](a, a));
-        if (h > 0 && std::isfinite(h)) scaling_[i * d + static_cast<std::size_t>(a)] = 1 / std::sqrt(h);
-      }
+      for (int a = 0; a < d_; ++a) scaling_[i * d + static_cast<std::size_t>(a)] = jacobi_scale(diag_[i](a, a));
     double bound = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const double* J = scaling_.data() + i * d;
@@ -517,14 +514,11 @@ class BlockTridiagonal {
     }
     return true;
   }
-  /** Whether a factor of cholesky_in_place has a diagonal entry with (J_j L(j, j))^2 <= `tiny`
-   *  (J L is the factor of the scaled pivot J S J): the pivot may then have an eigenvalue that
-   *  counts as zero (L(j, j)^2 bounds the smallest one from above only for the last j), and its
-   *  eigendecomposition decides. */
-  static bool tiny_cholesky_pivot(const Mat& L, const double* J, double tiny) {
-    for (int j = 0; j < D; ++j)
-      if (J[j] * J[j] / (L(j, j) * L(j, j)) <= tiny) return true;
-    return false;
+  /** The lower Cholesky factor L of a factor of cholesky_in_place (whose diagonal holds 1 / L(j, j)). */
+  static Mat true_factor(const Mat& F) {
+    Mat L = F.template triangularView<Eigen::Lower>();
+    for (int j = 0; j < D; ++j) L(j, j) = 1 / F(j, j);
+    return L;
   }
   /** x <- (L L^T)^{-1} x for the factor of cholesky_in_place (inverse diagonal). */
   static void cholesky_solve(const Mat& L, double* x) {

@@ -28,7 +28,9 @@ namespace {
 
 using detail::Context;
 
-/** Eigenvalues are compared with this fraction of the largest |eigenvalue| of their matrix. */
+/** The interval Hessians' eigenvalues (the seed's hypotheses, item 1 of the certificate) are
+ *  compared with this fraction of the largest |eigenvalue| of H^Ld_k. The inertia of H (item 2)
+ *  has the zero rule of inertia.hpp instead. */
 constexpr double kRelTol = 1e-10;
 
 struct IntervalCheck {
@@ -90,28 +92,10 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
   H.assemble(ctx, 0.0);
   const int n = H.blocks(), d = ctx.dim;
   equilibrate(H, d);
-  // Block LDL^T with eigen-decomposed pivots: inertia(H) = sum of inertias of the pivots.
-  long pos = 0, neg = 0, zero = 0;
-  Mat S = n > 0 ? H.diag(0) : Mat(), Sinv = Mat::Zero(d, d);
-  for (int i = 0; i < n; ++i) {
-    if (i > 0) S = H.diag(i) - H.off(i - 1).transpose() * Sinv * H.off(i - 1);
-    Eigen::SelfAdjointEigenSolver<Mat> es(S);
-    const auto& ev = es.eigenvalues();
-    const double scale = std::max(ev.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
-    Vec inv = Vec::Zero(d);
-    for (int a = 0; a < d; ++a) {
-      if (ev[a] > kRelTol * scale) {
-        ++pos;
-        inv[a] = 1 / ev[a];
-      } else if (ev[a] < -kRelTol * scale) {
-        ++neg;
-        inv[a] = 1 / ev[a];
-      } else {
-        ++zero;  // pseudo-inverse: the count is then approximate
-      }
-    }
-    Sinv = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
-  }
+  // The inertia by the block elimination and zero rule of every count (inertia.hpp); the
+  // equilibration by powers of two changes neither H's inertia nor its Jacobi-scaled form.
+  const detail::Inertia in = H.inertia();
+  const long pos = in.positive, neg = in.negative, zero = in.zero;
   const long fixed = static_cast<long>(n) * d - ctx.free_total;  // identity rows of fixed components
   c.inertia_positive = pos - fixed;
   c.inertia_negative = neg;

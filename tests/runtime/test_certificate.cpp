@@ -7,7 +7,8 @@
  * H^Ld_k indefinite; spline trapezoid(alpha=1): hold), knots restricting the Hessian, and the report.
  * At orders 3 and 4 (bundled min_jerk, min_snap), where 1 - rho falls like N^(-2 order), the
  * radius against the dense generalized eigenproblem H x = lambda D x (1 - rho = lambda_min), and
- * a radius within round-off of 1 reported as such.
+ * a radius within round-off of 1 reported as such. And the certificate and a solve's point
+ * assessment counting the inertia of a nearly singular Hessian alike, against its dense eigenvalues.
  */
 #include <gtest/gtest.h>
 
@@ -234,6 +235,131 @@ TEST(Certificate, KnotOffTheGridIsAnError) {
   EXPECT_NE(c.error.find("knot 0"), std::string::npos) << c.error;
   EXPECT_NE(c.error.find("nearest nodes: 3"), std::string::npos) << c.error;
   EXPECT_NE(c.report().find("not computed"), std::string::npos);
+}
+
+// ---- Two harmonic oscillators x, y (trapezoid, decoupled), frequencies p[0], p[1]: the Hessian's
+// blocks are diagonal, so its pivots are diag(x pivot, y pivot), and a y frequency next to its
+// conjugate point makes one y pivot tiny beside the x pivot of the same block.
+void pair_full(double h, double, double, const double* q0, const double* q1, const double* p, double* Ld, double* D1,
+               double* D2, double* D11, double* D12, double* D22) {
+  *Ld = 0;
+  for (int a = 0; a < 2; ++a) {
+    const double w2 = p[a] * p[a], dx = q1[a] - q0[a];
+    *Ld += dx * dx / (2 * h) - h * w2 * (q0[a] * q0[a] + q1[a] * q1[a]) / 4;
+    D1[a] = -dx / h - h * w2 * q0[a] / 2;
+    D2[a] = dx / h - h * w2 * q1[a] / 2;
+  }
+  for (int k = 0; k < 4; ++k) D11[k] = D12[k] = D22[k] = 0;
+  for (int a = 0; a < 2; ++a) {
+    D11[3 * a] = D22[3 * a] = 1 / h - h * p[a] * p[a] / 2;
+    D12[3 * a] = -1 / h;
+  }
+}
+void pair_sweep(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* D1,
+                double* D2, double* D11, double* D22) {
+  double Ld, D12[4];
+  pair_full(h, t0, t1, q0, q1, p, &Ld, D1, D2, D11, D12, D22);
+}
+void pair_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* Ld,
+               double* D1, double* D2) {
+  double D11[4], D12[4], D22[4];
+  pair_full(h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+}
+double pair_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p) {
+  double Ld, D1[2], D2[2];
+  pair_grad(h, t0, t1, q0, q1, p, &Ld, D1, D2);
+  return Ld;
+}
+const char* const pair_coords[] = {"x", "y"};
+const char* const pair_params[] = {"omega_x", "omega_y"};
+const double pair_defaults[] = {1.0, 1.0};
+const pardel_discretization pair_discs[] = {{"trapezoid", 2, pair_full, pair_sweep, pair_grad, pair_action}};
+const pardel_model pair_model = {PARDEL_KERNEL_ABI_VERSION, "test_oscillator_pair", "tests/runtime/test_certificate.cpp",
+                                 1, 2, 2, pair_coords, 2, pair_params, pair_defaults, 0, nullptr, 1, pair_discs, nullptr,
+                                 PARDEL_COST_ACTION};
+
+// The certificate (pardel check) and a solve's point assessment count the inertia of a Hessian
+// whose smallest eigenvalue is near zero alike, and as the dense eigenvalues say. y's Hessian is
+// a - (1/h) tridiag(1, 0, 1), a = 2/h - h w_y^2, with the eigenvalues a - (2/h) cos(j pi / N); w_y
+// puts the smallest at lambda (positive, negative or zero). At lambda = +-4e-12 the last y pivot
+// is about 1e-11 of the x pivot of its block: a rule relative to each pivot (the certificate's
+// former one, 1e-10 of the block) calls it zero, while the eigenvalue is far above what rounding
+// makes of the dense matrix, whose signs are therefore the truth; at lambda = 0 the dense
+// eigenvalue is rounding and the truth is a zero.
+TEST(Certificate, CertificateAndAssessmentCountTheInertiaOfANearlySingularHessianAlike) {
+  const int N = 10;
+  const double T = 1, h = T / N, b = 1 / h;
+  const int n = N - 1;
+  for (const double lambda : {4e-12, -4e-12, 0.0}) {
+    char trace[64];
+    std::snprintf(trace, sizeof trace, "lambda = %g", lambda);
+    SCOPED_TRACE(trace);
+    const double wy2 = (2 / h * (1 - std::cos(M_PI / N)) - lambda) / h;
+    pardel::Problem p;
+    p.model = &pair_model;
+    p.discretization = &pair_discs[0];
+    p.params = {1.0, std::sqrt(wy2)};
+    p.T = T;
+    p.N = N;
+    p.q0 = {1.0, 0.0};
+    p.qN = {0.5, 0.0};
+    // The dense Hessian over the unknown nodes, node by node (x, y), from the closed form.
+    const double a[2] = {2 / h - h * p.params[0] * p.params[0], 2 / h - h * wy2};
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+    for (int k = 0; k < n; ++k)
+      for (int c = 0; c < 2; ++c) {
+        H(2 * k + c, 2 * k + c) = a[c];
+        if (k + 1 < n) H(2 * k + c, 2 * k + 2 + c) = H(2 * k + 2 + c, 2 * k + c) = -b;
+      }
+    const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H, Eigen::EigenvaluesOnly).eigenvalues();
+    const double size = ev.cwiseAbs().maxCoeff(), rounding = 100 * 2.2e-16 * size;
+    long truth_pos = 0, truth_neg = 0, truth_zero = 0;
+    for (Eigen::Index i = 0; i < ev.size(); ++i) {
+      if (lambda == 0 && std::fabs(ev[i]) <= rounding) {
+        ++truth_zero;
+        continue;
+      }
+      ASSERT_GT(std::fabs(ev[i]), rounding) << "the sign of every eigenvalue is determined";
+      (ev[i] > 0 ? truth_pos : truth_neg) += 1;
+    }
+    ASSERT_EQ(truth_zero, lambda == 0 ? 1 : 0);
+    ASSERT_EQ(truth_neg, lambda < 0 ? 1 : 0);
+    if (lambda != 0) {
+      // The premise: the last y pivot, against the x pivot of its block (long double recursions).
+      long double px = a[0], py = a[1];
+      for (int k = 1; k < n; ++k) {
+        px = a[0] - static_cast<long double>(b) * b / px;
+        py = a[1] - static_cast<long double>(b) * b / py;
+      }
+      ASSERT_LT(std::fabs(static_cast<double>(py)), 1e-10 * std::fabs(static_cast<double>(px)));
+    }
+
+    const auto c = pardel::certify(p, pardel::linear_guess(p), 1);
+    ASSERT_TRUE(c.error.empty()) << c.error;
+    EXPECT_EQ(c.inertia_positive, truth_pos);
+    EXPECT_EQ(c.inertia_negative, truth_neg);
+    EXPECT_EQ(c.inertia_zero, truth_zero);
+    EXPECT_EQ(c.hessian_positive_definite, truth_neg == 0 && truth_zero == 0);
+
+    // A solve: y = 0 holds from the start; Newton solves x. At a saddle, the stationary-point Newton.
+    pardel::Options o;
+    if (lambda < 0) o.method = pardel::Method::stationary_newton;
+    pardel::Trajectory tr = pardel::linear_guess(p);
+    const pardel::Summary s = pardel::solve(p, o, tr);
+    ASSERT_EQ(s.termination, pardel::Termination::converged) << s.message;
+    EXPECT_EQ(s.point.positive, truth_pos) << s.point.note;
+    EXPECT_EQ(s.point.negative, truth_neg) << s.point.note;
+    EXPECT_EQ(s.point.zero, truth_zero) << s.point.note;
+    EXPECT_EQ(s.point.kind, truth_neg > 0    ? pardel::PointKind::saddle
+                            : truth_zero > 0 ? pardel::PointKind::degenerate
+                                             : pardel::PointKind::minimum)
+        << s.point.note;
+    // The same at the returned trajectory, assessed alone.
+    const pardel::PointAssessment alone = pardel::assess_point(p, tr, 1);
+    EXPECT_EQ(alone.positive, truth_pos) << alone.note;
+    EXPECT_EQ(alone.negative, truth_neg) << alone.note;
+    EXPECT_EQ(alone.zero, truth_zero) << alone.note;
+  }
 }
 
 }  // namespace

@@ -22,6 +22,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "../inertia.hpp"
+
 namespace pardel::mpi::detail {
 
 template <int D>
@@ -191,43 +193,58 @@ class SchurBlockSolver {
     return true;
   }
 
-  /** Counts of positive, negative and zero eigenvalues. */
-  struct Inertia {
-    long positive = 0, negative = 0, zero = 0;
-  };
+  using Inertia = pardel::detail::Inertia;
 
   /**
    * The inertia of H as assembled, by Haynsworth's theorem over the split: the inertias of the
-   * interiors' pivots (block elimination) plus that of the separators' Schur complement. Pivots
-   * are split by their symmetric eigendecomposition (so H need not be definite); an eigenvalue with
-   * |value| <= zero_tol * max(1, largest block entry over all ranks) counts as zero and is left out
-   * of the elimination (a pseudo-inverse). Collective over `comm`; the same counts on every rank.
-   * Overwrites the factorization of solve() (which refactors on every call).
+   * interiors' pivots (block elimination) plus that of the separators' Schur complement. Each pivot
+   * is split by split_pivot() of inertia.hpp, under the zero rule there (the one-process
+   * elimination's): zero is judged in the Jacobi-scaled H~ = J H J against Gershgorin's bound of
+   * H~ over all ranks, and eigenvalues that count as zero are left out of the elimination (a
+   * pseudo-inverse). Collective over `comm`; the same counts on every rank. Overwrites the
+   * factorization of solve() (which refactors on every call). `zero_tol` is the rule's kZeroPivot;
+   * it is a parameter only for callers that still pass it.
    */
+  Inertia inertia(MPI_Comm comm) { return inertia(pardel::detail::kZeroPivot, comm); }
   Inertia inertia(double zero_tol, MPI_Comm comm) {
     const int d = d_;
-    double scale = 1;
+    const std::size_t dz = static_cast<std::size_t>(d);
+    // J per owned unknown, and the neighbours' J at the two ends of this rank (every rank's first
+    // and last block, gathered), for the Gershgorin bound of H~ over the rows this rank owns.
+    std::vector<double> J(static_cast<std::size_t>(owned_) * dz, 1.0);
+    for (int i = 0; i < owned_; ++i)
+      for (int a = 0; a < d; ++a)
+        J[static_cast<std::size_t>(i) * dz + static_cast<std::size_t>(a)] = pardel::detail::jacobi_scale(diag_[static_cast<std::size_t>(i)](a, a));
+    std::vector<double> ends(2 * dz, 1.0), all_ends(2 * dz * static_cast<std::size_t>(ranks_), 1.0);
+    if (owned_ > 0) {
+      std::copy(J.begin(), J.begin() + d, ends.begin());
+      std::copy(J.end() - d, J.end(), ends.begin() + d);
+    }
+    MPI_Allgather(ends.data(), 2 * d, MPI_DOUBLE, all_ends.data(), 2 * d, MPI_DOUBLE, comm);
+    const double* J_left = has_left_ ? all_ends.data() + static_cast<std::size_t>(rank_ - 1) * 2 * dz + dz : nullptr;
+    const double* J_right = has_right_ ? all_ends.data() + static_cast<std::size_t>(rank_ + 1) * 2 * dz : nullptr;
+    double bound = 0;
     for (int i = 0; i < owned_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
-      scale = std::max({scale, diag_[ii].cwiseAbs().maxCoeff(), off_[ii].cwiseAbs().maxCoeff()});
-    }
-    MPI_Allreduce(MPI_IN_PLACE, &scale, 1, MPI_DOUBLE, MPI_MAX, comm);
-    const double tol = zero_tol * scale;
-    Inertia local;
-    // p = pseudo-inverse of the symmetric pivot S, its eigenvalues counted into `in`.
-    auto pivot = [&](const Mat& S, Mat& p, Inertia& in) {
-      Eigen::SelfAdjointEigenSolver<Mat> eig(S);
-      Vec inv = Vec::Zero(d);
+      const double* Ji = J.data() + ii * dz;
+      const double* Jn = i + 1 < owned_ ? Ji + dz : J_right;
+      const double* Jp = i > 0 ? Ji - dz : J_left;
+      const Mat* previous = i > 0 ? &off_[ii - 1] : has_left_ ? &left_ : nullptr;
       for (int a = 0; a < d; ++a) {
-        const double v = eig.info() == Eigen::Success ? eig.eigenvalues()(a) : 0.0;
-        if (!std::isfinite(v) || std::fabs(v) <= tol) {
-          ++in.zero;
-        } else {
-          if (v > 0) ++in.positive; else ++in.negative;
-          inv(a) = 1 / v;
+        double row = 0;
+        for (int c = 0; c < d; ++c) {
+          row += std::fabs(diag_[ii](a, c)) * Ji[a] * Ji[c];
+          if (Jn) row += std::fabs(off_[ii](a, c)) * Ji[a] * Jn[c];
+          if (previous) row += std::fabs((*previous)(c, a)) * Ji[a] * Jp[c];
         }
+        bound = std::max(bound, row);
       }
-      p = eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &bound, 1, MPI_DOUBLE, MPI_MAX, comm);
+    const double tol = zero_tol * std::max(1.0, bound);
+    Inertia local;
+    auto pivot = [&](const Mat& S, const double* Js, Mat& p, Inertia& in) {
+      pardel::detail::split_pivot(S, Js, tol, in, p);
     };
     // Interior: pivots P_i, G_i = P_i C_i, and the eliminations XL = T^+ E_L, XR = T^+ E_R.
     std::vector<Mat> P(static_cast<std::size_t>(std::max(interior_, 0)), Mat::Zero(d, d));
@@ -235,7 +252,7 @@ class SchurBlockSolver {
       const std::size_t ii = static_cast<std::size_t>(i);
       Mat S = diag_[ii];
       if (i > 0) S.noalias() -= off_[ii - 1].transpose() * G_[ii - 1];
-      pivot(S, P[ii], local);
+      pivot(S, J.data() + ii * dz, P[ii], local);
       if (i + 1 < interior_) G_[ii] = P[ii] * off_[ii]; else G_[ii].setZero();
       if (has_left_) {
         if (i == 0) XL_[0] = left_.transpose(); else XL_[ii].noalias() = -G_[ii - 1].transpose() * XL_[ii - 1];
@@ -286,7 +303,7 @@ class SchurBlockSolver {
       Mat S = Eigen::Map<const Mat>(pj + 3, d, d);
       S += Eigen::Map<const Mat>(pn + 3 + d * d, d, d);
       if (j > 0) S.noalias() -= So.transpose() * W;
-      pivot(S, Pj, total);
+      pivot(S, all_ends.data() + static_cast<std::size_t>(j) * 2 * dz + dz, Pj, total);  // rank j's last block
       So = j + 2 < ranks_ ? Mat(Eigen::Map<const Mat>(pn + 3 + 2 * d * d, d, d)) : Mat(Mat::Zero(d, d));
       W = Pj * So;
     }
