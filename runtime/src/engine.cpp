@@ -49,7 +49,7 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   ctx.t[static_cast<std::size_t>(N)] = problem.t0 + problem.T;
   if (!problem.times.empty() && N == problem.N) {  // a non-uniform grid (Problem::times)
     for (int k = 0; k <= N; ++k) ctx.t[static_cast<std::size_t>(k)] = problem.times[static_cast<std::size_t>(k)];
-    for (int k = 0; k < N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+    steps_from_times(ctx);
   }
   fit(ctx.is_free, n1 * d, static_cast<unsigned char>(1));
   fit(ctx.free_count, n1, m.dim);
@@ -107,32 +107,55 @@ int knot_node(const Problem& problem, std::size_t a, int N, std::string* message
 }
 
 bool apply_constraints(const Problem& problem, Context& ctx, std::string* message) {
-  const int d = ctx.dim, N = ctx.N;
   std::fill(ctx.is_free.begin(), ctx.is_free.end(), 1);
-  std::fill(ctx.free_count.begin(), ctx.free_count.end(), d);
+  if (!constrain_nodes(problem, ctx, ctx.N, 0, ctx.N, ctx.is_free.data(), ctx.q.data(), message)) return false;
+  count_free(ctx);
+  return true;
+}
+
+bool constrain_nodes(const Problem& problem, const Context& ctx, int N, int lo, int hi, unsigned char* free, double* q,
+                     std::string* message) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
   auto fix = [&](int k, int from, int to) {
-    for (int i = from; i < to; ++i) {
-      unsigned char& f = ctx.is_free[static_cast<std::size_t>(k) * d + i];
-      if (f) {
-        f = 0;
-        --ctx.free_count[static_cast<std::size_t>(k)];
-      }
-    }
+    if (k < lo || k > hi) return;
+    for (int i = from; i < to; ++i) free[static_cast<std::size_t>(k - lo) * d + static_cast<std::size_t>(i)] = 0;
   };
-  fix(0, 0, d);
-  fix(N, 0, d);
+  fix(0, 0, ctx.dim);
+  fix(N, 0, ctx.dim);
   for (std::size_t a = 0; a < problem.knots.size(); ++a) {
     const Knot& knot = problem.knots[a];
     const int k = knot_node(problem, a, N, message);
     if (k < 0) return false;
     // Order 1: the whole node is fixed; order >= 2: only the coordinates (seed eq2-interpolation).
-    fix(k, 0, ctx.order == 1 ? d : ctx.ncoords);
-    double* qk = ctx.node(ctx.q, k);
+    fix(k, 0, ctx.order == 1 ? ctx.dim : ctx.ncoords);
+    if (k < lo || k > hi) continue;
+    double* qk = q + static_cast<std::size_t>(k - lo) * d;
     for (int i = 0; i < ctx.ncoords; ++i) qk[i] = knot.q[static_cast<std::size_t>(i)];
   }
-  ctx.free_total = 0;
-  for (int c : ctx.free_count) ctx.free_total += c;
   return true;
+}
+
+void place_end_points(const Problem& problem, int N, int lo, int hi, int dim, double* q) {
+  const std::size_t d = static_cast<std::size_t>(dim);
+  for (std::size_t i = 0; i < d; ++i) {
+    if (lo == 0) q[i] = problem.q0[i];
+    if (hi == N) q[static_cast<std::size_t>(N - lo) * d + i] = problem.qN[i];
+  }
+}
+
+void count_free(Context& ctx) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  ctx.free_total = 0;
+  for (std::size_t j = 0; j < ctx.free_count.size(); ++j) {
+    int count = 0;
+    for (std::size_t i = 0; i < d; ++i) count += ctx.is_free[j * d + i];
+    ctx.free_count[j] = count;
+    ctx.free_total += count;
+  }
+}
+
+void steps_from_times(Context& ctx) {
+  for (std::size_t k = 0; k < ctx.hk.size(); ++k) ctx.hk[k] = ctx.t[k + 1] - ctx.t[k];
 }
 
 void ensure_interval_arrays(Context& ctx, Evaluated kind) {
@@ -398,8 +421,7 @@ bool context_at(const Problem& problem, const Trajectory& trajectory, int thread
   if (problem.clock != ClockMode::none) {
     if (trajectory.t.size() == ctx.t.size()) {
       ctx.t = trajectory.t;
-      if (problem.clock == ClockMode::fixed_total_time)
-        for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+      if (problem.clock == ClockMode::fixed_total_time) steps_from_times(ctx);
     } else {
       update_times(ctx, Positions::stay);
     }

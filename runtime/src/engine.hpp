@@ -119,6 +119,20 @@ inline long next_history_record(long iteration, long every, std::size_t recorded
 }
 /** Marks knots and boundaries; `message` is set and false returned for a knot off the grid. */
 bool apply_constraints(const Problem& problem, Context& ctx, std::string* message);
+/** The constraints of the problem on the nodes lo..hi of its grid of N intervals (all of it in one
+ *  process, a rank's nodes over MPI): in `free` (node layout from node lo, ctx.dim values a node,
+ *  all 1 on entry) 0 on the fixed components, the end points and the knots' nodes (all of a node
+ *  at order 1, its coordinates at order >= 2), and the knots' coordinates written into `q` (the
+ *  same layout); false with `message` for a knot off the grid. */
+bool constrain_nodes(const Problem& problem, const Context& ctx, int N, int lo, int hi, unsigned char* free, double* q,
+                     std::string* message);
+/** The problem's end points q0 and qN into `q`, the values of the nodes lo..hi of its grid of N
+ *  intervals in node layout, `dim` values a node (where those nodes include node 0 or node N). */
+void place_end_points(const Problem& problem, int N, int lo, int hi, int dim, double* q);
+/** ctx.free_count and ctx.free_total from ctx.is_free. */
+void count_free(Context& ctx);
+/** The steps ctx.hk from the node times ctx.t (a given grid, or the times of fixed_total_time's clock). */
+void steps_from_times(Context& ctx);
 /** A context for the problem at a given trajectory on its grid (its node times under a clock, or
  *  times from the clock when the trajectory has none); false with `error` for an invalid pair. */
 bool context_at(const Problem& problem, const Trajectory& trajectory, int threads, Context& ctx, std::string* error);

@@ -36,11 +36,7 @@ std::unique_ptr<Method_> OneProcess::make_stationary_newton(const Options& optio
 bool OneProcess::set_up(const Problem& problem, int N, int threads, const Trajectory& from, std::string* message) {
   setup_context(problem, N, threads, ctx_);
   ctx_.q = from.q;
-  const std::size_t d = static_cast<std::size_t>(ctx_.dim);
-  for (std::size_t i = 0; i < d; ++i) {
-    ctx_.q[i] = problem.q0[i];
-    ctx_.q[static_cast<std::size_t>(N) * d + i] = problem.qN[i];
-  }
+  place_end_points(problem, N, 0, N, ctx_.dim, ctx_.q.data());
   if (!apply_constraints(problem, ctx_, message)) return false;
   if (problem.clock != ClockMode::none && from.t.size() == ctx_.t.size()) ctx_.t = from.t;
   return true;
@@ -51,8 +47,7 @@ bool OneProcess::set_up_resumed(const Problem& problem, const SolverState& st, i
   ctx_.q = st.trajectory.q;
   if (!apply_constraints(problem, ctx_, message)) return false;
   ctx_.t = st.trajectory.t;
-  if (problem.clock == ClockMode::fixed_total_time)
-    for (int k = 0; k < ctx_.N; ++k) ctx_.hk[static_cast<std::size_t>(k)] = ctx_.t[k + 1] - ctx_.t[k];
+  if (problem.clock == ClockMode::fixed_total_time) steps_from_times(ctx_);
   return true;
 }
 

@@ -431,8 +431,7 @@ double residual_norm(const Problem& problem, const Trajectory& trajectory) {
   ctx.q = trajectory.q;  // the trajectory as given, knots included
   if (trajectory.t.size() == ctx.t.size()) {
     ctx.t = trajectory.t;
-    if (problem.clock == ClockMode::fixed_total_time)
-      for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+    if (problem.clock == ClockMode::fixed_total_time) detail::steps_from_times(ctx);
   }
   detail::eval_grad(ctx, ctx.q);
   if (detail::compute_residual(ctx) >= 0) return std::numeric_limits<double>::quiet_NaN();
@@ -447,8 +446,7 @@ double discrete_action(const Problem& problem, const Trajectory& trajectory) {
   detail::setup_context(problem, trajectory.N, 1, ctx);
   if (trajectory.t.size() == ctx.t.size()) {
     ctx.t = trajectory.t;
-    if (problem.clock == ClockMode::fixed_total_time)
-      for (int k = 0; k < ctx.N; ++k) ctx.hk[static_cast<std::size_t>(k)] = ctx.t[k + 1] - ctx.t[k];
+    if (problem.clock == ClockMode::fixed_total_time) detail::steps_from_times(ctx);
   }
   return detail::action_at(ctx, trajectory.q);
 }

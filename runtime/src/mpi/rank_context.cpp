@@ -33,39 +33,16 @@ bool setup_local(const Problem& problem, int N, int threads, const Trajectory& g
   // The guess on the local nodes, boundaries replaced by the problem's.
   std::copy(guess.q.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(L.lo) * d),
             guess.q.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(L.hi + 1) * d), ctx.q.begin());
-  if (L.lo == 0)
-    for (std::size_t i = 0; i < d; ++i) ctx.q[i] = problem.q0[i];
-  if (L.hi == N)
-    for (std::size_t i = 0; i < d; ++i) ctx.q[static_cast<std::size_t>(Nl) * d + i] = problem.qN[i];
+  pardel::detail::place_end_points(problem, N, L.lo, L.hi, ctx.dim, ctx.q.data());
   // Constraints of the whole problem on the local nodes.
   local.global_free.assign(static_cast<std::size_t>(Nl + 1) * d, 1);
-  auto fix = [&](int g, int from, int to) {
-    if (g < L.lo || g > L.hi) return;
-    for (int i = from; i < to; ++i) local.global_free[static_cast<std::size_t>(L.local(g)) * d + i] = 0;
-  };
-  fix(0, 0, ctx.dim);
-  fix(N, 0, ctx.dim);
-  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
-    const Knot& knot = problem.knots[a];
-    const int k = pardel::detail::knot_node(problem, a, N, message);
-    if (k < 0) return false;
-    fix(k, 0, ctx.order == 1 ? ctx.dim : ctx.ncoords);
-    if (k >= L.lo && k <= L.hi) {
-      double* qk = ctx.node(ctx.q, L.local(k));
-      for (int i = 0; i < ctx.ncoords; ++i) qk[i] = knot.q[static_cast<std::size_t>(i)];
-    }
-  }
+  if (!pardel::detail::constrain_nodes(problem, ctx, N, L.lo, L.hi, local.global_free.data(), ctx.q.data(), message))
+    return false;
   // The local context: the whole pattern, with the halo nodes fixed (their values come from the neighbours).
   ctx.is_free = local.global_free;
   if (L.has_left()) std::fill(ctx.is_free.begin(), ctx.is_free.begin() + static_cast<std::ptrdiff_t>(d), 0);
   if (L.has_right()) std::fill(ctx.is_free.end() - static_cast<std::ptrdiff_t>(d), ctx.is_free.end(), 0);
-  ctx.free_total = 0;
-  for (int j = 0; j <= Nl; ++j) {
-    int count = 0;
-    for (std::size_t i = 0; i < d; ++i) count += ctx.is_free[static_cast<std::size_t>(j) * d + i];
-    ctx.free_count[static_cast<std::size_t>(j)] = count;
-    ctx.free_total += count;
-  }
+  pardel::detail::count_free(ctx);
   local.interval_scratch.assign(static_cast<std::size_t>(local.owned_intervals()), 0.0);
   local.u0 = std::max(L.first, 1);
   local.u1 = std::min(L.last, N - 1);
@@ -191,7 +168,7 @@ bool lagrangian_regular_over_ranks(const Local& local, std::string* message) {
     probe.q = std::move(whole.q);
     probe.hk.assign(static_cast<std::size_t>(whole.N), ctx.T / whole.N);
     if (ctx.clock == ClockMode::fixed_total_time)
-      for (std::size_t k = 0; k < probe.hk.size(); ++k) probe.hk[k] = probe.t[k + 1] - probe.t[k];
+      pardel::detail::steps_from_times(probe);
     regular = pardel::detail::lagrangian_regular(probe, &text) ? 1 : 0;
   }
   MPI_Bcast(&regular, 1, MPI_INT, 0, local.comm);

@@ -108,8 +108,7 @@ bool RankTopology::set_up_resumed(const Problem& problem, const SolverState& st,
   const Layout& L = local_.layout;
   Context& ctx = local_.ctx;
   std::copy(st.trajectory.t.begin() + L.lo, st.trajectory.t.begin() + L.hi + 1, ctx.t.begin());
-  if (problem.clock == ClockMode::fixed_total_time)
-    for (std::size_t j = 0; j + 1 < ctx.t.size(); ++j) ctx.hk[j] = ctx.t[j + 1] - ctx.t[j];
+  if (problem.clock == ClockMode::fixed_total_time) pardel::detail::steps_from_times(ctx);
   return true;
 }
 
