@@ -1,7 +1,7 @@
 /**
  * @file levels.hpp
- * Internal: the grid levels of a solve, written once for the one-process solve (solve.cpp) and
- * the solve over MPI ranks (mpi/distributed.cpp): which grids coarse-to-fine refinement and the
+ * Internal: the grid levels of a solve (solve.cpp, over any topology: one process or MPI ranks,
+ * topology.hpp): which grids coarse-to-fine refinement and the
  * automatic method's grid sequencing visit, and where each level after the first starts (the
  * previous level's solution, or Newton's extrapolation from the two previous levels), and the
  * checks and counters of resuming an interrupted solve at a level (SolverState).
@@ -101,7 +101,7 @@ class LevelStarts {
  *  refinement_levels gives), and the summary's method, N and threads set from them. */
 Options resolved_options(const Options& requested, const Problem& problem, Summary& summary);
 
-/** What a solve does at each level (one process or over ranks; see run_levels). */
+/** What a solve does at each level (solve.cpp's, over its topology; see run_levels). */
 struct LevelSteps {
   std::function<bool()> resume;             ///< enter the resumed state's level
   std::function<bool(int N)> warm;          ///< enter a warm start's first level, with its counts
