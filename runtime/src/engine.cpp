@@ -158,6 +158,13 @@ void steps_from_times(Context& ctx) {
   for (std::size_t k = 0; k < ctx.hk.size(); ++k) ctx.hk[k] = ctx.t[k + 1] - ctx.t[k];
 }
 
+bool take_times(const Problem& problem, const Trajectory& trajectory, Context& ctx) {
+  if (trajectory.t.size() != ctx.t.size()) return false;
+  ctx.t = trajectory.t;
+  if (problem.clock == ClockMode::fixed_total_time) steps_from_times(ctx);
+  return true;
+}
+
 void ensure_interval_arrays(Context& ctx, Evaluated kind) {
   const std::size_t N = static_cast<std::size_t>(ctx.N), d = static_cast<std::size_t>(ctx.dim);
   auto size = [&ctx](std::vector<double>& v, std::size_t n) {
@@ -418,14 +425,7 @@ bool context_at(const Problem& problem, const Trajectory& trajectory, int thread
   setup_context(problem, problem.N, resolve_threads(threads), ctx);
   if (!apply_constraints(problem, ctx, error)) return false;
   ctx.q = trajectory.q;
-  if (problem.clock != ClockMode::none) {
-    if (trajectory.t.size() == ctx.t.size()) {
-      ctx.t = trajectory.t;
-      if (problem.clock == ClockMode::fixed_total_time) steps_from_times(ctx);
-    } else {
-      update_times(ctx, Positions::stay);
-    }
-  }
+  if (problem.clock != ClockMode::none && !take_times(problem, trajectory, ctx)) update_times(ctx, Positions::stay);
   return true;
 }
 

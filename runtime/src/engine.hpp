@@ -133,6 +133,9 @@ void place_end_points(const Problem& problem, int N, int lo, int hi, int dim, do
 void count_free(Context& ctx);
 /** The steps ctx.hk from the node times ctx.t (a given grid, or the times of fixed_total_time's clock). */
 void steps_from_times(Context& ctx);
+/** The node times of `trajectory` into ctx where it has them for ctx's grid, with the steps from
+ *  them under fixed_total_time; whether it had them. */
+bool take_times(const Problem& problem, const Trajectory& trajectory, Context& ctx);
 /** A context for the problem at a given trajectory on its grid (its node times under a clock, or
  *  times from the clock when the trajectory has none); false with `error` for an invalid pair. */
 bool context_at(const Problem& problem, const Trajectory& trajectory, int threads, Context& ctx, std::string* error);

@@ -51,7 +51,9 @@ bool OneProcess::set_up_resumed(const Problem& problem, const SolverState& st, i
   return true;
 }
 
-bool OneProcess::lagrangian_regular(std::string* message) { return detail::lagrangian_regular(ctx_, message); }
+bool OneProcess::lagrangian_regular(const Problem&, std::string* message) {
+  return detail::lagrangian_regular(ctx_, message);
+}
 
 void OneProcess::gather(bool, Trajectory& out) {
   out.N = ctx_.N;

@@ -73,7 +73,7 @@ class Driver : public detail::Iteration {
     if (problem_.clock != ClockMode::none) partition_.update_times(ctx_, detail::Positions::follow_times);
     if (!checked_regular_) {
       checked_regular_ = true;
-      if (!topology_.lagrangian_regular(&message)) return refuse(std::move(message));
+      if (!topology_.lagrangian_regular(problem_, &message)) return refuse(std::move(message));
     }
     method_.reset(ctx_);
     return true;
@@ -429,10 +429,7 @@ double residual_norm(const Problem& problem, const Trajectory& trajectory) {
   ctx.q = trajectory.q;
   if (!detail::apply_constraints(problem, ctx, &error)) return std::numeric_limits<double>::quiet_NaN();
   ctx.q = trajectory.q;  // the trajectory as given, knots included
-  if (trajectory.t.size() == ctx.t.size()) {
-    ctx.t = trajectory.t;
-    if (problem.clock == ClockMode::fixed_total_time) detail::steps_from_times(ctx);
-  }
+  detail::take_times(problem, trajectory, ctx);
   detail::eval_grad(ctx, ctx.q);
   if (detail::compute_residual(ctx) >= 0) return std::numeric_limits<double>::quiet_NaN();
   return ctx.residual;
@@ -444,10 +441,7 @@ double discrete_action(const Problem& problem, const Trajectory& trajectory) {
     return std::numeric_limits<double>::quiet_NaN();
   Context ctx;
   detail::setup_context(problem, trajectory.N, 1, ctx);
-  if (trajectory.t.size() == ctx.t.size()) {
-    ctx.t = trajectory.t;
-    if (problem.clock == ClockMode::fixed_total_time) detail::steps_from_times(ctx);
-  }
+  detail::take_times(problem, trajectory, ctx);
   return detail::action_at(ctx, trajectory.q);
 }
 

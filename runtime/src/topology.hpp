@@ -62,7 +62,7 @@ class Topology : public Partition {
   virtual bool set_up_resumed(const Problem& problem, const SolverState& st, int threads, std::string* message) = 0;
   /** lagrangian_regular (assessment.hpp) at the context's iterate and node times over the whole
    *  grid, the same verdict and message on every process. Collective. */
-  virtual bool lagrangian_regular(std::string* message) = 0;
+  virtual bool lagrangian_regular(const Problem& problem, std::string* message) = 0;
   /** The whole iterate of the current level and its node times in `out`: on every process
    *  (`everywhere`) or on the one that holds the result alone (the others' `out` emptied).
    *  Collective. */
@@ -109,7 +109,7 @@ class OneProcess final : public Topology {
   void reserve(int N) override { ctx_.reserve_N = N; }
   bool set_up(const Problem& problem, int N, int threads, const Trajectory& from, std::string* message) override;
   bool set_up_resumed(const Problem& problem, const SolverState& st, int threads, std::string* message) override;
-  bool lagrangian_regular(std::string* message) override;
+  bool lagrangian_regular(const Problem& problem, std::string* message) override;
   void gather(bool everywhere, Trajectory& out) override;
   void refine(const Options& options, Summary& summary) override;
   void assess(const Options& options, PointAssessment& out) override;

@@ -54,7 +54,9 @@ class Forwarding final : public pardel::detail::Topology {
     ++*levels_;
     return inner_.set_up_resumed(problem, st, threads, message);
   }
-  bool lagrangian_regular(std::string* message) override { return inner_.lagrangian_regular(message); }
+  bool lagrangian_regular(const pardel::Problem& problem, std::string* message) override {
+    return inner_.lagrangian_regular(problem, message);
+  }
   void gather(bool everywhere, pardel::Trajectory& out) override { inner_.gather(everywhere, out); }
   void refine(const pardel::Options& options, pardel::Summary& summary) override { inner_.refine(options, summary); }
   void assess(const pardel::Options& options, pardel::PointAssessment& out) override { inner_.assess(options, out); }

@@ -145,30 +145,17 @@ int globalize_residual(Local& local, int local_bad) {
 }
 
 
-bool lagrangian_regular_over_ranks(const Local& local, std::string* message) {
+bool lagrangian_regular_over_ranks(const Problem& problem, const Local& local, std::string* message) {
   Trajectory whole;
   gather_trajectory(local, false, whole);
   int regular = 1;
   std::string text;
   if (local.layout.rank == 0) {
-    // What lagrangian_regular reads: the model and discretization, the grid and its steps, the iterate.
-    const Context& ctx = local.ctx;
+    // The one-process context of the whole level: its grid, node times and steps, and its iterate.
     Context probe;
-    probe.model = ctx.model;
-    probe.disc = ctx.disc;
-    probe.dim = ctx.dim;
-    probe.ncoords = ctx.ncoords;
-    probe.order = ctx.order;
-    probe.params = ctx.params;
-    probe.clock = ctx.clock;
-    probe.t0 = ctx.t0;
-    probe.T = ctx.T;
-    probe.N = whole.N;
-    probe.t = std::move(whole.t);
+    pardel::detail::setup_context(problem, whole.N, 1, probe);
+    pardel::detail::take_times(problem, whole, probe);
     probe.q = std::move(whole.q);
-    probe.hk.assign(static_cast<std::size_t>(whole.N), ctx.T / whole.N);
-    if (ctx.clock == ClockMode::fixed_total_time)
-      pardel::detail::steps_from_times(probe);
     regular = pardel::detail::lagrangian_regular(probe, &text) ? 1 : 0;
   }
   MPI_Bcast(&regular, 1, MPI_INT, 0, local.comm);

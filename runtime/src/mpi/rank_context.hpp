@@ -65,7 +65,7 @@ int globalize_residual(Local& local, int local_bad);
 /** The one-process check that the Lagrangian is regular (assessment.hpp lagrangian_regular) at the
  *  current iterate and node times of the ranks: made on rank 0 from the whole level gathered
  *  there (for the length of the check), its verdict and message sent to every rank. Collective. */
-bool lagrangian_regular_over_ranks(const Local& local, std::string* message);
+bool lagrangian_regular_over_ranks(const Problem& problem, const Local& local, std::string* message);
 
 /** Node times from the model's clock over the ranks (rank_times.cpp): engine.cpp's update_times,
  *  the same bit for bit. Collective. */

@@ -112,7 +112,9 @@ bool RankTopology::set_up_resumed(const Problem& problem, const SolverState& st,
   return true;
 }
 
-bool RankTopology::lagrangian_regular(std::string* message) { return lagrangian_regular_over_ranks(local_, message); }
+bool RankTopology::lagrangian_regular(const Problem& problem, std::string* message) {
+  return lagrangian_regular_over_ranks(problem, local_, message);
+}
 
 void RankTopology::gather(bool everywhere, Trajectory& out) { gather_trajectory(local_, everywhere, out); }
 

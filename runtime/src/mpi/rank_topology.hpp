@@ -43,7 +43,7 @@ class RankTopology final : public pardel::detail::Topology {
   std::unique_ptr<pardel::detail::Method_> make_stationary_newton(const Options& options, int dim) override;
   bool set_up(const Problem& problem, int N, int threads, const Trajectory& from, std::string* message) override;
   bool set_up_resumed(const Problem& problem, const SolverState& st, int threads, std::string* message) override;
-  bool lagrangian_regular(std::string* message) override;
+  bool lagrangian_regular(const Problem& problem, std::string* message) override;
   void gather(bool everywhere, Trajectory& out) override;
   bool holds_result() const override { return rank_ == 0; }
   bool releases_whole_trajectories() const override { return true; }
