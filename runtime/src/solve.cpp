@@ -165,7 +165,8 @@ bool check_input(const Problem& problem, const Options& requested, const Options
  *  add to the peak memory. */
 void assess_point(const Options& options, const OnceFlags& flags, std::unique_ptr<detail::Method_>& method,
                   Topology& topology, Summary& summary) {
-  // The assessment polls Options::keep_going.
+  // The one-process assessment polls Options::keep_going; the assessment over ranks does not (one
+  // rank alone must not leave a collective).
   topology.context().keep_going = options.keep_going;
   if (!flags.assess) {
     summary.point.note = "not assessed";
