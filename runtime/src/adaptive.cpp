@@ -376,10 +376,11 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
     int N_new = 0;
     if (met) {
       // A grid that meets the request with room is followed by a smaller one placed from its
-      // well-resolved solution, unless a smaller one already failed.
+      // well-resolved solution, unless a smaller one already failed or there is no room left for
+      // it and a solve again on this grid within kMaxGrids.
       const long smaller = std::max({N_predicted, static_cast<long>(std::ceil(current.N / kMaxShrink)),
                                      static_cast<long>(problem.N)});
-      if (N_predicted == 0 || shrink_failed || smaller > kShrink * current.N || round + 1 >= kMaxGrids) {
+      if (N_predicted == 0 || shrink_failed || smaller > kShrink * current.N || round + 2 >= kMaxGrids) {
         outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
                   number(estimate) + ") after " + std::to_string(sizes.size()) + " grid" + (sizes.size() == 1 ? "" : "s");
         break;
