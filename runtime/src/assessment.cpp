@@ -4,7 +4,9 @@
  * Hessian from its block LDL^T (minimum, saddle of index k, degenerate) and, at a minimum, its two
  * smallest eigenvalues by Lanczos on the inverse (the second one with the first deflated) against
  * Gershgorin's bound on the largest, which tells a well-posed minimum from a nearly degenerate one.
- * O(N) work: one factorization (or Newton's last one, at the same point) and at most 3 x 24 solves. Also the check that refuses a degenerate Lagrangian before solving.
+ * O(N) work: one factorization (or Newton's last one, at the same point) and at most 2 x 24 solves
+ * where lambda_1's run takes at most 4 steps, 3 x 24 otherwise. Also the check that refuses a
+ * degenerate Lagrangian before solving.
  */
 #include <Eigen/Dense>
 #include <algorithm>
@@ -17,6 +19,7 @@
 
 #include "assessment.hpp"
 #include "block_tridiagonal.hpp"
+#include "lanczos.hpp"
 
 namespace pardel::detail {
 namespace {
@@ -80,126 +83,149 @@ double top_ritz(const std::vector<double>& alpha, const std::vector<double>& bet
   return eig.eigenvalues()(k - 1);
 }
 
+/** Where the vectors v_0, v_1, ... of a Lanczos run live: v_j in slot[j % cycle] (cycle 3 or 4). */
+struct Basis {
+  double* const* slot = nullptr;
+  int cycle = 3;
+  double* at(int j) const { return slot[j % cycle]; }
+};
+
 /**
  * Lanczos on A = H^-1 over the free components, projected against the unit vector y where y is
- * not null (A restricted to y's complement), from the start vector in v[1] (any norm): the largest
- * eigenvalue mu of A there, by the largest Ritz value of T_j, and 1/mu, an upper bound on the
- * smallest eigenvalue of H there. v holds three vectors of n (v[0] must be zero). Stops when the
- * residual bound puts mu within `settle` (relative) of an eigenvalue (after 3 steps at least) or
- * the Krylov space is invariant. With `replay` (the alpha, beta and Ritz vector s of an earlier run
- * from the same start) it recomputes the same basis with those coefficients instead and
- * accumulates the Ritz vector sum_j s_j v_j into y_out.
+ * not null (A restricted to y's complement), from the start vector in basis.at(0) (any norm): the
+ * largest eigenvalue mu of A there, by the largest Ritz value of T_j, and 1/mu, an upper bound on
+ * the smallest eigenvalue of H there. Stops when the residual bound puts mu within `settle`
+ * (relative) of an eigenvalue (after 3 steps at least), when the Krylov space is invariant, or at
+ * the budget of kLanczosSteps; then basis.at(steps) holds the residual W = A v_k - alpha_k v_k -
+ * beta_{k-1} v_{k-1} of the last step, not normalized, so that A V = V T + W e_k^T (V the basis,
+ * T the tridiagonal of alpha and beta) and A x = mu x + s_k W for the Ritz vector x = V s.
+ * With `replay` (an earlier run from the same start) it recomputes the same vectors and that W,
+ * and accumulates x = sum_j s_j v_j into x_out.
  */
 struct Lanczos {
   std::vector<double> alpha, beta;
   Eigen::VectorXd s;  ///< the top Ritz vector of T
   double lambda = 0;  ///< 1 / (largest Ritz value)
   bool settled = false;
+  bool complete = false;  ///< ended settled or at the budget, with W in basis.at(steps)
+  double start_norm = 0;  ///< the norm of the start vector (after the projection off y)
+  int steps() const { return static_cast<int>(alpha.size()); }
 };
-Lanczos lanczos(const LanczosOperator& op, double* v[3], const double* y, double settle, const Lanczos* replay,
-                double* y_out) {
+Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* y, double settle,
+                const Lanczos* replay = nullptr, double* x = nullptr) {
   const std::size_t n = op.n;
   const unsigned char* free = op.free;
   Lanczos run;
-  double* prev = v[0];
-  double* cur = v[1];
-  double* next = v[2];
+  double* v0 = basis.at(0);
   if (y) {
-    const double c = dot(op, y, cur);
-    for (std::size_t i = 0; i < n; ++i) cur[i] -= c * y[i];
+    const double c = dot(op, y, v0);
+    for (std::size_t i = 0; i < n; ++i) v0[i] -= c * y[i];
   }
-  const double norm = std::sqrt(dot(op, cur, cur));
+  const double norm = std::sqrt(dot(op, v0, v0));
   if (!(norm > 0) || !std::isfinite(norm)) return run;
-  for (std::size_t i = 0; i < n; ++i) cur[i] = free[i] ? cur[i] / norm : 0.0;
-  if (y_out) std::fill(y_out, y_out + n, 0.0);
-  const int steps = replay ? static_cast<int>(replay->alpha.size()) : kLanczosSteps;
+  for (std::size_t i = 0; i < n; ++i) v0[i] = free[i] ? v0[i] / norm : 0.0;
+  run.start_norm = norm;
+  if (x) std::fill(x, x + n, 0.0);
+  const int steps = replay ? replay->steps() : kLanczosSteps;
   for (int j = 0; j < steps; ++j) {
-    const double s_j = y_out ? replay->s(j) : 0.0;
-    if (replay && j + 1 == steps) {  // the last basis vector is in
-      for (std::size_t i = 0; i < n; ++i) y_out[i] += s_j * cur[i];
-      break;
-    }
+    double* cur = basis.at(j);
+    double* next = basis.at(j + 1);
+    const double b_prev = j > 0 ? (replay ? replay->beta[j - 1] : run.beta[j - 1]) : 0.0;
+    const double* prev = j > 0 ? basis.at(j - 1) : cur;  // times b_prev = 0 at j = 0
     op.solve(cur, next);
     // W = P A v_j - beta_{j-1} v_{j-1} - alpha_j v_j (P the projection off y; fixed components
-    // zero), in two passes over the vectors: the first removes y and v_{j-1} and forms
-    // alpha_j = v_j.W, the second removes alpha_j v_j and forms |W|^2 (with a replay, the recorded
-    // alpha and beta instead, and the Ritz vector's term of v_j).
-    double c = 0;
+    // zero), in two passes over the vectors: without y, those of lanczos_recurrence; with y, the
+    // first only forms the dot products that give c = y.A v_j and alpha_j = v_j.(A v_j - c y -
+    // beta_{j-1} v_{j-1}) (expanded), and the second removes the three terms and forms |W|^2.
+    double a = 0, bb = 0;
     if (y) {
-      for (std::size_t i = 0; i < n; ++i) c += free[i] ? y[i] * next[i] : 0.0;
-      op.reduce(&c, 1);
-    }
-    const double b_prev = j > 0 ? (replay ? replay->beta[j - 1] : run.beta[j - 1]) : 0.0;
-    double a = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double w = free[i] ? next[i] - (y ? c * y[i] : 0.0) - b_prev * prev[i] : 0.0;
-      next[i] = w;
-      a += cur[i] * w;
-    }
-    if (replay) {
-      a = replay->alpha[j];
-      const double inv_b = 1 / replay->beta[j];
+      double dots[4] = {0, 0, 0, 0};  // y.next, cur.next, cur.y, cur.prev
       for (std::size_t i = 0; i < n; ++i) {
-        next[i] = (next[i] - a * cur[i]) * inv_b;
-        y_out[i] += s_j * cur[i];
+        if (!free[i]) continue;
+        dots[0] += y[i] * next[i];
+        dots[1] += cur[i] * next[i];
+        dots[2] += cur[i] * y[i];
+        dots[3] += cur[i] * prev[i];
       }
-    } else {
-      op.reduce(&a, 1);
-      double bb = 0;
+      op.reduce(dots, 4);
+      const double c = dots[0];
+      a = dots[1] - c * dots[2] - b_prev * dots[3];
       for (std::size_t i = 0; i < n; ++i) {
-        const double w = next[i] - a * cur[i];
+        const double w = free[i] ? next[i] - c * y[i] - b_prev * prev[i] - a * cur[i] : 0.0;
         next[i] = w;
         bb += w * w;
       }
       op.reduce(&bb, 1);
-      run.alpha.push_back(a);
-      double second = 0;
-      const double mu = top_ritz(run.alpha, run.beta, &run.s, &second);
-      if (!(mu > 0)) break;
-      run.lambda = 1 / mu;
-      const double b = std::sqrt(bb);
-      // The Ritz pair's residual |A x - mu x| is b |s_j|; with the gap to the next Ritz value it
-      // bounds the distance of mu to an eigenvalue by r^2 / gap (Kato-Temple, the gap estimated
-      // from T). Settled when that is below `settle` of mu, or when the Krylov space is one that
-      // A maps into itself (W vanishes against A's scale).
-      const double r = b * std::fabs(run.s(run.s.size() - 1)), gap = mu - second;
-      if ((run.alpha.size() >= 3 && r * r <= settle * mu * gap) || !(b > 1e-12 * mu)) {
-        run.settled = true;
-        break;
-      }
-      run.beta.push_back(b);
-      const double inv_b = 1 / b;
-      for (std::size_t i = 0; i < n; ++i) next[i] *= inv_b;
+    } else {
+      const LanczosStep step = lanczos_recurrence(n, free, prev, b_prev, cur, next, op.reduce);
+      a = step.alpha;
+      bb = step.norm2;
     }
-    double* recycled = prev;
-    prev = cur;
-    cur = next;
-    next = recycled;
+    if (replay) {  // the same vectors again: the recorded beta normalizes, and v_j's term of x
+      const double s_j = replay->s(j);
+      for (std::size_t i = 0; i < n; ++i) x[i] += s_j * cur[i];
+      if (j + 1 < steps) {
+        const double inv_b = 1 / replay->beta[static_cast<std::size_t>(j)];
+        for (std::size_t i = 0; i < n; ++i) next[i] *= inv_b;
+      }
+      continue;
+    }
+    run.alpha.push_back(a);
+    double second = 0;
+    const double mu = top_ritz(run.alpha, run.beta, &run.s, &second);
+    if (!(mu > 0)) break;
+    run.lambda = 1 / mu;
+    const double b = std::sqrt(bb);
+    // The Ritz pair's residual |A x - mu x| is b |s_j|; with the gap to the next Ritz value it
+    // bounds the distance of mu to an eigenvalue by r^2 / gap (Kato-Temple, the gap estimated
+    // from T). Settled when that is below `settle` of mu, or when the Krylov space is one that
+    // A maps into itself (W vanishes against A's scale).
+    const double r = b * std::fabs(run.s(run.s.size() - 1)), gap = mu - second;
+    if ((run.alpha.size() >= 3 && r * r <= settle * mu * gap) || !(b > 1e-12 * mu)) {
+      run.settled = true;
+      run.complete = true;
+      break;
+    }
+    if (j + 1 == steps) {
+      run.complete = true;
+      break;
+    }
+    run.beta.push_back(b);
+    const double inv_b = 1 / b;
+    for (std::size_t i = 0; i < n; ++i) next[i] *= inv_b;
   }
   return run;
 }
+
 
 /** Start vectors: smooth shapes, even (shape 0) and odd (shape 1) about the middle (the lowest
  *  modes of a string), with per-component weights of no pattern, plus a pseudo-random tenth, so
  *  that every eigenvector, whatever the mix of components in it, is in the start (a smooth shape
  *  alike in every component misses the modes whose components move against each other). The same
  *  on every rank (a function of the global index). */
-void start_vector(const LanczosOperator& op, int shape, double* v) {
-  std::vector<double> weights(static_cast<std::size_t>(op.dim));
-  for (int a = 0; a < op.dim; ++a) weights[static_cast<std::size_t>(a)] = std::cos(1.3 + 2.1 * a + 0.7 * shape);
-  for (std::size_t i = 0; i < op.n; ++i) {
+struct StartVector {
+  const LanczosOperator& op;
+  int shape;
+  std::vector<double> weights;  ///< per component
+  StartVector(const LanczosOperator& o, int sh) : op(o), shape(sh), weights(static_cast<std::size_t>(o.dim)) {
+    for (int a = 0; a < op.dim; ++a) weights[static_cast<std::size_t>(a)] = std::cos(1.3 + 2.1 * a + 0.7 * shape);
+  }
+  double operator()(std::size_t i) const {
     const int node = op.first_node + static_cast<int>(i / op.dim), a = static_cast<int>(i % op.dim);
     const double s = static_cast<double>(node) / op.N;
     const double smooth = shape == 0 ? s * (1 - s) : s * (1 - s) * (1 - 2 * s);
-    const double weight = weights[static_cast<std::size_t>(a)];
     std::uint64_t x = (static_cast<std::uint64_t>(node) * static_cast<std::uint64_t>(op.dim) +
                        static_cast<std::uint64_t>(a) + 1) * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(shape);
     x ^= x >> 31;
     x *= 0xBF58476D1CE4E5B9ull;
     x ^= x >> 29;
     const double noise = static_cast<double>(x >> 11) / 9007199254740992.0 * 2 - 1;  // [-1, 1)
-    v[i] = op.free[i] ? smooth * (weight + 0.1 * noise) : 0.0;
+    return op.free[i] ? smooth * (weights[static_cast<std::size_t>(a)] + 0.1 * noise) : 0.0;
   }
+};
+void start_vector(const LanczosOperator& op, int shape, double* v) {
+  const StartVector start(op, shape);
+  for (std::size_t i = 0; i < op.n; ++i) v[i] = start(i);
 }
 
 }  // namespace
@@ -213,12 +239,17 @@ long fixed_components(const Context& ctx) {
 }
 
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive) {
-  // lambda_1 by Lanczos on H^-1; its Ritz vector y by replaying that run, refined by one inverse
-  // iteration; then lambda_2 by Lanczos on H^-1 restricted to the complement of y. The deflation
-  // keeps the converged lambda_1 out of the second run: without it, a Lanczos basis that loses
+  // lambda_1 by Lanczos on H^-1; its Ritz vector y = V s, refined by one inverse iteration, which
+  // the run has already done: H^-1 y = mu y + s_k W (the Lanczos relation); then lambda_2 by
+  // Lanczos on H^-1 restricted to the complement of the refined vector. The deflation keeps the
+  // converged lambda_1 out of the second run: without it, a Lanczos basis that loses
   // orthogonality once lambda_1 converges returns it a second time (a "ghost"), which a lambda_1
   // far below lambda_2 (a nearly degenerate minimum) does at once. A repeated lambda_1 is found
   // again in the complement.
+  // The first run's vectors cycle through the four work vectors, so that a run of up to 4 steps
+  // leaves v_1 .. v_{k-1} and W in them (v_0, the normalized start vector, is recomputed where W
+  // took its place): y needs no replay and no vector beyond the four. A longer run is replayed
+  // from its start (k solves: its vectors and W again) with y accumulated in the fourth vector.
   const std::size_t n = op.n;
   std::unique_ptr<double[]> store;
   double* w[4] = {op.work[0], op.work[1], op.work[2], op.work[3]};
@@ -226,37 +257,65 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
     store.reset(new double[4 * n]);
     for (std::size_t k = 0; k < 4; ++k) w[k] = store.get() + k * n;
   }
-  double* v[3] = {w[0], w[1], w[2]};
-  double* y = w[3];
   SmallestEigenvalues out;
-  std::fill(v[0], v[0] + n, 0.0);
-  start_vector(op, 0, v[1]);
-  const Lanczos first = lanczos(op, v, nullptr, 1e-4, nullptr, nullptr);
+  const Basis cycle4{w, 4};
+  start_vector(op, 0, cycle4.at(0));
+  const Lanczos first = lanczos(op, cycle4, nullptr, 1e-4);
   out.lambda[0] = first.lambda;
   if (positive < 2 || first.alpha.empty()) {
     out.settled = first.settled;
     return out;
   }
-  std::fill(v[0], v[0] + n, 0.0);
-  start_vector(op, 0, v[1]);
-  lanczos(op, v, nullptr, 0, &first, y);
-  // One inverse iteration from the Ritz vector, z = H^-1 y: the Rayleigh quotient of H at z,
-  // z.H z / z.z = z.y / z.z (as H z = y), is an upper bound on lambda_1 whose error is the square
-  // of z's angle to the eigenvector (a factor lambda_1 / lambda_2 below y's), and z/|z| is the
-  // vector deflated below.
-  op.solve(y, v[2]);
-  const double zy = dot(op, v[2], y), zz = dot(op, v[2], v[2]);
-  if (zz > 0 && zy > 0 && std::isfinite(zz)) {
-    out.lambda[0] = std::min(out.lambda[0], zy / zz);
-    const double nz = std::sqrt(zz);
-    for (std::size_t i = 0; i < n; ++i) y[i] = op.free[i] ? v[2][i] / nz : 0.0;
-  } else {
-    const double ny = std::sqrt(dot(op, y, y));
-    for (std::size_t i = 0; i < n; ++i) y[i] /= ny;
+  out.lambda[1] = first.lambda;  // where the refinement below fails: not settled
+  if (!first.complete) return out;
+  const int k = first.steps();
+  const Eigen::VectorXd& s = first.s;
+  const double mu = 1 / first.lambda, s_k = s(k - 1);
+  // z = mu y + s_k W, element by element, written over v_0 (or W, where W took v_0's place): y
+  // and z are then in w[0]. With a replay, y in w[3] and W in the replay's cycle of three.
+  const bool replayed = k > 4;
+  const Basis cycle3{w, 3};
+  double* z_out = w[0];
+  const double* W = cycle4.at(k);
+  if (replayed) {
+    start_vector(op, 0, cycle3.at(0));
+    lanczos(op, cycle3, nullptr, 0, &first, w[3]);
+    W = cycle3.at(k);
+    z_out = w[3];
   }
-  std::fill(v[0], v[0] + n, 0.0);
-  start_vector(op, 1, v[1]);
-  const Lanczos second = lanczos(op, v, y, 3e-3, nullptr, nullptr);
+  const StartVector start(op, 0);
+  double zz = 0, zy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double yi;
+    if (replayed) {
+      yi = w[3][i];
+    } else {
+      yi = s(0) * (k == 4 ? (op.free[i] ? start(i) / first.start_norm : 0.0) : w[0][i]);
+      for (int j = 1; j < k; ++j) yi += s(j) * w[j][i];
+    }
+    const double z = op.free[i] ? mu * yi + s_k * W[i] : 0.0;
+    zz += z * z;
+    zy += z * yi;
+    z_out[i] = z;
+  }
+  double sums[2] = {zz, zy};
+  op.reduce(sums, 2);
+  zz = sums[0];
+  zy = sums[1];
+  // The Rayleigh quotient of H at z, z.H z / z.z = z.y / z.z (H z = y), is an upper bound on
+  // lambda_1 whose error is the square of z's angle to the eigenvector (a factor lambda_1 /
+  // lambda_2 below y's), and z/|z| is the vector deflated below.
+  if (!(zz > 0) || !std::isfinite(zz)) return out;
+  if (zy > 0) out.lambda[0] = std::min(out.lambda[0], zy / zz);
+  const double nz = std::sqrt(zz);
+  double* y = z_out;
+  for (std::size_t i = 0; i < n; ++i) y[i] /= nz;
+  double* rest[3];
+  for (int j = 0, r = 0; j < 4; ++j)
+    if (w[j] != y) rest[r++] = w[j];
+  const Basis second_basis{rest, 3};
+  start_vector(op, 1, second_basis.at(0));
+  const Lanczos second = lanczos(op, second_basis, y, 3e-3);
   out.lambda[1] = std::max(second.lambda, first.lambda);
   out.settled = first.settled && second.settled;
   return out;

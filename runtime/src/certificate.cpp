@@ -22,6 +22,7 @@
 
 #include "block_tridiagonal.hpp"
 #include "engine.hpp"
+#include "lanczos.hpp"
 
 namespace pardel {
 namespace {
@@ -222,10 +223,9 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
     double b_prev = 0;
     for (int j = 0; j < max_steps; ++j) {
       apply(v, w);
-      double a = 0;
-      for (std::size_t i = 0; i < len; ++i) a += w[i] * v[i];
-      for (std::size_t i = 0; i < len; ++i) w[i] -= a * v[i] + b_prev * vprev[i];
-      const double b = norm(w);
+      const detail::LanczosStep step = detail::lanczos_recurrence(len, nullptr, vprev.data(), b_prev, v.data(), w.data(),
+                                                                  [](double*, int) {});
+      const double a = step.alpha, b = std::sqrt(step.norm2);
       alpha.push_back(a);
       const bool breakdown = !(b > 1e-14 * (std::fabs(a) + b_prev + 1e-300));
       if ((j + 1) % 10 == 0 || breakdown || j + 1 == max_steps) {
