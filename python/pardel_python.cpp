@@ -46,6 +46,7 @@
 #include "pardel/cuda.hpp"
 #endif
 #include "pardel/app/scene.hpp"
+#include "pardel/app/solve.hpp"
 #include "pardel/app/sweep.hpp"
 #include "pardel/app/trajectory_io.hpp"
 
@@ -550,18 +551,6 @@ py::dict result_dict(const Scene& scene, const Summary& summary, const Trajector
   return result;
 }
 
-/** Where a solve writes its checkpoint when it is interrupted (pardel::app's checkpoint files). */
-struct CheckpointPlan {
-  std::string dir;         ///< the folder of checkpoint.json ("" : no checkpoint)
-  std::string scene_text;  ///< pardel.solve's scene, written as DIR/scene.toml ("" : scene_file is one)
-  std::string scene_file;  ///< the scene file that was read, absolute
-  std::vector<std::string> overrides;  ///< with which it was read
-  int threads = -1;        ///< threads given besides the scene (-1: none)
-};
-
-/** The name of the scene file pardel.solve's checkpoints record, beside checkpoint.json. */
-constexpr const char* kCheckpointScene = "scene.toml";
-
 /** Makes the checkpoint folder (with its parents) before the solve, so that a folder that cannot
  *  be made is reported before the work; CheckpointError naming it otherwise. */
 void make_checkpoint_folder(const std::string& dir) {
@@ -577,34 +566,33 @@ void make_checkpoint_folder(const std::string& dir) {
 }
 
 /**
- * Solves a scene with the GIL released, from `trajectory` or, with `resume_from`, from an
- * interrupted solve's state. Every recorded iteration calls `on_iteration` (with the GIL) when
- * given, and at most every 50 ms checks Python's signals; a pending exception (KeyboardInterrupt
- * from Ctrl-C, or one raised by on_iteration) stops the solve, which ends `interrupted`. With
- * `plan.dir`, an interrupted solve writes its checkpoint there and any other end removes it
- * (app::update_checkpoint, as `pardel solve`). The result dictionary (result_dict) holds besides
+ * Solves a scene in this process with the GIL released through pardel::app's solve service
+ * (app::run_solve, as `pardel solve`), from `trajectory` or, with request.resume_from, from an
+ * interrupted solve's state (`checkpoint_path` names its checkpoint in messages). Every recorded
+ * iteration calls `on_iteration` (with the GIL) when given, and at most every 50 ms checks Python's
+ * signals; a pending exception (KeyboardInterrupt from Ctrl-C, or one raised by on_iteration)
+ * stops the solve, which ends `interrupted`. With request.checkpoint.dir (made before the solve),
+ * an interrupted solve writes its checkpoint there and any other end removes it. The service's
+ * memory refusal is a PardelError, running out of memory a MemoryError. The result dictionary (result_dict) holds besides
  * "checkpoint_written" and "pending": the exception that stopped the solve (None if none), which
  * the package raises, with "pending_trace" its traceback.
  */
-py::dict run_solve(Scene& scene, Trajectory trajectory, const py::object& on_iteration,
-                   const SolverState* resume_from, const CheckpointPlan& plan, const std::string& checkpoint_path) {
-  {
-    const MemoryEstimate memory = estimate_solve_memory(scene.problem, scene.options, false);
-    const std::string refusal = memory_refusal(scene.problem, scene.options, memory, machine_memory());
-    if (!refusal.empty()) throw InputError(fmt::format("{}: {}", scene.path, refusal));
-  }
-  // Taken before the solve: what a checkpoint of this solve records of its model.
-  const std::string digest = plan.dir.empty() ? "" : app::model_digest(*scene.model, scene.model_path);
+py::dict run_solve(const Scene& scene, Trajectory trajectory, const py::object& on_iteration,
+                   app::SolveRequest request, const std::string& checkpoint_path) {
   // The runtime continues no adaptive solve from a state: a checkpoint of one could not be resumed.
-  if (!plan.dir.empty() && scene.options.accuracy > 0 && !resume_from)
+  if (!request.checkpoint.dir.empty() && scene.options.accuracy > 0 && !request.resume_from)
     throw app::CheckpointError("checkpoint: an adaptive solve (accuracy) cannot be resumed from a state, so it takes "
                                "no checkpoint; solve without checkpoint");
-  if (!plan.dir.empty()) make_checkpoint_folder(plan.dir);
+  if (!request.checkpoint.dir.empty()) {
+    const std::string dir = request.checkpoint.dir;
+    request.prepare = [dir] { make_checkpoint_folder(dir); };
+  }
+  request.over_ranks = false;
 
   std::unique_ptr<py::error_already_set> pending;
   bool stopped_by_callback = false;
   auto last_check = std::chrono::steady_clock::now();
-  scene.options.on_iteration = [&](const IterationRecord& record) {
+  request.on_iteration = [&](const IterationRecord& record) {
     const auto now = std::chrono::steady_clock::now();
     if (on_iteration.is_none() && now - last_check < kSignalCheckPeriod) return true;
     last_check = now;
@@ -632,7 +620,7 @@ py::dict run_solve(Scene& scene, Trajectory trajectory, const py::object& on_ite
   };
   // The point assessment of a converged solve records no iteration: it polls Python's signals
   // through keep_going, so that Ctrl-C stops it too.
-  scene.options.keep_going = [&]() {
+  request.keep_going = [&]() {
     const auto now = std::chrono::steady_clock::now();
     if (now - last_check < kSignalCheckPeriod) return true;
     last_check = now;
@@ -641,46 +629,25 @@ py::dict run_solve(Scene& scene, Trajectory trajectory, const py::object& on_ite
     pending = std::make_unique<py::error_already_set>();
     return false;
   };
-  scene.options.resume_from = resume_from;
-  Summary summary;
-  {
+  app::SolveRun run;
+  try {
     py::gil_scoped_release release;
-    summary = pardel::solve(scene.problem, scene.options, trajectory);
+    run = app::run_solve(scene, trajectory, request);
+  } catch (const app::MemoryRefused& refused) {
+    throw InputError(refused.what());
+  } catch (const app::OutOfMemory& error) {
+    PyErr_SetString(PyExc_MemoryError, error.what());
+    throw py::error_already_set();
   }
-  scene.options.on_iteration = nullptr;
-  scene.options.keep_going = nullptr;
-  scene.options.resume_from = nullptr;
+  const Summary& summary = run.summary;
   if (summary.termination == Termination::invalid_input) {
     if (pending) throw std::move(*pending);
     // A state that does not fit the scene: the checkpoint's fault, named as `pardel solve --resume` names it.
-    if (resume_from) throw app::CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
+    if (request.resume_from) throw app::CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
     throw InputError(fmt::format("{}: error: {}", scene.path, summary.message));
   }
-
-  bool written = false;
-  if (!plan.dir.empty()) {
-    std::string scene_file = plan.scene_file;
-    const bool keep = summary.termination == Termination::interrupted && summary.state.valid;
-    try {
-      if (!plan.scene_text.empty()) {
-        std::error_code ec;
-        scene_file = std::filesystem::absolute(std::filesystem::path(plan.dir) / kCheckpointScene, ec)
-                         .lexically_normal()
-                         .string();
-        if (keep) app::write_file_atomic(scene_file, plan.scene_text);
-      }
-      written = app::update_checkpoint(plan.dir, summary, scene_file, plan.overrides, plan.threads, *scene.model,
-                                       digest);
-    } catch (const app::CheckpointError&) {
-      throw;
-    } catch (const std::exception& error) {
-      throw app::CheckpointError(fmt::format("{}: error: the checkpoint could not be written: {}",
-                                             (std::filesystem::path(plan.dir) / app::checkpoint_file_name()).string(),
-                                             error.what()));
-    }
-  }
   py::dict result = result_dict(scene, summary, trajectory, stopped_by_callback);
-  result["checkpoint_written"] = written;
+  result["checkpoint_written"] = run.checkpoint_written;
   result["pending"] = pending && pending->value() ? pending->value() : py::none();
   result["pending_trace"] = pending && pending->trace() ? pending->trace() : py::none();
   return result;
@@ -701,7 +668,8 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
                      const py::object& threads, const py::object& checkpoint, const py::object& scene_text,
                      const py::object& scene_file, const std::vector<std::string>& overrides) {
   if (!threads.is_none()) scene.options.threads = threads.cast<int>();
-  CheckpointPlan plan;
+  app::SolveRequest request;
+  app::CheckpointPlan& plan = request.checkpoint;
   if (!checkpoint.is_none()) {
     plan.dir = checkpoint.cast<std::string>();
     if (plan.dir.empty()) throw app::CheckpointError("checkpoint: an empty path was given; name a folder");
@@ -714,7 +682,7 @@ py::dict solve_scene(Scene scene, const py::object& guess, const py::object& gue
     plan.threads = threads.is_none() ? -1 : threads.cast<int>();
   }
   Trajectory trajectory = initial_trajectory(scene, guess, guess_t);
-  return run_solve(scene, std::move(trajectory), on_iteration, nullptr, plan, "");
+  return run_solve(scene, std::move(trajectory), on_iteration, std::move(request), "");
 }
 
 /** pardel.resume's solver options as `pardel solve --resume DIR --set solver.KEY=VALUE` overrides
@@ -769,23 +737,14 @@ py::dict resume_checkpoint(const std::string& dir, const py::object& threads, co
                            const py::dict& options) {
   if (dir.empty()) throw app::CheckpointError("checkpoint: an empty path was given; name a folder");
   const std::vector<std::string> warm = warm_start_overrides(options);
-  const std::string checkpoint_path = (std::filesystem::path(dir) / app::checkpoint_file_name()).string();
-  const app::Checkpoint resumed = app::read_checkpoint(dir);
-  std::vector<std::string> overrides = resumed.overrides;
-  overrides.insert(overrides.end(), warm.begin(), warm.end());
-  Scene scene = app::load_scene(resumed.scene_path, overrides, resolve_spec, bundled_model_names());
-  const std::string digest = app::model_digest(*scene.model, scene.model_path);
-  const std::string warning = app::check_resumable(resumed, checkpoint_path, scene, digest);
-  if (!warning.empty() && PyErr_WarnEx(PyExc_UserWarning, warning.c_str(), 1) != 0) throw py::error_already_set();
-  CheckpointPlan plan;
-  plan.dir = dir;
-  plan.scene_file = resumed.scene_path;
-  plan.overrides = overrides;
-  plan.threads = threads.is_none() ? resumed.threads : threads.cast<int>();
-  if (plan.threads >= 0) scene.options.threads = plan.threads;
-  scene.options.warm_start = !warm.empty();
-  py::dict result = run_solve(scene, Trajectory{}, on_iteration, &resumed.state, plan, checkpoint_path);
-  result["coords"] = scene_coords(scene);
+  app::Resumed resumed = app::resume_scene(dir, warm, resolve_spec, bundled_model_names());
+  if (!resumed.warning.empty() && PyErr_WarnEx(PyExc_UserWarning, resumed.warning.c_str(), 1) != 0)
+    throw py::error_already_set();
+  const int recorded_threads = threads.is_none() ? resumed.checkpoint.threads : threads.cast<int>();
+  if (recorded_threads >= 0) resumed.scene.options.threads = recorded_threads;
+  py::dict result = run_solve(resumed.scene, Trajectory{}, on_iteration,
+                              app::resume_request(resumed, dir, recorded_threads), resumed.checkpoint_path);
+  result["coords"] = scene_coords(resumed.scene);
   return result;
 }
 

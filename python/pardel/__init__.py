@@ -493,7 +493,7 @@ def _number_text(value, form):
 
 _INT_MAX = 2**31 - 1   # int members of pardel::Options (and Problem::N)
 _LONG_MAX = 2**63 - 1  # long members (max_iterations, history_every)
-# The scene reader's bound of grid.N (runtime/app/src/scene.cpp; test_argument_types.py checks
+# The scene reader's bound of grid.N (app/src/scene.cpp; test_argument_types.py checks
 # that the two agree).
 _MAX_N = 100000000
 # The integer options of pardel::Options and the largest value their C++ type holds; the ranges

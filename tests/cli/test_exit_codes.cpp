@@ -1,4 +1,4 @@
-// Tests of the exit status of `pardel solve` per termination (tools/pardel/exit_codes.hpp).
+// Tests of the exit status of `pardel solve` per termination (cli/exit_codes.hpp).
 #include <gtest/gtest.h>
 
 #include "exit_codes.hpp"

@@ -1,4 +1,4 @@
-// Tests of the progress line's estimates (tools/pardel/progress.hpp): contraction rate and time left.
+// Tests of the progress line's estimates (cli/progress.hpp): contraction rate and time left.
 #include <gtest/gtest.h>
 
 #include <cmath>

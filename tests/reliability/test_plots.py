@@ -1,6 +1,6 @@
 """The plotting step of `pardel solve` never ends in a Python traceback.
 
-Runs tools/pardel/plot.py as `pardel solve` runs it (PYTHON PLOT_SCRIPT OUT_DIR) on output folders
+Runs cli/plot.py as `pardel solve` runs it (PYTHON PLOT_SCRIPT OUT_DIR) on output folders
 of every status the solver writes (converged at a minimum, a saddle and a degenerate point,
 stalled, max_iterations, diverged, non_finite, interrupted), every kind of cost (declared action,
 declared clock summed over a fixed total time, travel time under a free final time, the action of

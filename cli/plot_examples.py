@@ -10,7 +10,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import plot  # noqa: E402  (tools/pardel/plot.py)
+import plot  # noqa: E402  (cli/plot.py)
 
 plt = plot.plt
 np = plot.np

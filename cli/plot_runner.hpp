@@ -1,6 +1,6 @@
 /**
  * @file plot_runner.hpp
- * The plots of the command line: runs a plotting script (tools/pardel/plot.py, plot_sweep.py)
+ * The plots of the command line: runs a plotting script (cli/plot.py, plot_sweep.py)
  * with the configured Python on an output folder.
  */
 #ifndef PARDEL_CLI_PLOT_RUNNER_HPP

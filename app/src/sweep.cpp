@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "pardel/app/outputs.hpp"
+#include "pardel/app/solve.hpp"
 #include "pardel/app/trajectory_io.hpp"
 #include "pardel/memory.hpp"
 #include "pardel/regular_file.hpp"
@@ -471,21 +472,22 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
       scene.guess.points = variant.points;
     }
     if (threads > 0) scene.options.threads = threads;
-    // Refused before anything of size N is allocated, as `pardel solve` refuses the scene.
-    if (sweep.memory_check) {
-      const MemoryEstimate memory = estimate_solve_memory(scene.problem, scene.options);
-      const std::string refusal = memory_refusal(scene.problem, scene.options, memory, machine_memory());
-      if (!refusal.empty()) {
-        result.status = "error";
-        result.message = "refused before solving: " + refusal + " (--no-memory-check skips this check)";
-        result.cost = std::nan("");
-        return result;
-      }
+    // Each variant in this process (sweeps spread variants, not nodes, over ranks); refused before
+    // anything of size N is allocated, as `pardel solve` refuses the scene.
+    SolveRequest request;
+    request.over_ranks = false;
+    request.check_memory = sweep.memory_check;
+    if (stop) request.on_iteration = [stop](const IterationRecord&) { return !stop->load(); };
+    Trajectory trajectory;  // the variant's scene's guess
+    Summary summary;
+    try {
+      summary = run_solve(scene, trajectory, request).summary;
+    } catch (const MemoryRefused& refused) {
+      result.status = "error";
+      result.message = "refused before solving: " + refused.reason() + " (--no-memory-check skips this check)";
+      result.cost = std::nan("");
+      return result;
     }
-    scene.options.on_iteration = nullptr;
-    if (stop) scene.options.on_iteration = [stop](const IterationRecord&) { return !stop->load(); };
-    Trajectory trajectory = make_initial_guess(scene);
-    const Summary summary = solve(scene.problem, scene.options, trajectory);
     result.status = to_string(summary.termination);
     result.message = summary.message;
     result.iterations = summary.iterations;
@@ -506,16 +508,13 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
       result.status = "error";
       result.message = "converged without a trajectory on the grid";
     }
-  } catch (const std::bad_alloc&) {
+  } catch (const OutOfMemory& error) {
     result = VariantResult{};
     result.id = variant.id;
     result.configuration = variant.configuration;
     result.status = "error";
     result.cost = std::nan("");
-    const Problem& problem = sweep.configurations.at(variant.configuration).problem;
-    result.message = fmt::format("out of memory (std::bad_alloc) while solving with grid.N = {} (model dim {}); "
-                                 "lower grid.N or free memory",
-                                 problem.N, problem.model->dim);
+    result.message = error.what();
   } catch (const std::exception& error) {
     result.status = "error";
     result.message = error.what();

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iostream>
 #include <new>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -264,6 +265,27 @@ int run_kernels(const KernelArgs& args) {
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted.store(true); }
 
+/** SIGINT and SIGTERM set g_interrupted from construction until restore() (or destruction), which
+ *  puts the previous handlers back. */
+class StopOnSignals {
+ public:
+  StopOnSignals() : previous_int_(std::signal(SIGINT, on_sigint)), previous_term_(std::signal(SIGTERM, on_sigint)) {}
+  StopOnSignals(const StopOnSignals&) = delete;
+  StopOnSignals& operator=(const StopOnSignals&) = delete;
+  ~StopOnSignals() { restore(); }
+  void restore() {
+    if (!installed_) return;
+    installed_ = false;
+    std::signal(SIGINT, previous_int_);
+    std::signal(SIGTERM, previous_term_);
+  }
+
+ private:
+  void (*previous_int_)(int);
+  void (*previous_term_)(int);
+  bool installed_ = true;
+};
+
 Scene load_scene_or_throw(const std::string& path, const std::vector<std::string>& sets) {
   return load_scene(path, sets, resolve_model_spec, bundled_model_names());
 }
@@ -281,83 +303,93 @@ struct SolveArgs {
   std::string certificate = "inertia";  ///< "full": also the seed's certificate (pardel check's)
 };
 
-/** What a solve was doing, for the message of an out-of-memory failure. */
-std::string g_solve_context = "solving";
-
 int run_solve_unguarded(const SolveArgs& args) {
-  Checkpoint resumed;
   const bool resume = !args.resume.empty();
-  const std::string checkpoint_path = (fs::path(args.resume) / checkpoint_file_name()).string();
-  // --resume with --set solver.KEY=VALUE: a warm start from the checkpoint's iterate with other
-  // solver options (another method, say) instead of the exact continuation.
-  const bool warm = resume && !args.sets.empty();
   if (resume) {
     if (!args.scene.empty())
       throw UsageError("--resume: give no scene; the solve continues with the scene and overrides recorded in " +
-                       checkpoint_path);
+                       (fs::path(args.resume) / checkpoint_file_name()).string());
+    // --resume with --set solver.KEY=VALUE: a warm start from the checkpoint's iterate with other
+    // solver options (another method, say) instead of the exact continuation.
     for (const std::string& set : args.sets)
       if (set.rfind("solver.", 0) != 0)
         throw UsageError("--resume: only --set solver.KEY=VALUE may change a resumed solve (a warm start from its "
                          "iterate); '" + set + "' changes the problem");
-    resumed = read_checkpoint(args.resume);
   } else if (args.scene.empty()) {
     throw UsageError("solve: a scene file is required (or --resume OUTPUT_DIR)");
   }
-  const std::string scene_path = resume ? resumed.scene_path : args.scene;
-  std::vector<std::string> overrides = resume ? resumed.overrides : args.sets;
-  if (warm) overrides.insert(overrides.end(), args.sets.begin(), args.sets.end());
-  Scene scene = load_scene_or_throw(scene_path, overrides);
-  // Taken before the solve: what a checkpoint of this solve records of its model.
-  const std::string digest = model_digest(*scene.model, scene.model_path);
+  std::optional<Resumed> resumed;
   if (resume) {
-    const std::string warning = check_resumable(resumed, checkpoint_path, scene, digest);
-    if (!warning.empty() && pardel::mpi::world_rank() == 0) std::fprintf(stderr, "%s\n", warning.c_str());
+    resumed = resume_scene(args.resume, args.sets, resolve_model_spec, bundled_model_names());
+    if (!resumed->warning.empty() && pardel::mpi::world_rank() == 0)
+      std::fprintf(stderr, "%s\n", resumed->warning.c_str());
   }
-  const int threads = args.threads >= 0 ? args.threads : resume ? resumed.threads : -1;
+  Scene scene = resume ? resumed->scene : load_scene_or_throw(args.scene, args.sets);
+  const std::string scene_path = resume ? resumed->checkpoint.scene_path : args.scene;
+  const int threads = args.threads >= 0 ? args.threads : resume ? resumed->checkpoint.threads : -1;
   if (threads >= 0) scene.options.threads = threads;
-  const MemoryEstimate memory = estimate_solve_memory(scene.problem, scene.options, args.certificate == "full");
-  g_solve_context = fmt::format("solving {} with grid.N = {} (method {}, model dim {}; estimated need {})", scene_path,
-                                scene.problem.N, to_string(scene.options.method), scene.model->dim,
-                                format_bytes(memory.peak));
-  if (!args.no_memory_check) {
-    const std::string refusal = memory_refusal(scene.problem, scene.options, memory, machine_memory());
-    if (!refusal.empty()) throw UsageError(fmt::format("{}: {} (--no-memory-check skips this check)", scene_path, refusal));
-  }
-  Trajectory trajectory = resume ? Trajectory{} : make_initial_guess(scene);
-  if (resume) scene.options.resume_from = &resumed.state;
-  scene.options.warm_start = warm;
 
   std::string out_dir = args.out;
   if (out_dir.empty() && resume) out_dir = args.resume;
   if (out_dir.empty()) out_dir = scene.output_dir;
   if (out_dir.empty()) out_dir = (fs::path("out") / fs::path(args.scene).stem()).string();
+  std::error_code ec;
+  SolveRequest request;
+  if (resume) {
+    request = resume_request(*resumed, out_dir, threads);
+  } else {
+    request.checkpoint.dir = out_dir;
+    request.checkpoint.scene_file = fs::absolute(scene_path, ec).lexically_normal().string();
+    request.checkpoint.overrides = args.sets;
+    request.checkpoint.threads = threads;
+  }
+  request.check_memory = !args.no_memory_check;
+  request.full_certificate = args.certificate == "full";
   // Under mpirun with more than one rank, one solve decomposed over the ranks: every rank solves,
-  // rank 0 alone creates the output folder, writes the outputs and reports (so that it alone knows
-  // whether it created the folder, and removes it again when the solve is refused).
+  // rank 0 alone creates the output folder (once the memory check passed), writes the outputs and
+  // reports (so that it alone knows whether it created the folder, and removes it again when the
+  // solve is refused).
   const int ranks = pardel::mpi::world_size();
   const bool root = pardel::mpi::world_rank() == 0;
-  std::error_code ec;
   const bool created_out_dir = root && !fs::exists(out_dir, ec);
-  if (root) create_output_folder(out_dir);
+  request.prepare = [&out_dir, root] {
+    if (root) create_output_folder(out_dir);
+  };
   ProgressLine progress(root && !args.quiet, scene.options.tol);
-  scene.options.on_iteration = [&progress, root](const IterationRecord& record) {
+  request.on_iteration = [&progress, root](const IterationRecord& record) {
     if (root) progress.update(record);
     return !g_interrupted.load();
   };
-  scene.options.keep_going = [] { return !g_interrupted.load(); };
+  request.keep_going = [] { return !g_interrupted.load(); };
+  // Ctrl-C and SIGTERM stop the solve (it ends interrupted, with a checkpoint); once it has
+  // ended they have their usual effect again, also while the outputs are written.
   g_interrupted.store(false);
-  auto previous_int = std::signal(SIGINT, on_sigint);
-  auto previous_term = std::signal(SIGTERM, on_sigint);
-  const Summary summary = solve_scene(scene, trajectory);
-  std::signal(SIGINT, previous_int);
-  std::signal(SIGTERM, previous_term);
+  StopOnSignals stop_on_signals;
+  // The outputs (rank 0) are written before the checkpoint, which comes last.
+  SolveOutputs outputs;
+  request.outputs = [&](const Summary& summary, const Trajectory& trajectory) {
+    stop_on_signals.restore();
+    progress.finish();
+    if (!root) return;
+    nlohmann::ordered_json extra = nlohmann::ordered_json::object();
+    if (ranks > 1) extra["ranks"] = ranks;
+    outputs = write_solve_outputs(scene, summary, trajectory, out_dir, extra, args.certificate == "full");
+  };
+  Trajectory trajectory;  // empty: the scene's initial guess (or the resumed state)
+  SolveRun run;
+  try {
+    run = run_solve(scene, trajectory, request);
+  } catch (const MemoryRefused& refused) {
+    throw UsageError(fmt::format("{}: {} (--no-memory-check skips this check)", scene_path, refused.reason()));
+  }
+  stop_on_signals.restore();
   progress.finish();
-  scene.options.on_iteration = nullptr;
+  const Summary& summary = run.summary;
   // A checkpoint that does not fit is refused before anything in the folder is overwritten (under
   // mpirun, by rank 0 alone).
   if (resume && summary.termination == Termination::invalid_input) {
     if (!root) return exit_code(summary.termination);
-    throw CheckpointError(fmt::format("{}: error: {}", checkpoint_path, summary.message));
+    throw CheckpointError(fmt::format("{}: error: {}", resumed->checkpoint_path, summary.message));
   }
   // Input the runtime refused (a degenerate model, a method this build lacks, fewer nodes than the
   // ranks need, ...): an error, and nothing is written.
@@ -369,14 +401,6 @@ int run_solve_unguarded(const SolveArgs& args) {
   }
   if (!root) return exit_code(summary.termination);
 
-  nlohmann::ordered_json extra = nlohmann::ordered_json::object();
-  if (ranks > 1) extra["ranks"] = ranks;
-  const SolveOutputs outputs =
-      write_solve_outputs(scene, summary, trajectory, out_dir, extra, args.certificate == "full");
-  const pardel_model& model = *scene.model;
-  update_checkpoint(out_dir, summary,
-                    resume ? scene_path : fs::absolute(scene_path, ec).lexically_normal().string(), overrides,
-                    threads, model, digest);
   if (!args.no_plot && outputs.have_trajectory) run_plot_script(config::plot_script, out_dir, "plots");
   if (!args.quiet) {
     print_solve_report(scene, summary, trajectory, outputs.certificate, out_dir,
@@ -388,7 +412,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   if (!summary.converged()) {
     std::fprintf(stderr, "pardel solve: %s: %s\n", to_string(summary.termination), summary.message.c_str());
   }
-  if (summary.termination == Termination::interrupted && summary.state.valid) {
+  if (run.checkpoint_written) {
     std::fprintf(stderr, "pardel solve: checkpoint written; continue with: pardel solve --resume %s\n",
                  out_dir.c_str());
   }
@@ -399,9 +423,10 @@ int run_solve_unguarded(const SolveArgs& args) {
 int run_solve(const SolveArgs& args) {
   try {
     return run_solve_unguarded(args);
+  } catch (const OutOfMemory& error) {
+    throw UsageError(error.what());
   } catch (const std::bad_alloc&) {
-    throw UsageError(fmt::format("out of memory (std::bad_alloc) while {}; lower grid.N or free memory",
-                                 g_solve_context));
+    throw UsageError("out of memory (std::bad_alloc) while reading the scene; lower grid.N or free memory");
   }
 }
 
