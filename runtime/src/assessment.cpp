@@ -100,7 +100,7 @@ struct Basis {
  * beta_{k-1} v_{k-1} of the last step, not normalized, so that A V = V T + W e_k^T (V the basis,
  * T the tridiagonal of alpha and beta) and A x = mu x + s_k W for the Ritz vector x = V s.
  * With `replay` (an earlier run from the same start) it recomputes the same vectors and that W,
- * and accumulates x = sum_j s_j v_j into x_out.
+ * and accumulates x = sum_j s_j v_j into x.
  */
 struct Lanczos {
   std::vector<double> alpha, beta;
