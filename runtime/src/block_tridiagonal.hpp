@@ -317,9 +317,8 @@ class BlockTridiagonal {
    * above the rule's threshold is taken as it is; any other is split by the eigendecomposition of
    * its scaled form, and its eigenvalues that count as zero are left out of the elimination (a
    * pseudo-inverse). Overwrites the LDL^T factorization (factor_ldlt() must be called again).
-   * `zero_tol` is the rule's kZeroPivot; it is a parameter only for callers that still pass it.
    */
-  Inertia inertia(double zero_tol = kZeroPivot) { return eliminate(zero_tol, false); }
+  Inertia inertia() { return eliminate(false); }
 
   /**
    * Block LDL^T of H as assembled when it may be indefinite: the elimination of inertia(), each
@@ -327,9 +326,9 @@ class BlockTridiagonal {
    * eigenvalue that counts as zero (H singular to working precision) or is not finite. Allocates
    * the inverses on its first call at a size (the stationary-point Newton only).
    */
-  bool factor_indefinite(double zero_tol = kZeroPivot, Inertia* inertia_out = nullptr) {
+  bool factor_indefinite(Inertia* inertia_out = nullptr) {
     assign_within(inverse_, static_cast<std::size_t>(std::max(n_, 0)), diag_.capacity(), Mat::Zero(d_, d_));
-    const Inertia in = eliminate(zero_tol, true);
+    const Inertia in = eliminate(true);
     if (inertia_out) *inertia_out = in;
     indefinite_ = in.zero == 0;
     return indefinite_;
@@ -397,10 +396,10 @@ class BlockTridiagonal {
   };
 
   /** The elimination of inertia(); with `keep`, each pivot's (pseudo-)inverse in inverse_. */
-  Inertia eliminate(double zero_tol, bool keep) {
+  Inertia eliminate(bool keep) {
     Inertia in;
     indefinite_ = false;
-    const double tiny = zero_tol * std::max(1.0, jacobi_scaling());
+    const double tiny = zero_threshold(jacobi_scaling());
     Mat P = Mat::Zero(d_, d_);
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);

@@ -216,7 +216,7 @@ Phase double_phase(Context& ctx, const Options& options) {
   BlockTridiagonal<D> H;
   H.resize(N, ctx.dim);
   H.assemble(ctx, 0.0);
-  if (!H.factor_ldlt() && !H.factor_indefinite(1e-12)) {
+  if (!H.factor_ldlt() && !H.factor_indefinite()) {
     Phase phase;
     phase.failure = "the Hessian at the solution is singular to working precision";
     return phase;

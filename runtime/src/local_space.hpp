@@ -51,7 +51,7 @@ class LocalSpace {
    *  times b; false where it is singular to working precision (stationary.cpp). */
   bool factor_indefinite(const Context& ctx, double lambda, const double* b, double* x) {
     H_.assemble(ctx, lambda, difference_);
-    if (!H_.factor_indefinite(kZeroPivot)) return false;
+    if (!H_.factor_indefinite()) return false;
     H_.solve_ldlt(b, x);
     return true;
   }
@@ -65,7 +65,7 @@ class LocalSpace {
   /** Of the unshifted Hessian (reassembled: a failed factorization leaves it partly overwritten). */
   long negative_eigenvalues(const Context& ctx) {
     H_.assemble(ctx, 0.0, difference_);
-    return H_.inertia(kZeroPivot).negative;
+    return H_.inertia().negative;
   }
 
   /** y = M x on the free components (x is zero on fixed ones). */
@@ -115,9 +115,6 @@ class LocalSpace {
   }
 
  private:
-  /** Pivot eigenvalues below this fraction of their block's size count as zero (inertia). */
-  static constexpr double kZeroPivot = 1e-12;
-
   bool cyclic_, difference_;
   BlockTridiagonal<D> H_;
   std::size_t dz_ = 0, n_ = 0;

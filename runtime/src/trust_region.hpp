@@ -2,7 +2,7 @@
  * @file trust_region.hpp
  * Newton's method on the whole DEL system (beyond the seed), globalized by a trust region on the
  * discrete action that these problems minimize; written once for the one-process solve
- * (newton.cpp) and the distributed one (mpi/distributed.cpp), which differ only in the Space that
+ * (newton.cpp) and over MPI ranks (mpi/distributed_newton.cpp), which differ only in the Space that
  * holds the Hessian, its solver and the reductions over the unknowns. Each step solves the
  * trust-region subproblem
  *   min g.s + s.H.s/2  subject to  |s|_M <= Delta

@@ -95,7 +95,7 @@ class DistributedSpace {
    *  rows) taken out of the positive count; collective. */
   typename detail::SchurBlockSolver<D>::Inertia inertia(const Context& ctx) {
     assemble(ctx, 0.0);
-    auto in = solver_.inertia(kZeroPivot, local_.comm);
+    auto in = solver_.inertia(local_.comm);
     long fixed = 0;
     for (std::size_t i = 0; i < n_; ++i) fixed += local_.global_free[off0_ + i] ? 0 : 1;
     MPI_Allreduce(MPI_IN_PLACE, &fixed, 1, MPI_LONG, MPI_SUM, local_.comm);
@@ -216,9 +216,6 @@ class DistributedSpace {
     detail::exchange_halos(local_.layout, halo_.data(), static_cast<int>(dz_), local_.comm);
     return halo_.data();
   }
-
-  /** Pivot eigenvalues below this fraction of the largest block entry count as zero (inertia). */
-  static constexpr double kZeroPivot = 1e-12;
 
   Local& local_;
   bool difference_;

@@ -202,11 +202,9 @@ class SchurBlockSolver {
    * elimination's): zero is judged in the Jacobi-scaled H~ = J H J against Gershgorin's bound of
    * H~ over all ranks, and eigenvalues that count as zero are left out of the elimination (a
    * pseudo-inverse). Collective over `comm`; the same counts on every rank. Overwrites the
-   * factorization of solve() (which refactors on every call). `zero_tol` is the rule's kZeroPivot;
-   * it is a parameter only for callers that still pass it.
+   * factorization of solve() (which refactors on every call).
    */
-  Inertia inertia(MPI_Comm comm) { return inertia(pardel::detail::kZeroPivot, comm); }
-  Inertia inertia(double zero_tol, MPI_Comm comm) {
+  Inertia inertia(MPI_Comm comm) {
     const int d = d_;
     const std::size_t dz = static_cast<std::size_t>(d);
     // J per owned unknown, and the neighbours' J at the two ends of this rank (every rank's first
@@ -241,7 +239,7 @@ class SchurBlockSolver {
       }
     }
     MPI_Allreduce(MPI_IN_PLACE, &bound, 1, MPI_DOUBLE, MPI_MAX, comm);
-    const double tol = zero_tol * std::max(1.0, bound);
+    const double tol = pardel::detail::zero_threshold(bound);
     Inertia local;
     auto pivot = [&](const Mat& S, const double* Js, Mat& p, Inertia& in) {
       pardel::detail::split_pivot(S, Js, tol, in, p);
