@@ -1,5 +1,5 @@
-# Type stub of pardel's compiled core pardel._pardel (pybind11, python/pardel_python.cpp), for type
-# checkers and editors; the package pardel is its only intended caller. tests/python/test_api.py
+# Type stub of pardel's compiled core pardel._pardel (pybind11, python/src/), for type checkers
+# and editors; the package pardel is its only intended caller. tests/python/test_api.py
 # checks that its names and parameters are those of the compiled module.
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 

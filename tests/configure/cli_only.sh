@@ -27,7 +27,7 @@ unwanted() {  # grep's mode (-E or -F), then the pattern
 }
 unwanted -E 'nvcc|\.cu( |$)'
 unwanted -E 'pardel-gen .*\.lag'
-for source in src/mpi/decomposition.cpp pardel_python.cpp "-c $src/tests/" "-c $src/tools/benchmarks/"; do
+for source in src/mpi/decomposition.cpp python/src/ "-c $src/tests/" "-c $src/tools/benchmarks/"; do
   unwanted -F "$source"
 done
 for key in PARDEL_WITH_MPI PARDEL_WITH_CUDA PARDEL_REGENERATE; do

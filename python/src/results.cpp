@@ -1,0 +1,94 @@
+/**
+ * @file results.cpp
+ * Between NumPy arrays and the runtime's trajectories: arrays of values, the initial trajectory of
+ * a solve (the scene's guess or one given as an array), and the result dictionary that
+ * pardel.Result is made of.
+ */
+#include "bindings.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "pardel/app/outputs.hpp"
+
+namespace pardel::python {
+
+py::array_t<double> matrix(const std::vector<double>& values, std::size_t rows, std::size_t cols) {
+  py::array_t<double> out({rows, cols});
+  std::copy(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(rows * cols), out.mutable_data());
+  return out;
+}
+
+py::array_t<double> vector(const std::vector<double>& values) {
+  py::array_t<double> out(values.size());
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
+
+/** The initial trajectory: the scene's guess, or `guess` ((M+1) x dim rows, resampled to the
+ *  scene's N when M differs; node times `guess_t` when given, else uniform). */
+Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t) {
+  if (guess.is_none()) return app::make_initial_guess(scene);
+  const Problem& problem = scene.problem;
+  const int dim = scene.model->dim;
+  const auto q = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(guess);
+  if (!q) throw InputError("guess: a 2-D array of numbers was expected");
+  if (q.ndim() != 2 || q.shape(1) != dim || q.shape(0) < 2)
+    throw InputError(fmt::format("guess: shape ({}) given; expected (N+1, {}) (model {} has dim {}: {})",
+                                 fmt::join(std::vector<py::ssize_t>(q.shape(), q.shape() + q.ndim()), ", "), dim,
+                                 scene.model->name, dim, scene.model->order == 1 ? "its coords" : "coords, then derivatives"));
+  Trajectory from;
+  from.N = static_cast<int>(q.shape(0) - 1);
+  from.dim = dim;
+  from.q.assign(q.data(), q.data() + q.size());
+  from.t.resize(static_cast<std::size_t>(from.N) + 1);
+  if (!guess_t.is_none()) {
+    const auto t = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(guess_t);
+    if (!t || t.ndim() != 1 || t.shape(0) != from.N + 1)
+      throw InputError(fmt::format("guess_t: {} node times were expected", from.N + 1));
+    from.t.assign(t.data(), t.data() + t.size());
+  } else {
+    for (int k = 0; k <= from.N; ++k) from.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / from.N;
+  }
+  if (from.N == problem.N) return from;
+  return resample(problem, from, problem.N);
+}
+
+/** What pardel.Result is made of: summary.json's dictionary (as text), the trajectory, the
+ *  boundary momenta and the history as arrays. */
+py::dict result_dict(const Scene& scene, const Summary& summary, const Trajectory& trajectory, bool stopped_by_callback) {
+  py::dict result;
+  const std::string model_source = app::scene_model_source(scene);
+  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes, as in summary.json.
+  result["summary"] = app::summary_json(scene, summary, trajectory, Certificate{}, model_source)
+                          .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  result["stopped_by_callback"] = stopped_by_callback;
+  result["t"] = vector(trajectory.t);
+  result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
+  const BoundaryMomenta momenta = app::momenta_on_trajectory_grid(scene.problem, trajectory);
+  result["p0"] = vector(momenta.p0);
+  result["pN"] = vector(momenta.pN);
+  const std::size_t n = summary.history.size();
+  std::vector<double> it(n), N(n), res(n), act(n), sec(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    it[i] = static_cast<double>(summary.history[i].iteration);
+    N[i] = summary.history[i].N;
+    res[i] = summary.history[i].residual;
+    act[i] = summary.history[i].action;
+    sec[i] = summary.history[i].seconds;
+  }
+  py::dict history;
+  history["iteration"] = vector(it).attr("astype")("int64");
+  history["N"] = vector(N).attr("astype")("int64");
+  history["residual"] = vector(res);
+  history["action"] = vector(act);
+  history["seconds"] = vector(sec);
+  result["history"] = history;
+  return result;
+}
+
+}  // namespace pardel::python
