@@ -11,6 +11,8 @@
 
 #include "pardel/pardel.hpp"
 
+#include "methods.hpp"
+
 namespace pardel {
 namespace {
 
@@ -141,12 +143,6 @@ struct Named {
   const char* name;
 };
 
-constexpr Named<Method> kMethods[] = {{Method::automatic, "auto"},
-                                      {Method::jacobi, "jacobi"},
-                                      {Method::jacobi_newton, "jacobi-newton"},
-                                      {Method::newton, "newton"},
-                                      {Method::hybrid, "hybrid"},
-                                      {Method::stationary_newton, "stationary-newton"}};
 constexpr Named<Device> kDevices[] = {{Device::cpu, "cpu"}, {Device::cuda, "cuda"}};
 constexpr Named<LinearSolver> kLinearSolvers[] = {{LinearSolver::block_ldlt, "ldlt"},
                                                   {LinearSolver::cyclic_reduction, "cyclic-reduction"}};
@@ -192,9 +188,22 @@ std::vector<std::string> names_in(const Named<E> (&table)[K]) {
 
 }  // namespace
 
-const char* to_string(Method method) { return name_in(kMethods, method); }
-bool parse_method(std::string_view text, Method* method) { return parse_in(kMethods, text, method); }
-std::vector<std::string> method_names() { return names_in(kMethods); }
+// The methods' names are their rows of the catalogue (methods.hpp).
+const char* to_string(Method method) {
+  const detail::MethodRow* row = detail::method_row(method);
+  return row ? row->name : "unknown";
+}
+bool parse_method(std::string_view text, Method* method) {
+  const detail::MethodRow* row = detail::method_row(std::string(text));
+  if (row) *method = row->method;
+  return row != nullptr;
+}
+std::vector<std::string> method_names() {
+  std::vector<std::string> names;
+  for (const detail::MethodRow* row = detail::method_rows_begin(); row != detail::method_rows_end(); ++row)
+    names.emplace_back(row->name);
+  return names;
+}
 
 const char* to_string(Device device) { return name_in(kDevices, device); }
 bool parse_device(std::string_view text, Device* device) { return parse_in(kDevices, text, device); }
@@ -302,7 +311,7 @@ bool Options::is_valid(std::string* error) const {
     const double value = member.value(*this);
     if (!member.bound.accepts(value)) return bad(member.bound.name, number(value), member.bound.rule);
   }
-  if (!in_table(kMethods, method))
+  if (!detail::method_row(method))
     return bad("method", std::to_string(static_cast<int>(method)), "is not a known method");
   if (!in_table(kDevices, device))
     return bad("device", std::to_string(static_cast<int>(device)), "is not a known device");

@@ -14,14 +14,16 @@
 #include <utility>
 #include <vector>
 
+#include "methods.hpp"
 #include "pardel/pardel.hpp"
 
 namespace pardel::detail {
 
-/** Newton on the whole DEL system, minimizing (trust region) or not (stationary): nested iteration
- *  solves each coarse level to the tolerance, and each level takes a step before it stops. */
+/** The catalogue's whole_system_newton of `method` (methods.hpp): nested iteration solves each
+ *  coarse level to the tolerance, and each level takes a step before it stops. */
 inline bool whole_system_newton(Method method) {
-  return method == Method::newton || method == Method::stationary_newton;
+  const MethodRow* row = method_row(method);
+  return row && row->whole_system_newton;
 }
 
 /** Whether every knot lies on an interior node of the uniform grid with n intervals. */

@@ -15,6 +15,7 @@
 
 #include "block_tridiagonal.hpp"
 #include "engine.hpp"
+#include "methods.hpp"
 
 namespace pardel {
 namespace {
@@ -51,15 +52,24 @@ BlockBytes block_bytes(int d) {
   });
 }
 
+}  // namespace
+
 /** BlockTridiagonal<D>: diag, off, W, y and the pivots' factors for N-1 blocks (resize), and with
  *  `cyclic` the cyclic-reduction levels (N-1, (N-1)/2, ..., 1 blocks: about 2(N-1) in all). */
-double block_tridiagonal_bytes(double N, int d, bool cyclic) {
+double detail::block_tridiagonal_bytes(double N, int d, bool cyclic) {
   const BlockBytes b = block_bytes(d);
   const double n = std::max(N - 1, 0.0);
   const double factors = b.fixed_size ? b.mat : b.llt;
   const double levels = cyclic ? 2 * n * (3 * b.mat + 2 * b.vec + b.llt + 1) : 0;
   return n * (3 * b.mat + b.vec + factors) + levels;
 }
+
+double detail::newton_bytes(double N, int d, bool cyclic) {
+  return N * 8 + N * d * 8 * 2 + N * d * d * 8 * 3 + (N + 1) * d * 8 + 4 * std::max(N - 1, 0.0) * d * 8 +
+         block_tridiagonal_bytes(N, d, cyclic);
+}
+
+namespace {
 
 /** detail::Context at N (engine.cpp setup_context). */
 double context_bytes(double N, int d) {
@@ -74,25 +84,6 @@ double context_bytes(double N, int d) {
 }
 
 double trajectory_bytes(double N, int d) { return (N + 1) * (d + 1) * 8.0; }
-
-/** Newton's own arrays (newton.cpp): copies of the interval arrays, four vectors (right-hand side,
- *  step and two of the secular iteration), the Hessian. */
-double newton_bytes(double N, int d, bool cyclic) {
-  return N * 8 + N * d * 8 * 2 + N * d * d * 8 * 3 + (N + 1) * d * 8 + 4 * std::max(N - 1, 0.0) * d * 8 +
-         block_tridiagonal_bytes(N, d, cyclic);
-}
-
-double method_bytes(Method method, bool cyclic, double N, int d) {
-  switch (method) {
-    case Method::jacobi:
-    case Method::jacobi_newton: return N + 1;  // node status
-    case Method::automatic:
-    case Method::newton: return newton_bytes(N, d, cyclic);
-    case Method::hybrid: return (N + 1) + newton_bytes(N, d, cyclic);  // its check factors Newton's Hessian
-    case Method::stationary_newton: return newton_bytes(N, d, false) + std::max(N - 1, 0.0) * d * d * 8;  // pivot inverses
-  }
-  return 0;
-}
 
 std::string read_file(const char* path) {
   std::ifstream in(path);
@@ -122,7 +113,8 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
   const bool levels = options.refine_start_N > 0 || options.method == Method::automatic;
   const double trajectories = (levels ? 3 : 2) * trajectory_bytes(N, d);
   const bool cyclic = options.linear_solver == LinearSolver::cyclic_reduction;
-  e.solve = context_bytes(N, d) + method_bytes(options.method, cyclic, N, d) + trajectories;
+  const detail::MethodRow* method = detail::method_row(options.method);
+  e.solve = context_bytes(N, d) + (method ? method->bytes(N, d, cyclic) : 0) + trajectories;
   // Context::q_old: the iterate before a re-placement of the nodes (engine.cpp update_times).
   if (problem.clock == ClockMode::fixed_total_time) e.solve += (N + 1) * d * 8;
   // Context::t_kept, hk_kept: the node times and steps before a convergence check's clock update.
@@ -130,12 +122,12 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
   // The point assessment (assessment.cpp): the solve's context and trajectories, the Hessian and
   // the four vectors of its Lanczos iterations.
   const double n = std::max(N - 1, 0.0);
-  e.assessment = context_bytes(N, d) + trajectories + block_tridiagonal_bytes(N, d, false) + 4 * n * d * 8;
+  e.assessment = context_bytes(N, d) + trajectories + detail::block_tridiagonal_bytes(N, d, false) + 4 * n * d * 8;
   // certify(): its own context, the Hessian, Cholesky pivots, four vectors of the spectral-radius
   // iteration, interval verdicts, and (Hessian not positive definite) LU factors of the diagonal
   // blocks in a vector that grows by doubling (up to 3n of them while it moves).
   if (certificate) {
-    e.certificate = trajectory_bytes(N, d) + context_bytes(N, d) + block_tridiagonal_bytes(N, d, false) +
+    e.certificate = trajectory_bytes(N, d) + context_bytes(N, d) + detail::block_tridiagonal_bytes(N, d, false) +
                     n * block_bytes(d).llt + 3 * n * block_bytes(d).lu + 4 * n * d * 8 + N * 32;
   }
   // trajectory.csv: about 24 characters per number, a std::string that grows by doubling.

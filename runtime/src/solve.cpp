@@ -22,26 +22,19 @@
 #include "error_estimate.hpp"
 #include "iteration.hpp"
 #include "levels.hpp"
+#include "methods.hpp"
 #include "topology.hpp"
 
 namespace pardel {
 namespace detail {
 
 std::unique_ptr<Method_> make_method(const Options& options, int dim, Topology& topology, std::string* message) {
-  switch (options.method) {
-    case Method::jacobi: return make_jacobi(options, dim);
-    case Method::jacobi_newton: return make_jacobi_newton(options, dim);
-    case Method::automatic:
-    case Method::newton: return topology.make_newton(options, dim);
-    case Method::hybrid: return make_hybrid(options, dim, topology, topology.make_newton(options, dim));
-    case Method::stationary_newton: {
-      std::unique_ptr<Method_> method = topology.make_stationary_newton(options, dim);
-      if (!method) *message = "stationary-newton does not run over this topology";
-      return method;
-    }
+  const MethodRow* row = method_row(options.method);
+  if (!row) {
+    *message = "unknown method";
+    return nullptr;
   }
-  *message = "unknown method";
-  return nullptr;
+  return row->make(options, dim, topology, message);
 }
 
 }  // namespace detail
