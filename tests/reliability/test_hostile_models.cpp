@@ -294,7 +294,7 @@ TEST_F(HostileModel, OutOfRangeNumbersAreRefusedWithTheirColumn) {
 }
 
 // An exponent beyond the range of long ("1e99999999999999999999") makes std::stol throw
-// std::out_of_range inside the reader (codegen/src/lag_parser.cpp, number_value), which
+// std::out_of_range inside the reader (codegen/src/lag_expression.cpp, number_value), which
 // pardel-gen reports as "internal error of pardel-gen: stol" without a position. A defect:
 // the number must be refused as out of range at its FILE:LINE:COL.
 TEST_F(HostileModel, ExponentBeyondLongIsRefusedWithItsColumn) {
