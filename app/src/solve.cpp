@@ -53,6 +53,19 @@ SolveRun run_solve(const Scene& scene, Trajectory& trajectory, const SolveReques
   // Taken before the solve: what a checkpoint of this solve records of its model.
   const std::string digest = request.checkpoint.dir.empty() ? "" : model_digest(*scene.model, scene.model_path);
 
+  const auto out_of_memory = [&scene, &run] {
+    return OutOfMemory(fmt::format(
+        "out of memory (std::bad_alloc) while solving {} with grid.N = {} (method {}, model dim {}; estimated "
+        "need {}); lower grid.N or free memory",
+        scene.path, scene.problem.N, to_string(scene.options.method), scene.model->dim,
+        format_bytes(run.memory.peak)));
+  };
+  // The guess before prepare: a guess file that cannot be read leaves no output folder behind.
+  try {
+    if (trajectory.N == 0 && !request.resume_from) trajectory = make_initial_guess(scene);
+  } catch (const std::bad_alloc&) {
+    throw out_of_memory();
+  }
   if (request.prepare) request.prepare();
 
   Options options = scene.options;
@@ -61,16 +74,11 @@ SolveRun run_solve(const Scene& scene, Trajectory& trajectory, const SolveReques
   options.resume_from = request.resume_from;
   options.warm_start = request.resume_from && request.warm_start;
   try {
-    if (trajectory.N == 0 && !request.resume_from) trajectory = make_initial_guess(scene);
     run.summary = request.over_ranks && mpi::world_size() > 1
                       ? mpi::solve_distributed(scene.problem, options, trajectory)
                       : solve(scene.problem, options, trajectory);
   } catch (const std::bad_alloc&) {
-    throw OutOfMemory(fmt::format(
-        "out of memory (std::bad_alloc) while solving {} with grid.N = {} (method {}, model dim {}; estimated "
-        "need {}); lower grid.N or free memory",
-        scene.path, scene.problem.N, to_string(scene.options.method), scene.model->dim,
-        format_bytes(run.memory.peak)));
+    throw out_of_memory();
   }
   if (run.summary.termination == Termination::invalid_input) return run;
   if (request.outputs) request.outputs(run.summary, trajectory);

@@ -60,8 +60,8 @@ struct SolveRequest {
   /** Under mpirun with more than one rank, decompose this solve over all ranks; false solves it
    *  in this process alone (a sweep's variant, a Python call). */
   bool over_ranks = true;
-  /** Called once the memory check passed, before anything of size N is allocated (a front end
-   *  creates its output folder there, so that a refused solve leaves none). */
+  /** Called once the memory check passed and the initial guess is made, before the solve (a
+   *  front end creates its output folder there, so that a refused solve leaves none). */
   std::function<void()> prepare;
   /** Continue from this state of an interrupted solve (the trajectory is then ignored). */
   const SolverState* resume_from = nullptr;
@@ -88,8 +88,9 @@ struct SolveRun {
 
 /**
  * Solves the scene's problem with its options from `trajectory` (the initial guess; an empty one,
- * N = 0, stands for the scene's own, make_initial_guess; on return the solve's trajectory) as
- * `request` asks: MemoryRefused before anything else when it would not fit; then request.prepare;
+ * N = 0, stands for the scene's own, make_initial_guess, made after the memory check, whose errors
+ * come before request.prepare; on return the solve's trajectory) as `request` asks: MemoryRefused
+ * before anything else when it would not fit; then request.prepare;
  * OutOfMemory when it ran out anyway; a solve that ended `invalid_input` (the runtime refused the
  * problem or the resumed state) leaves the checkpoint folder untouched; any other end calls
  * request.outputs, then updates the checkpoint (update_checkpoint; on rank 0 alone), whose failure throws CheckpointError naming
