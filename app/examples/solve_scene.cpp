@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     // Model names resolve to the bundled models (pardel::bundled_models).
     pardel::app::Scene scene = pardel::app::load_scene(
         argv[1], {}, [](const std::string& name) { return pardel::find_model(name); });
-    pardel::Trajectory trajectory = pardel::app::make_initial_guess(scene);
+    pardel::Trajectory trajectory;  // empty: the scene's own guess, made after the memory check
     const pardel::Summary summary = pardel::app::solve_scene(scene, trajectory);
     if (pardel::mpi::world_rank() == 0) {
       std::filesystem::create_directories(argv[2]);
@@ -32,5 +32,11 @@ int main(int argc, char** argv) {
   } catch (const pardel::app::SceneError& error) {  // FILE:LINE:COL: error: ...
     std::fprintf(stderr, "%s\n", error.what());
     return 2;
+  } catch (const pardel::app::MemoryRefused& error) {  // SCENE: the estimate against the machine's memory
+    std::fprintf(stderr, "%s\n", error.what());
+    return 2;
+  } catch (const pardel::app::OutOfMemory& error) {  // ran out of memory anyway, named
+    std::fprintf(stderr, "%s\n", error.what());
+    return 1;
   }
 }

@@ -51,7 +51,9 @@ SolveRun run_solve(const Scene& scene, Trajectory& trajectory, const SolveReques
     if (!refusal.empty()) throw MemoryRefused(scene.path, refusal);
   }
   // Taken before the solve: what a checkpoint of this solve records of its model.
-  const std::string digest = request.checkpoint.dir.empty() ? "" : model_digest(*scene.model, scene.model_path);
+  const CheckpointPlan& plan = request.checkpoint;
+  std::string digest = plan.model_digest;
+  if (!plan.dir.empty() && digest.empty()) digest = model_digest(*scene.model, scene.model_path);
 
   const auto out_of_memory = [&scene, &run] {
     return OutOfMemory(fmt::format(
@@ -100,8 +102,8 @@ Resumed resume_scene(const std::string& dir, const std::vector<std::string>& sol
   resumed.overrides.insert(resumed.overrides.end(), solver_sets.begin(), solver_sets.end());
   resumed.warm_start = !solver_sets.empty();
   resumed.scene = load_scene(resumed.checkpoint.scene_path, resumed.overrides, resolve, model_names);
-  const std::string digest = model_digest(*resumed.scene.model, resumed.scene.model_path);
-  resumed.warning = check_resumable(resumed.checkpoint, resumed.checkpoint_path, resumed.scene, digest);
+  resumed.model_digest = model_digest(*resumed.scene.model, resumed.scene.model_path);
+  resumed.warning = check_resumable(resumed.checkpoint, resumed.checkpoint_path, resumed.scene, resumed.model_digest);
   return resumed;
 }
 
@@ -113,6 +115,7 @@ SolveRequest resume_request(const Resumed& resumed, const std::string& dir, int 
   request.checkpoint.scene_file = resumed.checkpoint.scene_path;
   request.checkpoint.overrides = resumed.overrides;
   request.checkpoint.threads = threads;
+  request.checkpoint.model_digest = resumed.model_digest;
   return request;
 }
 

@@ -19,6 +19,7 @@
 
 #include "assessment.hpp"
 #include "block_tridiagonal.hpp"
+#include "constants.hpp"
 #include "lanczos.hpp"
 
 namespace pardel::detail {
@@ -30,8 +31,6 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
   return buf;
 }
 
-/** The budget of Lanczos steps for each of the two smallest eigenvalues at a minimum. */
-constexpr int kLanczosSteps = 24;
 
 /** Scales the rows, then the columns, of a d x d row-major block by their largest |entry| (a zero
  *  row or column is left as it is): a congruence of diagonal matrices, which keeps the rank. */
@@ -260,7 +259,7 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   SmallestEigenvalues out;
   const Basis cycle4{w, 4};
   start_vector(op, 0, cycle4.at(0));
-  const Lanczos first = lanczos(op, cycle4, nullptr, 1e-4);
+  const Lanczos first = lanczos(op, cycle4, nullptr, kSettleSmallest);
   out.lambda[0] = first.lambda;
   if (positive < 2 || first.alpha.empty()) {
     out.settled = first.settled;
@@ -315,7 +314,7 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
     if (w[j] != y) rest[r++] = w[j];
   const Basis second_basis{rest, 3};
   start_vector(op, 1, second_basis.at(0));
-  const Lanczos second = lanczos(op, second_basis, y, 3e-3);
+  const Lanczos second = lanczos(op, second_basis, y, kSettleNext);
   out.lambda[1] = std::max(second.lambda, first.lambda);
   out.settled = first.settled && second.settled;
   return out;
@@ -459,7 +458,7 @@ bool lagrangian_regular(const Context& ctx, std::string* message) {
     // Then rows and columns by their largest entries (the rank is unchanged): coordinates in units
     // whose terms differ by 10^12 (W = diag(1e12, 1)) are not taken for a singular D12.
     equilibrate(D12.data(), d);
-    if (relative_smallest_singular_value(D12.data(), d) <= 1e-12) ++singular;
+    if (relative_smallest_singular_value(D12.data(), d) <= kSingularD12) ++singular;
   }
   if (singular < samples) return true;
   *message = "model '" + std::string(ctx.model->name ? ctx.model->name : "?") +

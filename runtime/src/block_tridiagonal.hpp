@@ -22,6 +22,7 @@
 #include <cmath>
 #include <vector>
 
+#include "constants.hpp"
 #include "engine.hpp"
 #include "inertia.hpp"
 

@@ -21,6 +21,7 @@
 #include <limits>
 
 #include "block_tridiagonal.hpp"
+#include "constants.hpp"
 #include "engine.hpp"
 #include "lanczos.hpp"
 
@@ -29,10 +30,6 @@ namespace {
 
 using detail::Context;
 
-/** The interval Hessians' eigenvalues (the seed's hypotheses, item 1 of the certificate) are
- *  compared with this fraction of the largest |eigenvalue| of H^Ld_k. The inertia of H (item 2)
- *  has the zero rule of inertia.hpp instead. */
-constexpr double kRelTol = 1e-10;
 
 struct IntervalCheck {
   double min_h = 0, min_a = 0, min_b = 0;
@@ -327,9 +324,9 @@ Certificate certify(const Problem& problem, const Trajectory& trajectory, int th
     restricted_eigs(Hk, idx, &ch.min_h, &scale_h);
     restricted_eigs(Hk, ia, &ch.min_a, &scale_a);
     restricted_eigs(Hk, ib, &ch.min_b, &scale_b);
-    ch.psd = ch.min_h >= -kRelTol * scale_h;
-    ch.a_pd = ch.min_a > kRelTol * scale_h;
-    ch.b_pd = ch.min_b > kRelTol * scale_h;
+    ch.psd = ch.min_h >= -detail::kCertificateRelTol * scale_h;
+    ch.a_pd = ch.min_a > detail::kCertificateRelTol * scale_h;
+    ch.b_pd = ch.min_b > detail::kCertificateRelTol * scale_h;
   }
   c.all_intervals_psd = c.all_A_pd = c.all_B_pd = true;
   for (int k = 0; k < N; ++k) {

@@ -21,11 +21,10 @@
 #include <vector>
 
 #include "pardel/pardel.hpp"
+#include "constants.hpp"
 
 namespace pardel::detail {
 
-/** Below this many nodes (or blocks) a loop runs on one thread: a parallel region costs more. */
-constexpr int kParallelMin = 512;
 
 /** Which kernel filled the interval arrays. */
 enum class Evaluated { nothing, sweep, grad, full };

@@ -4,6 +4,7 @@
  * under a clock, the history, and the stopping rules (converged, level settled, answer at the
  * tolerance, stalled, max_iterations, diverged, non-finite, interrupted), each with its message.
  */
+#include "constants.hpp"
 #include "iteration.hpp"
 
 #include "levels.hpp"
@@ -259,7 +260,7 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
                                         std::to_string(iteration_ + 1) + "; the last finite iterate is returned");
     return true;
   }
-  if (qmax > 1e150) {
+  if (qmax > kExplodedIterate) {
     finish(Termination::diverged, format("iterates exploded (max |q| = %.3g) in iteration %.0f", qmax,
                                          static_cast<double>(iteration_ + 1)));
     return true;

@@ -92,10 +92,6 @@ class Iteration {
   bool stalled_at_round_off(double r, double target);
   bool times_unsettled(int placements);
   bool times_stop_increasing();
-  /** Re-placements of the nodes at the tolerance, in a row, before times_unsettled(). */
-  static constexpr int kMaxPlacements = 20;
-  /** A converged message warns where the round-off level sets the target above this many rtol. */
-  static constexpr double kRoundOffDominates = 100;
   bool reached_max_iterations(double r, double target);
   bool diverged(double r);
   /** Ends the level on a method's failed step or a non-finite or exploding next iterate. */

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "block_tridiagonal.hpp"
+#include "constants.hpp"
 
 #if defined(PARDEL_EXTENDED_FLOAT128)
 #include <boost/multiprecision/eigen.hpp>

@@ -17,10 +17,6 @@
 
 namespace pardel::detail {
 
-/** At most this many corrections. */
-constexpr int kMaxRefinementSteps = 6;
-/** Refinement::automatic applies the corrections only when the first is above this many eps max|q|. */
-constexpr double kRefinementThreshold = 1000;
 
 /** The DEL residual at q from the extended kernel into res ((N+1) dim; 0 on fixed components and
  *  at the ends), each node's two terms summed in double-double and rounded once; `pairs` is

@@ -20,6 +20,7 @@
 #include <limits>
 #include <vector>
 
+#include "constants.hpp"
 #include "engine.hpp"
 
 #ifdef _OPENMP
@@ -69,7 +70,7 @@ bool node_newton_step(NodeScratch<D>& s, int d) {
     const double norm = std::max(std::fabs(a) + std::fabs(c), std::fabs(b) + std::fabs(e));
     const double norm_adj = std::max(std::fabs(e) + std::fabs(c), std::fabs(b) + std::fabs(a));
     // rcond = |det| / (|M|_1 |adj M|_1) > 1e-14, without a division on the way.
-    if (!(std::fabs(det) > 1e-14 * (norm * norm_adj)) || !std::isfinite(det)) return false;
+    if (!(std::fabs(det) > kJacobiMinRcond * (norm * norm_adj)) || !std::isfinite(det)) return false;
     const double inv = 1 / det;
     s.x[0] -= (e * s.r[0] - b * s.r[1]) * inv;
     s.x[1] -= (a * s.r[1] - c * s.r[0]) * inv;
@@ -78,7 +79,7 @@ bool node_newton_step(NodeScratch<D>& s, int d) {
     (void)d;
     s.lu.compute(s.M);
     const double rc = s.lu.rcond();
-    if (!(rc > 1e-14)) return false;
+    if (!(rc > kJacobiMinRcond)) return false;
     s.dx.noalias() = s.lu.solve(s.r);
     s.x -= s.dx;
     return true;

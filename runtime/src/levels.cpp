@@ -5,6 +5,7 @@
  * solve: the checks of its state (the Iteration's counters are captured and restored in
  * iteration.cpp).
  */
+#include "constants.hpp"
 #include "levels.hpp"
 
 #include <algorithm>

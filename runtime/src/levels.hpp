@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "constants.hpp"
 #include "methods.hpp"
 #include "pardel/pardel.hpp"
 
@@ -28,13 +29,6 @@ inline bool whole_system_newton(Method method) {
 
 /** Whether every knot lies on an interior node of the uniform grid with n intervals. */
 bool knots_on_grid(const Problem& problem, int n);
-
-/** The coarsest grid of the automatic method's grid sequencing, and the ratio of successive grids.
- *  Each level takes one Newton step from the extrapolated coarser solution on well-posed problems,
- *  so the levels below N cost 1/(kAutoRatio - 1) of the finest one: a third at ratio 4, against as
- *  much as the finest level at ratio 2 (docs/benchmarks.md has the measurements). */
-constexpr int kAutoCoarseN = 200;
-constexpr int kAutoRatio = 4;
 
 /** Grid sequencing of the automatic method: N, N/4, N/16, ... (each rounded up to a grid that
  *  holds the knots) down to between kAutoCoarseN and kAutoRatio kAutoCoarseN, coarsest first;

@@ -18,16 +18,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "constants.hpp"
 #include "local_space.hpp"
 #include "trust_region.hpp"
 
 namespace pardel::detail {
 namespace {
 
-/** Armijo's fraction of the predicted decrease of the merit. */
-constexpr double kArmijo = 1e-4;
-/** Backtracking halvings before the iteration reports a stall. */
-constexpr int kMaxHalvings = 40;
 
 template <int D>
 class StationaryNewton : public Method_ {

@@ -48,6 +48,7 @@
 #include <utility>
 #include <vector>
 
+#include "constants.hpp"
 #include "engine.hpp"
 
 namespace pardel::detail {
@@ -111,12 +112,6 @@ class TrialEvaluation {
   std::vector<double> Ld_, D1_, D2_, D11_, D12_, D22_, res_;
 };
 
-/** How often in one level the method refuses to stop at a saddle before it reports it. */
-constexpr int kMaxEscapes = 5;
-/** Newton steps the watchdog takes past a refused one before it returns to the reference point. */
-constexpr int kWatchdogSteps = 4;
-/** The watchdog arms only near a solution: residual below this fraction of the DEL terms' scale. */
-constexpr double kWatchdogResidual = 1e-3;
 
 template <class Space>
 class TrustRegionNewton : public Method_ {
@@ -244,9 +239,9 @@ class TrustRegionNewton : public Method_ {
         v.rho = 1;
       }
       if (v.accepted) {
-        if (v.rho < 0.25 && !v.by_residual) {
+        if (v.rho < kShrinkRatio && !v.by_residual) {
           delta_ = 0.5 * step.norm;
-        } else if (v.rho > 0.75 && step.norm >= 0.9 * delta_) {
+        } else if (v.rho > kExpandRatio && step.norm >= kBoundaryShare * delta_) {
           delta_ = std::max(delta_, 2 * step.norm);
         } else if (v.by_residual || step.newton) {
           delta_ = std::max(delta_, step.norm);
@@ -426,7 +421,7 @@ class TrustRegionNewton : public Method_ {
       const double c = delta_ / best_norm;
       for (double& v : p_) v *= c;
       best_norm = delta_;
-    } else if ((hard || escaping) && best_norm < 0.9 * delta_) {
+    } else if ((hard || escaping) && best_norm < kBoundaryShare * delta_) {
       best_norm = add_negative_curvature(ctx);
     }
     *step = Step{best_norm, false};
@@ -498,9 +493,9 @@ class TrustRegionNewton : public Method_ {
       return v;
     }
     v.rho = ared / pred;
-    if (v.rho >= 1e-4) {
+    if (v.rho >= kAcceptRatio) {
       v.accepted = true;
-    } else if (newton && rn <= 0.9 * best_residual_) {
+    } else if (newton && rn <= kResidualAccept * best_residual_) {
       v.accepted = true;
       v.by_residual = true;
     }

@@ -49,6 +49,9 @@ struct CheckpointPlan {
   std::string scene_text;               ///< the scene as text: written to DIR/scene.toml, which it records
   std::vector<std::string> overrides;   ///< the --set KEY=VALUE strings it records
   int threads = -1;                     ///< the thread count it records (-1: not given)
+  /** The model's digest (model_digest) it records, where the caller took it already before the
+   *  solve (resume_scene does, to check the checkpoint); "": run_solve takes it before the solve. */
+  std::string model_digest;
 };
 
 /** What a front end asks of a scene's solve besides the scene and its initial guess. */
@@ -113,6 +116,7 @@ struct Resumed {
   Scene scene;                          ///< from the recorded path with the recorded overrides, then `solver_sets`
   std::vector<std::string> overrides;   ///< the recorded overrides followed by `solver_sets`
   std::string warning;                  ///< check_resumable's warning, or ""
+  std::string model_digest;             ///< the scene's model digest, taken for check_resumable
   bool warm_start = false;              ///< `solver_sets` were given: a warm start from the iterate
 };
 
@@ -126,7 +130,7 @@ Resumed resume_scene(const std::string& dir, const std::vector<std::string>& sol
                      const std::vector<std::string>& model_names = {});
 
 /** The SolveRequest that continues `resumed` (resume_from, warm_start, and its checkpoint in
- *  DIR recording the scene file, the overrides and `threads`). */
+ *  DIR recording the scene file, the overrides, `threads` and the model digest already taken). */
 SolveRequest resume_request(const Resumed& resumed, const std::string& dir, int threads);
 
 }  // namespace pardel::app
