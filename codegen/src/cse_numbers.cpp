@@ -1,7 +1,8 @@
 /**
  * @file cse_numbers.cpp
  * The constants of the CSE: GiNaC constants rounded once to double and to extended precision,
- * their C literals (c_double_literal, c_extended_literal), and the table of emittable functions.
+ * their C literals (c_double_literal, c_extended_literal), the check for numbers beyond 1e300
+ * (has_huge_number, which the .lag reader shares), and the table of emittable functions.
  */
 #include <cmath>
 #include <cstdio>
@@ -35,22 +36,20 @@ std::string c_extended_literal(ExtendedFloat value) {
   return s + ")";
 }
 
+bool has_huge_number(const GiNaC::ex& e) {
+  if (GiNaC::is_a<GiNaC::numeric>(e)) return GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(e)) > GiNaC::numeric(1e300);
+  for (std::size_t i = 0; i < e.nops(); ++i) {
+    if (has_huge_number(e.op(i))) return true;
+  }
+  return false;
+}
+
 namespace cse {
 namespace {
 
 double checked(double v, const char* what) {
   if (!std::isfinite(v)) throw CodegenError(std::string("a constant subexpression (") + what + ") is not finite");
   return v;
-}
-
-/** True when a number in `c` is beyond 1e300 in magnitude: GiNaC's evalf of functions of such
- *  numbers is not reliable (exp(10^308) evaluates to 1.0), and no double kernel needs them. */
-bool has_huge_number(const GiNaC::ex& c) {
-  if (GiNaC::is_a<GiNaC::numeric>(c)) return GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(c)) > GiNaC::numeric(1e300);
-  for (std::size_t i = 0; i < c.nops(); ++i) {
-    if (has_huge_number(c.op(i))) return true;
-  }
-  return false;
 }
 
 /** A double as an exact rational. */

@@ -9,21 +9,9 @@
 #include <vector>
 
 #include "lag_reader.hpp"
+#include "pardel_codegen/cse.hpp"
 
 namespace pardel_codegen::lag {
-namespace {
-
-/** True when a number in `e` is beyond 1e300 in magnitude (GiNaC's evalf of functions of such
- *  numbers is unreliable: exp(10^308) evaluates to 1.0). */
-bool has_huge_number(const GiNaC::ex& e) {
-  if (GiNaC::is_a<GiNaC::numeric>(e)) return GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(e)) > GiNaC::numeric(1e300);
-  for (std::size_t i = 0; i < e.nops(); ++i) {
-    if (has_huge_number(e.op(i))) return true;
-  }
-  return false;
-}
-
-}  // namespace
 
 void Reader::declare_name(const Line& line, const Token& tok, const char* what) {
   if (tok.kind != Tok::ident) {

@@ -99,6 +99,11 @@ KernelCode generate_kernel_code(const std::vector<KernelOutput>& outputs, const 
 /** A double as a C literal with 17 significant digits (always with '.' or an exponent). */
 std::string c_double_literal(double value);
 
+/** True when a number in `e` is beyond 1e300 in magnitude: GiNaC's evalf of functions of such
+ *  numbers is not reliable (exp(10^308) evaluates to 1.0), and no double kernel needs them. The
+ *  .lag reader refuses such a param default, the CSE such a constant. */
+bool has_huge_number(const GiNaC::ex& e);
+
 /** An extended-precision value as a C++ expression of type pd_quad that needs no compiler flag:
  *  the sum of up to three doubles, `(pd_quad(0.33333333333333331) + 1.8503717077085941e-17 +
  *  1.0271626370065257e-33)`, whose sum in pd_quad is the value (a value that is a double prints
