@@ -5,8 +5,11 @@
  * and 2-stage Gauss on the cubic Hermite interpolant of (q0, v0, q1, v1); any order: s-point
  * Gauss-Legendre on the Hermite interpolant of degree 2 order - 1 of the two nodes' jets, and the
  * Galerkin family: a polynomial with interior values under Gauss or Gauss-Lobatto quadrature.
+ * Each family's builder is named by its row of the catalogue (discretizations.cpp).
  */
 #include "pardel_codegen/discretize.hpp"
+
+#include "pardel_codegen/discretizations.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -223,7 +226,7 @@ GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSp
   }
   const ex h = s.h;
   // The quadrature.
-  Quadrature quad = spec.kind == DiscretizationKind::galerkin_gauss ? gauss_legendre(spec.stages) : gauss_lobatto(spec.stages + 1);
+  Quadrature quad = spec.family->quadrature(spec.stages);
   ex total = 0;
   for (std::size_t stage = 0; stage < quad.nodes.size(); ++stage) {
     const numeric c = GiNaC::ex_to<numeric>(quad.nodes[stage].evalf());
@@ -275,96 +278,111 @@ KernelSymbols::KernelSymbols(const LagModel& model) {
   for (const ParamDecl& param : model.params) p.push_back(param.symbol);
 }
 
-ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
-                       Gauss2Positions positions) {
+ex trapezoid_lagrangian(const LagModel& model, const DiscretizationSpec&, const KernelSymbols& s, Gauss2Positions) {
+  const std::size_t n = model.coords.size();
+  const ex h = s.h;
+  std::vector<ex> x0 = block(s.q0, 0, n), x1 = block(s.q1, 0, n), v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = (x1[i] - x0[i]) / h;
+  return h / 2 * (evaluate_at(model, model.lagrangian, s.t0, {x0, v}) + evaluate_at(model, model.lagrangian, s.t1, {x1, v}));
+}
+
+ex midpoint_lagrangian(const LagModel& model, const DiscretizationSpec&, const KernelSymbols& s, Gauss2Positions) {
+  const std::size_t n = model.coords.size();
+  const ex h = s.h;
+  std::vector<ex> x0 = block(s.q0, 0, n), x1 = block(s.q1, 0, n), v(n), xm(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    v[i] = (x1[i] - x0[i]) / h;
+    xm[i] = (x0[i] + x1[i]) / 2;
+  }
+  return h * evaluate_at(model, model.lagrangian, (s.t0 + s.t1) / 2, {xm, v});
+}
+
+ex trapezoid_alpha_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                              Gauss2Positions) {
+  const std::size_t n = model.coords.size();
+  const ex h = s.h;
+  const ex a = spec.alpha;
+  std::vector<ex> x0 = block(s.q0, 0, n), v0 = block(s.q0, 1, n);
+  std::vector<ex> x1 = block(s.q1, 0, n), v1 = block(s.q1, 1, n), a0(n), a1(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    a0[i] = (((1 - 3 * a) * v1[i] - (1 + 3 * a) * v0[i]) * h + 6 * a * (x1[i] - x0[i])) / (h * h);
+    a1[i] = (((1 + 3 * a) * v1[i] - (1 - 3 * a) * v0[i]) * h - 6 * a * (x1[i] - x0[i])) / (h * h);
+  }
+  return h / 2 * (evaluate_at(model, model.lagrangian, s.t0, {x0, v0, a0}) +
+                  evaluate_at(model, model.lagrangian, s.t1, {x1, v1, a1}));
+}
+
+ex gauss2_lagrangian(const LagModel& model, const DiscretizationSpec&, const KernelSymbols& s, Gauss2Positions positions) {
   const std::size_t n = model.coords.size();
   const ex h = s.h, t0 = s.t0, t1 = s.t1;
-  const ex& L = model.lagrangian;
-  switch (spec.kind) {
-    case DiscretizationKind::trapezoid:
-    case DiscretizationKind::midpoint: {
-      std::vector<ex> x0 = block(s.q0, 0, n), x1 = block(s.q1, 0, n), v(n), xm(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        v[i] = (x1[i] - x0[i]) / h;
-        xm[i] = (x0[i] + x1[i]) / 2;
+  std::vector<ex> x0 = block(s.q0, 0, n), v0 = block(s.q0, 1, n);
+  std::vector<ex> x1 = block(s.q1, 0, n), v1 = block(s.q1, 1, n);
+  const ex r3 = GiNaC::sqrt(ex(3));
+  ex total = 0;
+  for (int stage = 0; stage < 2; ++stage) {
+    const ex c = stage == 0 ? ex(GiNaC::numeric(1, 2)) - r3 / 6 : ex(GiNaC::numeric(1, 2)) + r3 / 6;
+    // Cubic Hermite basis on [0, 1] and its first two derivatives at c.
+    const ex h00 = (2 * c * c * c - 3 * c * c + 1).expand(), h10 = (c * c * c - 2 * c * c + c).expand();
+    const ex h01 = (-2 * c * c * c + 3 * c * c).expand(), h11 = (c * c * c - c * c).expand();
+    const ex d00 = (6 * c * c - 6 * c).expand(), d10 = (3 * c * c - 4 * c + 1).expand();
+    const ex d01 = (-6 * c * c + 6 * c).expand(), d11 = (3 * c * c - 2 * c).expand();
+    const ex e00 = (12 * c - 6).expand(), e10 = (6 * c - 4).expand();
+    const ex e01 = (-12 * c + 6).expand(), e11 = (6 * c - 2).expand();
+    std::vector<ex> Q(n), V(n), A(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (positions == Gauss2Positions::hermite) {
+        Q[i] = h00 * x0[i] + h10 * h * v0[i] + h01 * x1[i] + h11 * h * v1[i];
+      } else {
+        Q[i] = (1 - c) * x0[i] + c * x1[i] - h / 12 * (v1[i] - v0[i]);
       }
-      if (spec.kind == DiscretizationKind::trapezoid) {
-        return h / 2 * (evaluate_at(model, L, t0, {x0, v}) + evaluate_at(model, L, t1, {x1, v}));
-      }
-      return h * evaluate_at(model, L, (t0 + t1) / 2, {xm, v});
+      V[i] = (d00 * x0[i] + d01 * x1[i]) / h + d10 * v0[i] + d11 * v1[i];
+      A[i] = (e00 * x0[i] + e01 * x1[i]) / (h * h) + (e10 * v0[i] + e11 * v1[i]) / h;
     }
-    case DiscretizationKind::trapezoid_alpha: {
-      const ex a = spec.alpha;
-      std::vector<ex> x0 = block(s.q0, 0, n), v0 = block(s.q0, 1, n);
-      std::vector<ex> x1 = block(s.q1, 0, n), v1 = block(s.q1, 1, n), a0(n), a1(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        a0[i] = (((1 - 3 * a) * v1[i] - (1 + 3 * a) * v0[i]) * h + 6 * a * (x1[i] - x0[i])) / (h * h);
-        a1[i] = (((1 + 3 * a) * v1[i] - (1 - 3 * a) * v0[i]) * h - 6 * a * (x1[i] - x0[i])) / (h * h);
-      }
-      return h / 2 * (evaluate_at(model, L, t0, {x0, v0, a0}) + evaluate_at(model, L, t1, {x1, v1, a1}));
-    }
-    case DiscretizationKind::gauss2: {
-      std::vector<ex> x0 = block(s.q0, 0, n), v0 = block(s.q0, 1, n);
-      std::vector<ex> x1 = block(s.q1, 0, n), v1 = block(s.q1, 1, n);
-      const ex r3 = GiNaC::sqrt(ex(3));
-      ex total = 0;
-      for (int stage = 0; stage < 2; ++stage) {
-        const ex c = stage == 0 ? ex(GiNaC::numeric(1, 2)) - r3 / 6 : ex(GiNaC::numeric(1, 2)) + r3 / 6;
-        // Cubic Hermite basis on [0, 1] and its first two derivatives at c.
-        const ex h00 = (2 * c * c * c - 3 * c * c + 1).expand(), h10 = (c * c * c - 2 * c * c + c).expand();
-        const ex h01 = (-2 * c * c * c + 3 * c * c).expand(), h11 = (c * c * c - c * c).expand();
-        const ex d00 = (6 * c * c - 6 * c).expand(), d10 = (3 * c * c - 4 * c + 1).expand();
-        const ex d01 = (-6 * c * c + 6 * c).expand(), d11 = (3 * c * c - 2 * c).expand();
-        const ex e00 = (12 * c - 6).expand(), e10 = (6 * c - 4).expand();
-        const ex e01 = (-12 * c + 6).expand(), e11 = (6 * c - 2).expand();
-        std::vector<ex> Q(n), V(n), A(n);
-        for (std::size_t i = 0; i < n; ++i) {
-          if (positions == Gauss2Positions::hermite) {
-            Q[i] = h00 * x0[i] + h10 * h * v0[i] + h01 * x1[i] + h11 * h * v1[i];
-          } else {
-            Q[i] = (1 - c) * x0[i] + c * x1[i] - h / 12 * (v1[i] - v0[i]);
-          }
-          V[i] = (d00 * x0[i] + d01 * x1[i]) / h + d10 * v0[i] + d11 * v1[i];
-          A[i] = (e00 * x0[i] + e01 * x1[i]) / (h * h) + (e10 * v0[i] + e11 * v1[i]) / h;
-        }
-        total += evaluate_at(model, L, t0 + c * (t1 - t0), {Q, V, A});
-      }
-      return h / 2 * total;
-    }
-    case DiscretizationKind::hermite_gauss: {
-      // The interpolant x(t0 + u h) = sum_k h^k (at[k](u) x0^(k) + bt[k](u) x1^(k)); its j-th time
-      // derivative at a stage c is sum_k h^(k-j) (at[k]^(j)(c) x0^(k) + bt[k]^(j)(c) x1^(k)).
-      const int g = model.order;
-      const GiNaC::symbol u("u");
-      const HermiteBasis basis = hermite_basis(g, u);
-      const Quadrature quad = gauss_legendre(spec.stages);
-      ex total = 0;
-      for (std::size_t stage = 0; stage < quad.nodes.size(); ++stage) {
-        const ex c = quad.nodes[stage];
-        std::vector<std::vector<ex>> values(static_cast<std::size_t>(g) + 1, std::vector<ex>(n, 0));
-        for (int k = 0; k < g; ++k) {
-          const std::vector<ex> x0 = block(s.q0, static_cast<std::size_t>(k), n);
-          const std::vector<ex> x1 = block(s.q1, static_cast<std::size_t>(k), n);
-          ex da = basis.at[static_cast<std::size_t>(k)], db = basis.bt[static_cast<std::size_t>(k)];
-          for (int j = 0; j <= g; ++j) {
-            const ex ca = da.subs(u == c).expand(), cb = db.subs(u == c).expand();
-            const ex scale = GiNaC::pow(h, k - j);
-            for (std::size_t i = 0; i < n; ++i) values[static_cast<std::size_t>(j)][i] += scale * (ca * x0[i] + cb * x1[i]);
-            da = da.diff(u);
-            db = db.diff(u);
-          }
-        }
-        total += quad.weights[stage] * evaluate_at(model, L, t0 + c * (t1 - t0), values);
-      }
-      return h * total;
-    }
-    case DiscretizationKind::galerkin_gauss:
-    case DiscretizationKind::galerkin_lobatto: {
-      if (spec.interior_points > 0) throw std::logic_error(spec.name + " has interior values: it has no closed form");
-      return galerkin_interval(model, spec, s).action;
-    }
+    total += evaluate_at(model, model.lagrangian, t0 + c * (t1 - t0), {Q, V, A});
   }
-  return 0;
+  return h / 2 * total;
+}
+
+ex hermite_gauss_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                            Gauss2Positions) {
+  // The interpolant x(t0 + u h) = sum_k h^k (at[k](u) x0^(k) + bt[k](u) x1^(k)); its j-th time
+  // derivative at a stage c is sum_k h^(k-j) (at[k]^(j)(c) x0^(k) + bt[k]^(j)(c) x1^(k)).
+  const std::size_t n = model.coords.size();
+  const ex h = s.h, t0 = s.t0, t1 = s.t1;
+  const int g = model.order;
+  const GiNaC::symbol u("u");
+  const HermiteBasis basis = hermite_basis(g, u);
+  const Quadrature quad = gauss_legendre(spec.stages);
+  ex total = 0;
+  for (std::size_t stage = 0; stage < quad.nodes.size(); ++stage) {
+    const ex c = quad.nodes[stage];
+    std::vector<std::vector<ex>> values(static_cast<std::size_t>(g) + 1, std::vector<ex>(n, 0));
+    for (int k = 0; k < g; ++k) {
+      const std::vector<ex> x0 = block(s.q0, static_cast<std::size_t>(k), n);
+      const std::vector<ex> x1 = block(s.q1, static_cast<std::size_t>(k), n);
+      ex da = basis.at[static_cast<std::size_t>(k)], db = basis.bt[static_cast<std::size_t>(k)];
+      for (int j = 0; j <= g; ++j) {
+        const ex ca = da.subs(u == c).expand(), cb = db.subs(u == c).expand();
+        const ex scale = GiNaC::pow(h, k - j);
+        for (std::size_t i = 0; i < n; ++i) values[static_cast<std::size_t>(j)][i] += scale * (ca * x0[i] + cb * x1[i]);
+        da = da.diff(u);
+        db = db.diff(u);
+      }
+    }
+    total += quad.weights[stage] * evaluate_at(model, model.lagrangian, t0 + c * (t1 - t0), values);
+  }
+  return h * total;
+}
+
+ex galerkin_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s, Gauss2Positions) {
+  if (spec.interior_points > 0) throw std::logic_error(spec.name + " has interior values: it has no closed form");
+  return galerkin_interval(model, spec, s).action;
+}
+
+ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                       Gauss2Positions positions) {
+  if (spec.family == nullptr || spec.family->build == nullptr) throw std::logic_error(spec.name + " has no builder");
+  return spec.family->build(model, spec, s, positions);
 }
 
 ex interval_clock(const LagModel& model, const KernelSymbols& s) {

@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "lag_reader.hpp"
+#include "pardel_codegen/discretizations.hpp"
 #include "pardel/regular_file.hpp"
 
 namespace pardel_codegen {
@@ -79,18 +80,7 @@ LagModel Reader::read() {
   if (discretization_line_) {
     read_discretizations(*discretization_line_);
   } else {
-    DiscretizationSpec spec;
-    if (model_.order >= 3) {
-      spec = hermite_gauss_spec(model_.order, model_.order);
-    } else if (model_.order == 1) {
-      spec.kind = DiscretizationKind::trapezoid;
-      spec.name = spec.ident = "trapezoid";
-    } else {
-      spec.kind = DiscretizationKind::trapezoid_alpha;
-      spec.name = "trapezoid(alpha=1)";
-      spec.ident = "trapezoid_alpha_1";
-    }
-    model_.discretizations.push_back(spec);
+    model_.discretizations.push_back(default_discretization(model_.order));
   }
   model_.filename = filename_;
   model_.source_lines = raw_lines_;

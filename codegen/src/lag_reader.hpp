@@ -27,9 +27,6 @@ bool is_function_name(const std::string& s);
 /** t, pi and the function names. */
 bool is_reserved_name(const std::string& s);
 
-/** hermite_gauss(s=S) for an order-`order` model (S >= order): consistency order min(2 order, 2 S). */
-DiscretizationSpec hermite_gauss_spec(int order, int stages);
-
 enum class Tok { ident, number, op, end };
 
 struct Token {
@@ -92,8 +89,7 @@ class Reader {
   GiNaC::numeric read_discretization_parameter(const Line& line, const Token& name, std::size_t& i,
                                                int& value_col) const;
   DiscretizationSpec discretization_spec(const Line& line, const Token& name, bool has_value,
-                                         const GiNaC::numeric& value, int value_col,
-                                         const std::string& available) const;
+                                         const GiNaC::numeric& value, int value_col) const;
 
   // Expression parsing over one line's tokens (lag_expression.cpp).
   struct Cursor {

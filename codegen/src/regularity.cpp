@@ -4,7 +4,7 @@
  * GiNaC and evaluated at pseudo-random points in 50-digit arithmetic; its rank (row reduction
  * with a relative tolerance of 1e-30), its null directions, and a bisection for a zero of det W
  * between sample points where det W has opposite signs. Also the discretizations that are not
- * regular for any L (trapezoid(alpha=0)).
+ * regular for any L, as their rows of the catalogue say (trapezoid(alpha=0)).
  */
 #include "pardel_codegen/regularity.hpp"
 
@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "pardel_codegen/cse.hpp"
+#include "pardel_codegen/discretizations.hpp"
 #include "pardel_codegen/lag_parser.hpp"
 
 namespace pardel_codegen {
@@ -527,17 +528,15 @@ std::vector<std::string> check_regularity(const LagModel& model, bool allow_sing
             "; the DEL equations are not regular there, and a solve whose path comes near it may fail"));
   }
 
-  // Discretizations that are not regular for any L.
+  // Discretizations that are not regular for any L (the catalogue's never_regular).
   const std::vector<std::pair<int, int>> where = discretization_positions(model);
   for (std::size_t k = 0; k < model.discretizations.size(); ++k) {
     const DiscretizationSpec& spec = model.discretizations[k];
-    if (spec.kind != DiscretizationKind::trapezoid_alpha || !spec.alpha.is_zero()) continue;
+    const char* reason = spec.family && spec.family->never_regular ? spec.family->never_regular(spec) : nullptr;
+    if (reason == nullptr) continue;
     const int dl = k < where.size() ? where[k].first : line, dc = k < where.size() ? where[k].second : col;
     const std::string message =
-        "model '" + model.name + "': discretization '" + spec.name +
-        "' is not regular: with alpha = 0 the accelerations a0 = a1 = (v1 - v0)/h do not involve the positions "
-        "x0, x1, so d2Ld/dx0dx1 = 0 for every L (D12 Ld is singular) and the DEL equations do not determine "
-        "the positions; use alpha != 0 (trapezoid(alpha=1) is the default) or gauss2";
+        "model '" + model.name + "': discretization '" + spec.name + "' is not regular: " + reason;
     if (!allowed) {
       const std::string source = model.source_lines[static_cast<std::size_t>(dl - 1)];
       throw LagError(lag_diagnostic(model.filename, source, dl, dc, message) + "\nnote: " + opt_out, dl, dc, message);

@@ -67,11 +67,35 @@ struct GalerkinInterval {
 };
 GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s);
 
-/** The discrete Lagrangian L_d(h, t0, t1, q0, q1, p) of `spec` for `model`. A Galerkin
- *  discretization with interior values has no closed form: use galerkin_interval.
- *  @throws std::logic_error for one. */
+/** The discrete Lagrangian L_d(h, t0, t1, q0, q1, p) of `spec` for `model`: the builder of its
+ *  row of the catalogue (discretizations.hpp). A Galerkin discretization with interior values has
+ *  no closed form: use galerkin_interval. @throws std::logic_error for one. */
 GiNaC::ex discrete_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
                               Gauss2Positions positions = Gauss2Positions::hermite);
+
+// The builders of the catalogue's rows (discretizations.cpp), one per family; each writes the
+// interval's discrete Lagrangian (formulas: docs/discretizations.md). `positions` is read by
+// gauss2 only.
+
+/** Order 1: h/2 [L(t0, q0, v) + L(t1, q1, v)], v = (q1 - q0)/h. */
+GiNaC::ex trapezoid_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                               Gauss2Positions positions);
+/** Order 1: h L((t0 + t1)/2, (q0 + q1)/2, v). */
+GiNaC::ex midpoint_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                              Gauss2Positions positions);
+/** Order 2: the trapezoid rule with the accelerations of the L_d^alpha family (spec.alpha). */
+GiNaC::ex trapezoid_alpha_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                                     Gauss2Positions positions);
+/** Order 2: 2-stage Gauss on the cubic Hermite interpolant of (q0, v0, q1, v1). */
+GiNaC::ex gauss2_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                            Gauss2Positions positions);
+/** Any order: spec.stages-point Gauss-Legendre on the Hermite interpolant of degree 2 order - 1. */
+GiNaC::ex hermite_gauss_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                                   Gauss2Positions positions);
+/** galerkin_gauss and galerkin_lobatto without interior values (s = order): galerkin_interval's
+ *  action. @throws std::logic_error with interior values. */
+GiNaC::ex galerkin_lagrangian(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
+                              Gauss2Positions positions);
 
 /** h * clock at (t0, q0, v) with v = (q1 - q0)/h for order 1, or q0's stored derivatives otherwise. */
 GiNaC::ex interval_clock(const LagModel& model, const KernelSymbols& s);

@@ -13,22 +13,15 @@
 
 namespace pardel_codegen {
 
-/** The discrete Lagrangians pardel-gen knows (see docs/discretizations.md). */
-enum class DiscretizationKind {
-  trapezoid,        ///< order 1: h/2 [L(t0,q0,v) + L(t1,q1,v)], v = (q1-q0)/h
-  midpoint,         ///< order 1: h L((t0+t1)/2, (q0+q1)/2, v)
-  trapezoid_alpha,  ///< order 2: the seed's L_d^alpha family
-  gauss2,           ///< order 2: 2-stage Gauss on the cubic Hermite interpolant
-  hermite_gauss,    ///< any order: s-point Gauss-Legendre on the Hermite interpolant of degree 2*order-1
-  galerkin_gauss,   ///< any order: Galerkin polynomial of degree s+order-1 (s-order interior values), s Gauss points
-  galerkin_lobatto, ///< the same polynomial under the (s+1)-point Gauss-Lobatto rule
-};
+struct DiscretizationFamily;  // discretizations.hpp
 
 /** One requested discretization with its canonical names. */
 struct DiscretizationSpec {
-  DiscretizationKind kind = DiscretizationKind::trapezoid;
-  GiNaC::numeric alpha = 1;   ///< the parameter of trapezoid_alpha (exact rational)
-  int stages = 0;             ///< the number s of Gauss points of hermite_gauss; s of the Galerkin family
+  /** Its row of the catalogue (discretizations.hpp), which has static storage; see
+   *  docs/discretizations.md for each family. */
+  const DiscretizationFamily* family = nullptr;
+  GiNaC::numeric alpha = 1;   ///< a rational parameter (alpha of trapezoid for order 2), exact
+  int stages = 0;             ///< an integer parameter s: the Gauss points of hermite_gauss, s of the Galerkin family
   int interior_points = 0;    ///< interior values per coordinate of a Galerkin interval (s - order)
   std::string name;           ///< canonical name: "trapezoid", "trapezoid(alpha=1)", "hermite_gauss(s=3)", ...
   std::string ident;          ///< C-identifier form: "trapezoid", "trapezoid_alpha_1", "hermite_gauss_s_3", ...
