@@ -24,7 +24,9 @@
 
 #include <unistd.h>
 
+#include "arguments.hpp"
 #include "exit_codes.hpp"
+#include "inspect_commands.hpp"
 #include "pardel/app/checkpoint.hpp"
 #include "pardel/app/outputs.hpp"
 #include "pardel/app/scene.hpp"
@@ -58,12 +60,6 @@ const char* const kExitCodesHelp =
     "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate),\n"
     "7 stalled (no progress at the round-off level of the problem: tol is unattainable).";
 
-/** A bad command-line value: the message names the option; exit code 2. */
-class UsageError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 bool looks_like_path(const std::string& spec) {
   return spec.find('/') != std::string::npos || (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
 }
@@ -85,178 +81,6 @@ const pardel_model* resolve_model_spec(const std::string& spec) {
 #else
   throw std::runtime_error("this build cannot load .lag files (no model loader); use a bundled model");
 #endif
-}
-
-double parse_number_option(const std::string& text, const std::string& option) {
-  char* end = nullptr;
-  errno = 0;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE) {
-    throw UsageError(fmt::format("{}: '{}' is not a number", option, text));
-  }
-  return value;
-}
-
-std::vector<double> parse_vector_option(const std::string& text, const std::string& option, std::size_t size,
-                                        const std::string& what) {
-  std::vector<double> values;
-  std::size_t start = 0;
-  for (;;) {
-    const std::size_t comma = text.find(',', start);
-    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    values.push_back(parse_number_option(item, option));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  if (values.size() != size) {
-    throw UsageError(fmt::format("{}: {} value{} given; expected {} ({})", option, values.size(),
-                                 values.size() == 1 ? "" : "s", size, what));
-  }
-  return values;
-}
-
-// ---------------------------------------------------------------------------------------------
-// pardel models
-
-int run_models(bool json) {
-  const auto& models = bundled_models();
-  if (json) {
-    nlohmann::ordered_json list = nlohmann::ordered_json::array();
-    for (const pardel_model* m : models) {
-      nlohmann::ordered_json j;
-      j["name"] = m->name;
-      j["source"] = m->source ? m->source : "";
-      j["order"] = m->order;
-      j["dim"] = m->dim;
-      j["coords"] = std::vector<std::string>(m->coords, m->coords + m->ncoords);
-      nlohmann::ordered_json params = nlohmann::ordered_json::object();
-      for (int i = 0; i < m->nparams; ++i) params[m->param_names[i]] = m->param_defaults[i];
-      j["params"] = params;
-      j["time_dependent"] = m->time_dependent != 0;
-      j["clock"] = m->clock != nullptr;
-      nlohmann::ordered_json discs = nlohmann::ordered_json::array();
-      for (int i = 0; i < m->ndiscretizations; ++i) {
-        discs.push_back({{"name", m->discretizations[i].name},
-                         {"consistency_order", m->discretizations[i].consistency_order}});
-      }
-      j["discretizations"] = discs;
-      list.push_back(j);
-    }
-    std::cout << list.dump(2) << "\n";
-    return 0;
-  }
-  if (models.empty()) {
-    std::cout << "no bundled models in this build\n";
-    return 0;
-  }
-  for (const pardel_model* m : models) {
-    std::string coords;
-    for (int i = 0; i < m->ncoords; ++i) coords += (i ? " " : "") + std::string(m->coords[i]);
-    std::string params;
-    for (int i = 0; i < m->nparams; ++i) {
-      params += fmt::format("{}{}={}", i ? " " : "", m->param_names[i], m->param_defaults[i]);
-    }
-    std::string discs;
-    for (int i = 0; i < m->ndiscretizations; ++i) discs += (i ? " " : "") + std::string(m->discretizations[i].name);
-    std::cout << fmt::format("{}\n  coords: {}\n  order: {}{}{}\n  params: {}\n  discretizations: {}\n", m->name,
-                             coords, m->order, m->time_dependent ? ", time-dependent" : "",
-                             m->clock ? ", has a clock" : "", params.empty() ? "(none)" : params, discs);
-  }
-  return 0;
-}
-
-// ---------------------------------------------------------------------------------------------
-// pardel kernels
-
-struct KernelArgs {
-  std::string model, disc, h, t0, t1, q0, q1;
-  std::vector<std::string> params;
-};
-
-std::string json_number(double v) {
-  return std::isfinite(v) ? format_double(v) : "null";
-}
-
-std::string json_vector(const double* v, int n) {
-  std::string out = "[";
-  for (int i = 0; i < n; ++i) out += (i ? ", " : "") + json_number(v[i]);
-  return out + "]";
-}
-
-std::string json_matrix(const double* m, int n) {
-  std::string out = "[";
-  for (int i = 0; i < n; ++i) out += (i ? ", " : "") + json_vector(m + static_cast<std::size_t>(i) * n, n);
-  return out + "]";
-}
-
-int run_kernels(const KernelArgs& args) {
-  const pardel_model* model = nullptr;
-  try {
-    model = resolve_model_spec(args.model);
-  } catch (const std::exception& error) {
-    throw UsageError(fmt::format("--model: cannot load '{}': {}", args.model, error.what()));
-  }
-  if (!model) {
-    const std::string suggestion = nearest_name(args.model, bundled_model_names());
-    throw UsageError(fmt::format("--model: unknown model '{}'{}", args.model,
-                                 suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion)));
-  }
-  const pardel_discretization* disc = find_discretization(*model, args.disc);
-  if (!disc) {
-    std::vector<std::string> names;
-    for (int i = 0; i < model->ndiscretizations; ++i) names.push_back(model->discretizations[i].name);
-    const std::string suggestion = nearest_name(args.disc, names);
-    std::string all;
-    for (const auto& n : names) all += (all.empty() ? "" : ", ") + n;
-    throw UsageError(fmt::format("--disc: unknown discretization '{}' for model {}{} (it has: {})", args.disc,
-                                 model->name, suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion),
-                                 all));
-  }
-  // The kernels are evaluated at the numbers as given: a step that is not positive, or a point
-  // that is not finite, has no discrete Lagrangian to report.
-  const double h = parse_number_option(args.h, "--h");
-  if (!(std::isfinite(h) && h > 0)) throw UsageError(fmt::format("--h: the step must be a finite number > 0, got '{}'", args.h));
-  const auto finite = [](double value, const std::string& text, const std::string& option) {
-    if (!std::isfinite(value)) throw UsageError(fmt::format("{}: '{}' is not a finite number", option, text));
-    return value;
-  };
-  const double t0 = finite(parse_number_option(args.t0, "--t0"), args.t0, "--t0");
-  const double t1 = finite(parse_number_option(args.t1, "--t1"), args.t1, "--t1");
-  std::string layout;
-  for (const auto& name : state_column_names(*model)) layout += (layout.empty() ? "" : ",") + name;
-  const auto q0 = parse_vector_option(args.q0, "--q0", model->dim, "order*ncoords values: " + layout);
-  const auto q1 = parse_vector_option(args.q1, "--q1", model->dim, "order*ncoords values: " + layout);
-  for (const auto* point : {&q0, &q1}) {
-    const std::string option = point == &q0 ? "--q0" : "--q1";
-    for (std::size_t i = 0; i < point->size(); ++i)
-      if (!std::isfinite((*point)[i]))
-        throw UsageError(fmt::format("{}: value {} ({}) is not a finite number", option, i + 1,
-                                     state_column_names(*model)[i]));
-  }
-  std::vector<double> p(model->param_defaults, model->param_defaults + model->nparams);
-  std::vector<std::string> names(model->param_names, model->param_names + model->nparams);
-  for (const auto& assignment : args.params) {
-    const auto eq = assignment.find('=');
-    if (eq == std::string::npos) throw UsageError(fmt::format("--param: '{}' is not NAME=VALUE", assignment));
-    const std::string name = assignment.substr(0, eq);
-    const auto it = std::find(names.begin(), names.end(), name);
-    if (it == names.end()) {
-      const std::string suggestion = nearest_name(name, names);
-      throw UsageError(fmt::format("--param: model {} has no param '{}'{}", model->name, name,
-                                   suggestion.empty() ? (names.empty() ? " (it has none)" : "")
-                                                      : fmt::format("; did you mean '{}'?", suggestion)));
-    }
-    p[it - names.begin()] = finite(parse_number_option(assignment.substr(eq + 1), "--param " + name),
-                                   assignment.substr(eq + 1), "--param " + name);
-  }
-  const int m = model->dim;
-  double Ld = 0;
-  std::vector<double> D1(m), D2(m), D11(m * m), D12(m * m), D22(m * m);
-  disc->full(h, t0, t1, q0.data(), q1.data(), p.data(), &Ld, D1.data(), D2.data(), D11.data(), D12.data(), D22.data());
-  std::cout << "{\"Ld\": " << json_number(Ld) << ", \"D1\": " << json_vector(D1.data(), m)
-            << ", \"D2\": " << json_vector(D2.data(), m) << ", \"D11\": " << json_matrix(D11.data(), m)
-            << ", \"D12\": " << json_matrix(D12.data(), m) << ", \"D22\": " << json_matrix(D22.data(), m) << "}\n";
-  return 0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -606,7 +430,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*models) return run_models(models_json);
-    if (*kernels) return run_kernels(k);
+    if (*kernels) return run_kernels(k, resolve_model_spec);
     if (*solve_cmd) {
       if (!s.device.empty()) s.sets.push_back("solver.device=" + s.device);
       return run_solve(s);
