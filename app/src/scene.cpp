@@ -13,6 +13,7 @@
 #include "pardel/app/trajectory_io.hpp"
 #include "pardel/regular_file.hpp"
 #include "toml_read.hpp"
+#include "pardel/app/scene_table.hpp"  // after toml_read.hpp, which sets toml++'s options
 
 namespace pardel::app {
 
@@ -692,15 +693,13 @@ void read_output(const SceneReader& r, const toml::table& root, Scene& scene) {
 
 }  // namespace
 
-Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
-                  const ModelResolver& resolve, const std::vector<std::string>& model_names) {
-  toml::table root = detail::parse_document(text, source_name);
-  std::map<std::string, std::string> origins;
-  for (const auto& assignment : overrides) {
-    const std::string dotted = apply_override(root, assignment);
-    origins[dotted] = "--set " + assignment;
-  }
-  const SceneReader r(source_name, origins);
+namespace {
+
+/** A parsed scene read and checked, one table at a time; `origins` names the --set that supplied
+ *  a key (parse_scene's overrides). */
+Scene read_scene(const toml::table& root, const std::string& source_name, std::map<std::string, std::string> origins,
+                 const ModelResolver& resolve, const std::vector<std::string>& model_names) {
+  const SceneReader r(source_name, std::move(origins));
 
   Scene scene;
   scene.path = source_name;
@@ -732,6 +731,24 @@ Scene parse_scene(std::string_view text, const std::string& source_name, const s
                                  why));
   }
   return scene;
+}
+
+}  // namespace
+
+Scene parse_scene(std::string_view text, const std::string& source_name, const std::vector<std::string>& overrides,
+                  const ModelResolver& resolve, const std::vector<std::string>& model_names) {
+  toml::table root = detail::parse_document(text, source_name);
+  std::map<std::string, std::string> origins;
+  for (const auto& assignment : overrides) {
+    const std::string dotted = apply_override(root, assignment);
+    origins[dotted] = "--set " + assignment;
+  }
+  return read_scene(root, source_name, std::move(origins), resolve, model_names);
+}
+
+Scene read_scene_table(const toml::table& root, const std::string& source_name, const ModelResolver& resolve,
+                       const std::vector<std::string>& model_names) {
+  return read_scene(root, source_name, {}, resolve, model_names);
 }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides, const ModelResolver& resolve,

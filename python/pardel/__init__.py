@@ -363,7 +363,7 @@ class Result:
     summary: Dict[str, Any]
 
     def __init__(self, raw: Dict[str, Any], model_coords: Sequence[str]) -> None:
-        self.summary = json.loads(raw["summary"])
+        self.summary = raw["summary"]
         s = self.summary
         self.t = np.asarray(raw["t"])
         self.q = np.asarray(raw["q"])
@@ -487,7 +487,7 @@ def _number_text(value, form):
 
 # ---------------------------------------------------------------------------------------------
 # Argument checks: every public function checks its arguments here before anything reaches the
-# scene text or the compiled core, with Python's exceptions (TypeError for a wrong type, a
+# scene or the compiled core, with Python's exceptions (TypeError for a wrong type, a
 # ValueError, PardelError, for a bad value) and messages that name the argument as the caller
 # wrote it: "pardel.solve: N must be an int between 2 and 100000000, got 1e+30".
 

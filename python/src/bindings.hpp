@@ -2,7 +2,7 @@
  * @file bindings.hpp
  * What the sources of pardel's compiled Python core (pardel._pardel, the .cpp files of python/src/)
  * share: the error raised for refused input, model resolution with the GIL released, the scene made
- * from pardel.solve's keyword arguments, the conversions to NumPy arrays, and the entry points that
+ * from pardel.solve's keyword arguments, the conversions to NumPy arrays and Python values, and the entry points that
  * module.cpp binds. Internal to the module (not installed).
  */
 #pragma once
@@ -19,6 +19,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "pardel/app/scene.hpp"
 #include "pardel/pardel.hpp"
@@ -93,7 +95,8 @@ std::string scene_text(const std::string& model_spec, const py::dict& arguments,
 Scene parse_generated_scene(const std::string& text, const std::string& model_spec = {},
                             const ModelHandle* loaded = nullptr);
 
-/** A scene from pardel.solve's arguments (scene_text, then the options outside the scene schema). */
+/** A scene from pardel.solve's arguments (their TOML table read by the scene reader, then the
+ *  options outside the scene schema). */
 Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments,
                            const ModelHandle* loaded = nullptr);
 
@@ -109,10 +112,13 @@ std::vector<std::string> warm_start_overrides(const py::dict& options);
 py::array_t<double> matrix(const std::vector<double>& values, std::size_t rows, std::size_t cols);
 py::array_t<double> vector(const std::vector<double>& values);
 
+/** A JSON value (summary.json's) as the Python value json.loads makes of its text. */
+py::object json_value(const nlohmann::ordered_json& value);
+
 /** The initial trajectory: the scene's guess, or `guess` resampled to the scene's N. */
 Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t);
 
-/** What pardel.Result is made of: summary.json's dictionary (as text) and the arrays. */
+/** What pardel.Result is made of: summary.json's dictionary and the arrays. */
 py::dict result_dict(const Scene& scene, const Summary& summary, const Trajectory& trajectory, bool stopped_by_callback);
 
 

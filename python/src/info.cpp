@@ -46,7 +46,7 @@ py::dict scene_info(const Scene& s) {
   py::dict out;
   out["path"] = path_str(s.path);
   out["model"] = ModelHandle{s.model};
-  out["model_spec"] = s.model_spec;
+  out["model_spec"] = path_str(s.model_spec);  // a .lag path need not be UTF-8
   out["discretization"] = s.discretization;
   std::vector<double> params = s.problem.params;
   py::dict named;

@@ -5,10 +5,10 @@
  * library (pardel::app: the scene reader, summary.json, sweeps, checkpoints). This file defines the
  * module's functions and classes and turns the C++ exceptions into pardel's Python exceptions; the
  * other files of python/src/ hold what the functions do (bindings.hpp names them). Keyword
- * arguments of pardel.solve are written as a scene and read by the scene reader, so their checks
- * and messages are those of `pardel solve` (the package checks the arguments' types before); solves
- * and .lag compiles run with the GIL released and stop at Ctrl-C; results come back as NumPy arrays
- * and summary.json's dictionary (as text).
+ * arguments of pardel.solve are made into a scene (a TOML table) and read by the scene reader, so
+ * their checks and messages are those of `pardel solve` (the package checks the arguments' types
+ * before); solves and .lag compiles run with the GIL released and stop at Ctrl-C; results come back
+ * as NumPy arrays and summary.json's dictionary (a dict, not JSON text).
  */
 #include "bindings.hpp"
 

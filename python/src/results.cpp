@@ -1,14 +1,16 @@
 /**
  * @file results.cpp
  * Between NumPy arrays and the runtime's trajectories: arrays of values, the initial trajectory of
- * a solve (the scene's guess or one given as an array), and the result dictionary that
- * pardel.Result is made of.
+ * a solve (the scene's guess or one given as an array), JSON values as Python values, and the
+ * result dictionary that pardel.Result is made of.
  */
 #include "bindings.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -27,6 +29,44 @@ py::array_t<double> vector(const std::vector<double>& values) {
   py::array_t<double> out(values.size());
   std::copy(values.begin(), values.end(), out.mutable_data());
   return out;
+}
+
+/** A JSON string as Python's json.loads reads the text nlohmann dumps with error_handler_t::replace
+ *  (summary.json's): bytes that are not UTF-8 become U+FFFD as that dump writes them. */
+py::str json_string(const std::string& text) {
+  PyObject* decoded = PyUnicode_DecodeUTF8(text.data(), static_cast<Py_ssize_t>(text.size()), nullptr);
+  if (decoded) return py::reinterpret_steal<py::str>(decoded);
+  PyErr_Clear();
+  const auto replace = nlohmann::ordered_json::error_handler_t::replace;
+  return py::str(nlohmann::ordered_json::parse(nlohmann::ordered_json(text).dump(-1, ' ', false, replace))
+                     .get_ref<const std::string&>());
+}
+
+/** A JSON value as the Python value json.loads makes of its dumped text: objects as dicts (in
+ *  order), arrays as lists, a number that is not finite as None (the dump writes it as null). */
+py::object json_value(const nlohmann::ordered_json& value) {
+  using Type = nlohmann::ordered_json::value_t;
+  switch (value.type()) {
+    case Type::boolean: return py::bool_(value.get<bool>());
+    case Type::number_integer: return py::int_(value.get<std::int64_t>());
+    case Type::number_unsigned: return py::int_(value.get<std::uint64_t>());
+    case Type::number_float: {
+      const double number = value.get<double>();
+      return std::isfinite(number) ? py::object(py::float_(number)) : py::object(py::none());
+    }
+    case Type::string: return json_string(value.get_ref<const std::string&>());
+    case Type::array: {
+      py::list out;
+      for (const auto& item : value) out.append(json_value(item));
+      return out;
+    }
+    case Type::object: {
+      py::dict out;
+      for (const auto& item : value.items()) out[json_string(item.key())] = json_value(item.value());
+      return out;
+    }
+    default: return py::none();  // null (binary and discarded values are not in pardel's JSON)
+  }
 }
 
 /** The initial trajectory: the scene's guess, or `guess` ((M+1) x dim rows, resampled to the
@@ -58,14 +98,13 @@ Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const
   return resample(problem, from, problem.N);
 }
 
-/** What pardel.Result is made of: summary.json's dictionary (as text), the trajectory, the
- *  boundary momenta and the history as arrays. */
+/** What pardel.Result is made of: summary.json's dictionary, the trajectory, the boundary momenta
+ *  and the history as arrays. */
 py::dict result_dict(const Scene& scene, const Summary& summary, const Trajectory& trajectory, bool stopped_by_callback) {
   py::dict result;
   const std::string model_source = app::scene_model_source(scene);
-  // Paths that are not UTF-8 are written with U+FFFD for their invalid bytes, as in summary.json.
-  result["summary"] = app::summary_json(scene, summary, trajectory, Certificate{}, model_source)
-                          .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  // Paths that are not UTF-8 have U+FFFD for their invalid bytes, as in summary.json.
+  result["summary"] = json_value(app::summary_json(scene, summary, trajectory, Certificate{}, model_source));
   result["stopped_by_callback"] = stopped_by_callback;
   result["t"] = vector(trajectory.t);
   result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
@@ -73,17 +112,18 @@ py::dict result_dict(const Scene& scene, const Summary& summary, const Trajector
   result["p0"] = vector(momenta.p0);
   result["pN"] = vector(momenta.pN);
   const std::size_t n = summary.history.size();
-  std::vector<double> it(n), N(n), res(n), act(n), sec(n);
+  py::array_t<std::int64_t> it(n), N(n);
+  std::vector<double> res(n), act(n), sec(n);
   for (std::size_t i = 0; i < n; ++i) {
-    it[i] = static_cast<double>(summary.history[i].iteration);
-    N[i] = summary.history[i].N;
+    it.mutable_data()[i] = summary.history[i].iteration;
+    N.mutable_data()[i] = summary.history[i].N;
     res[i] = summary.history[i].residual;
     act[i] = summary.history[i].action;
     sec[i] = summary.history[i].seconds;
   }
   py::dict history;
-  history["iteration"] = vector(it).attr("astype")("int64");
-  history["N"] = vector(N).attr("astype")("int64");
+  history["iteration"] = it;
+  history["N"] = N;
   history["residual"] = vector(res);
   history["action"] = vector(act);
   history["seconds"] = vector(sec);

@@ -1,8 +1,9 @@
 /**
  * @file scene_arguments.cpp
- * pardel.solve's keyword arguments as a scene: written as scene text (TOML) and read by the scene
- * reader, so that their checks and messages are those of `pardel solve`; the options outside the
- * scene schema; and pardel.resume's solver options as the overrides of a warm start.
+ * pardel.solve's keyword arguments as a scene: built as a TOML table and read by the scene reader
+ * (app::read_scene_table), so that their checks and messages are those of `pardel solve`, or written
+ * as scene text for a checkpoint to record; the options outside the scene schema; and
+ * pardel.resume's solver options as the overrides of a warm start.
  */
 #include "bindings.hpp"
 
@@ -16,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "pardel/app/scene_table.hpp"
 #include "pardel/model_loader.hpp"
 
 namespace pardel::python {
@@ -63,6 +65,9 @@ const std::vector<std::pair<std::string, std::string>> kRecordedArguments = {
     {"history_every", "solver.history_every"},
     {"divergence_factor", "solver.divergence_factor"},
     {"refine_settle", "solver.refine.settle"}};
+
+/** The name of a scene made from pardel.solve's arguments in the scene reader's messages. */
+const std::string kGeneratedSource = "pardel.solve";
 
 std::vector<std::string> argument_names() {
   std::vector<std::string> names;
@@ -159,15 +164,13 @@ std::string without_generated_position(const std::string& message, const std::st
   return source + ": " + std::regex_replace(rest, position, "", std::regex_constants::format_first_only);
 }
 
-}  // namespace
-
-/** The scene text (TOML) of pardel.solve's arguments: the model (a bundled name or a .lag path),
+/** The scene (a TOML table) of pardel.solve's arguments: the model (a bundled name or a .lag path),
  *  then the keyword arguments of kArguments (None values are left out). `complete`: the options
  *  outside kArguments' scene keys are written as scene keys too (solver.history_every,
- *  solver.divergence_factor, solver.refine.settle), so that the text alone gives the solve's
+ *  solver.divergence_factor, solver.refine.settle), so that the scene alone gives the solve's
  *  options (what a checkpoint records); solver.refine.settle needs solver.refine.start_N. */
-std::string scene_text(const std::string& model_spec, const py::dict& arguments, bool complete,
-                       const ModelHandle* loaded) {
+toml::table scene_table(const std::string& model_spec, const py::dict& arguments, bool complete,
+                        const ModelHandle* loaded) {
   const std::vector<std::string> names = argument_names();
   for (const auto& item : arguments) {
     const std::string key = py::str(item.first).cast<std::string>();
@@ -248,8 +251,24 @@ std::string scene_text(const std::string& model_spec, const py::dict& arguments,
       insert(table, key, arguments[r.first.c_str()], r.first);
     }
   }
+  return root;
+}
+
+/** The resolver of a scene made from pardel.solve's arguments: `loaded`, when given, is the model
+ *  the scene names as `model_spec`. */
+app::ModelResolver generated_scene_resolver(const std::string& model_spec, const ModelHandle* loaded) {
+  return [model_spec, loaded](const std::string& spec) {
+    return loaded && spec == model_spec ? loaded->model : resolve_spec(spec);
+  };
+}
+
+}  // namespace
+
+/** The scene text (TOML) of pardel.solve's arguments: scene_table written out. */
+std::string scene_text(const std::string& model_spec, const py::dict& arguments, bool complete,
+                       const ModelHandle* loaded) {
   std::ostringstream text;
-  text << root;
+  text << scene_table(model_spec, arguments, complete, loaded);
   return text.str();
 }
 
@@ -257,24 +276,23 @@ std::string scene_text(const std::string& model_spec, const py::dict& arguments,
  *  the generated text); `loaded`, when given, is the model the text names as `model_spec`. */
 Scene parse_generated_scene(const std::string& text, const std::string& model_spec,
                             const ModelHandle* loaded) {
-  const std::string source = "pardel.solve";
-  const app::ModelResolver resolve = [&](const std::string& spec) {
-    return loaded && spec == model_spec ? loaded->model : resolve_spec(spec);
-  };
   try {
-    return app::parse_scene(text, source, {}, resolve, bundled_model_names());
+    return app::parse_scene(text, kGeneratedSource, {}, generated_scene_resolver(model_spec, loaded),
+                            bundled_model_names());
   } catch (const SceneError& error) {
-    throw SceneError(without_generated_position(error.what(), source));
+    throw SceneError(without_generated_position(error.what(), kGeneratedSource));
   }
 }
 
-/** A scene from pardel.solve's arguments (scene_text, then the options outside the scene schema).
- *  `loaded`: the model a pardel.Model holds for model_spec, used instead of resolving the spec again
- *  (for a .lag path that is reading, hashing and checking the file and its cached library: about
- *  0.5 ms a call). */
+/** A scene from pardel.solve's arguments: their table (scene_table) read by the scene reader, as
+ *  parse_generated_scene reads their text (the same checks and messages: a table built in memory
+ *  has no positions), then the options outside the scene schema. `loaded`: the model a pardel.Model
+ *  holds for model_spec, used instead of resolving the spec again (for a .lag path that is reading,
+ *  hashing and checking the file and its cached library: about 0.5 ms a call). */
 Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments,
                            const ModelHandle* loaded) {
-  Scene scene = parse_generated_scene(scene_text(model_spec, arguments, false, loaded), model_spec, loaded);
+  Scene scene = app::read_scene_table(scene_table(model_spec, arguments, false, loaded), kGeneratedSource,
+                                      generated_scene_resolver(model_spec, loaded), bundled_model_names());
   // Options outside the scene schema.
   auto number = [&arguments](const char* name, auto* target) {
     if (arguments.contains(name) && !arguments[name].is_none())

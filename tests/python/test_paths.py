@@ -5,6 +5,7 @@ import json
 import os
 import time
 
+import numpy as np
 import pytest
 
 import pardel
@@ -60,6 +61,24 @@ def test_lag_file_name_not_utf8(tmp_path):
     assert os.fsencode(model.source) == b"mod\xe8le.lag"  # the kernel records the name's bytes
     k = pardel.kernels(model, "trapezoid", 0.5, 0.0, 0.5, [1.0], [1.25])
     assert k["Ld"] == pytest.approx(-0.2578125, abs=1e-15)
+
+
+def test_solve_with_a_lag_file_name_not_utf8(tmp_path):
+    """pardel.solve reads its keyword arguments' scene without writing it as text, so a .lag path
+    that is not UTF-8 reaches the model loader as its bytes: the solve is the one of the same model
+    under a UTF-8 name, and the continuous motion x = sin t / sin 1 (x'' = -x) within O(h^2)."""
+    text = "model latin1_solve\ncoords x\nL = x'^2/2 - x^2/2\n"
+    folder = latin1_folder(tmp_path)
+    lag, plain = os.path.join(folder, b"mod\xe8le.lag"), os.path.join(folder, b"model.lag")
+    for path in (lag, plain):
+        with open(path, "w") as f:
+            f.write(text)
+    reference = pardel.solve(os.fsdecode(plain), q0=[0.0], qN=[1.0], T=1.0, N=16)
+    for model in (os.fsdecode(lag), pardel.model(os.fsdecode(lag))):
+        result = pardel.solve(model, q0=[0.0], qN=[1.0], T=1.0, N=16)
+        assert result.status == "converged"
+        assert np.array_equal(result.q, reference.q)
+        assert np.max(np.abs(result.q[:, 0] - np.sin(result.t) / np.sin(1.0))) < 1e-3
 
 
 def test_missing_scene_not_utf8_names_it(tmp_path):

@@ -1,7 +1,5 @@
 """repr() and str() of a pardel.Result work for every status, also when the solve ended non-finite
 and summary.json holds null for its residual, action or cost."""
-import json
-
 import numpy as np
 import pytest
 
@@ -28,7 +26,7 @@ def test_a_non_finite_solve_prints():
 def _with(result, **changes):
     """A Result like `result` with members of its summary replaced."""
     summary = dict(result.summary, **changes)
-    raw = {"summary": json.dumps(summary), "t": result.t, "q": result.q, "p0": result.p0, "pN": result.pN,
+    raw = {"summary": summary, "t": result.t, "q": result.q, "p0": result.p0, "pN": result.pN,
            "history": result.history, "stopped_by_callback": False}
     return pardel.Result(raw, result.coords)
 

@@ -107,6 +107,36 @@ def test_check_reports_every_member_of_the_certificate(tmp_path, spring_lag):
     assert "(1 - rho = %.6e, round-off level" % c["jacobi_one_minus_rho"] in c["report"]
 
 
+def test_summary_is_the_command_lines_summary_json(tmp_path, spring_lag):
+    """Result.summary, made from the C++ summary without JSON text, is what Python's json module reads
+    from the summary.json `pardel solve` writes for the same scene: the same keys in the same order,
+    the same values (the times of the run apart), null where a number is not finite."""
+    cli = os.environ.get("PARDEL_CLI")
+    if not cli:
+        pytest.skip("PARDEL_CLI (the pardel command line) is not set")
+    scene_path, _ = write_scene(tmp_path, spring_lag)
+    from_python = pardel.solve_scene(pardel.load_scene(scene_path)).summary
+    done = subprocess.run([cli, "solve", str(scene_path), "--out", str(tmp_path / "out"), "--quiet"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    with open(tmp_path / "out" / "summary.json", encoding="utf-8") as f:
+        from_cli = json.load(f)
+
+    def without_times(value):
+        if isinstance(value, dict):
+            return {k: without_times(v) for k, v in value.items() if k not in ("wall_seconds", "error_seconds", "seconds")}
+        if isinstance(value, list):
+            return [without_times(v) for v in value]
+        return value
+
+    assert list(from_python) == [k for k in from_cli if k in from_python]
+    assert from_python["status"] == "converged" and from_python["N"] == 30
+    expected = without_times(from_cli)
+    for key, value in without_times(from_python).items():
+        assert value == expected[key], key
+    assert isinstance(from_python["wall_seconds"], float) and isinstance(from_python["iterations"], int)
+
+
 def test_check_agrees_with_the_command_line(tmp_path, spring_lag):
     cli = os.environ.get("PARDEL_CLI")
     if not cli:

@@ -5,7 +5,8 @@
  * knots, initial guess, solver options and output folder. Parsing is strict: unknown keys,
  * wrong types and wrong sizes raise SceneError naming the key and its FILE:LINE:COL, with the
  * nearest valid key suggested. Each TOML table has its own reader (scene.cpp); the command line,
- * the Python module, tests and fuzzers call the same parse_scene.
+ * the Python module, tests and fuzzers call the same parse_scene, or for a table built in memory
+ * (pardel.solve's keyword arguments) its entry point read_scene_table (scene_table.hpp).
  */
 #ifndef PARDEL_APP_SCENE_HPP
 #define PARDEL_APP_SCENE_HPP
