@@ -193,6 +193,10 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
                 {"coarse_N", summary.error_coarse_N},
                 {"seconds", summary.error_seconds},
                 {"extrapolated", summary.extrapolated},
+                {"observed_order", std::isfinite(summary.error_observed_order)
+                                       ? nlohmann::ordered_json(summary.error_observed_order)
+                                       : nlohmann::ordered_json()},
+                {"reliable", summary.error_reliable},
                 {"note", summary.error_note}};
   j["grid"] = {{"accuracy", scene.options.accuracy > 0 ? nlohmann::ordered_json(scene.options.accuracy) : nlohmann::ordered_json()},
                {"sizes", summary.grid_sizes},

@@ -3,9 +3,10 @@
  * Adaptive grids (Options::accuracy): solve, estimate the error (Richardson, error_estimate.hpp),
  * and place a new grid whose nodes equidistribute the local-error density of the last solution
  * (per interval, from the impulses of the coarse and the fine steps), with the N predicted to meet
- * the request: a larger grid while the estimate is above the requested accuracy, and after a grid
- * that met it with room a smaller one, until one misses it; the previous solution, interpolated
- * onto the new grid, starts the next solve. Knots stay on (even) nodes. docs/solvers.md, "Adaptive grids".
+ * the request: a larger grid while the estimate is above the requested accuracy (or not confirmed
+ * by a third grid level), and after a grid that met it with room a smaller one, until one misses
+ * it; the previous solution, interpolated onto the new grid, starts the next solve. Knots stay on
+ * nodes that are multiples of 4. docs/solvers.md, "Adaptive grids".
  */
 #include "adaptive.hpp"
 
@@ -46,6 +47,10 @@ constexpr double kTargetShare = 0.5;
 constexpr double kShrink = 0.8;
 /// ... and at least its N over this factor (and at least the first grid's N).
 constexpr double kMaxShrink = 2.0;
+/// Every stretch between fixed nodes gets a multiple of this many intervals, so that the grid,
+/// its every other node and its every 4th node all hold the knots: the estimate's coarse grid and
+/// the third level that checks it (error_estimate.hpp).
+constexpr int kMultiple = 4;
 
 std::string number(double v) {
   char buf[64];
@@ -193,8 +198,9 @@ void floor_and_smooth(const std::vector<double>& t, std::vector<double>& rho, do
 
 /**
  * N_new + 1 node times that equidistribute `rho` (piecewise constant on the intervals of `t`)
- * between the fixed times (ends and knots), each segment between two fixed times getting an even
- * number of intervals (at least 2) in proportion to its share of the monitor's integral.
+ * between the fixed times (ends and knots), each segment between two fixed times getting a
+ * multiple of kMultiple intervals (at least kMultiple) in proportion to its share of the
+ * monitor's integral.
  */
 std::vector<double> equidistribute(const std::vector<double>& t, const std::vector<double>& rho,
                                    const std::vector<int>& fixed_nodes, int N_new) {
@@ -208,23 +214,24 @@ std::vector<double> equidistribute(const std::vector<double>& t, const std::vect
   int total = 0;
   for (std::size_t s = 0; s < segments; ++s) {
     const double share = (W[static_cast<std::size_t>(fixed_nodes[s + 1])] - W[static_cast<std::size_t>(fixed_nodes[s])]) / W.back();
-    count[s] = std::max(2, 2 * static_cast<int>(std::lround(share * N_new / 2)));
+    count[s] = std::max(kMultiple, kMultiple * static_cast<int>(std::lround(share * N_new / kMultiple)));
     total += count[s];
   }
-  // Adjust to N_new (even) in steps of 2 on the segments with the largest (smallest) step.
+  // Adjust to N_new (a multiple of kMultiple) in such steps on the segments with the largest
+  // (smallest) step.
   while (total != N_new) {
     std::size_t pick = 0;
     double best = total < N_new ? -1 : std::numeric_limits<double>::infinity();
     for (std::size_t s = 0; s < segments; ++s) {
       const double per = (W[static_cast<std::size_t>(fixed_nodes[s + 1])] - W[static_cast<std::size_t>(fixed_nodes[s])]) / count[s];
-      if (total < N_new ? per > best : (count[s] > 2 && per < best)) {
+      if (total < N_new ? per > best : (count[s] > kMultiple && per < best)) {
         best = per;
         pick = s;
       }
     }
-    if (total > N_new && count[pick] <= 2) break;  // every segment at its minimum
-    count[pick] += total < N_new ? 2 : -2;
-    total += total < N_new ? 2 : -2;
+    if (total > N_new && count[pick] <= kMultiple) break;  // every segment at its minimum
+    count[pick] += total < N_new ? kMultiple : -kMultiple;
+    total += total < N_new ? kMultiple : -kMultiple;
   }
   std::vector<double> out;
   out.reserve(static_cast<std::size_t>(total) + 1);
@@ -335,8 +342,11 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
                 " ended " + to_string(summary.termination);
       break;
     }
+    // A grid meets the request when its estimate does and a third grid level confirmed the
+    // estimate (Summary::error_reliable): on a coarse grid of a high order the error need not yet
+    // fall with the nominal order, and the estimate from two grids can be far below it.
     const double estimate = summary.error_estimate;
-    const bool met = std::isfinite(estimate) && estimate <= accuracy;
+    const bool met = std::isfinite(estimate) && estimate <= accuracy && summary.error_reliable;
     if (!met && shrinking) {
       // The smaller grid missed the request: solve once more on the last grid that met it (from its
       // own solution) and end there, so that the returned grid is one solved on and meeting it.
@@ -372,7 +382,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       const double n = integral * std::pow(estimate * worst / (largest * kTargetShare * accuracy), 1 / p);
       if (largest > 0 && std::isfinite(n) && n > 0) N_predicted = static_cast<long>(std::min(n, 1e9));
     }
-    const int max_N = requested.accuracy_max_N - requested.accuracy_max_N % 2;
+    const int max_N = requested.accuracy_max_N - requested.accuracy_max_N % kMultiple;
     int N_new = 0;
     if (met) {
       // A grid that meets the request with room is followed by a smaller one placed from its
@@ -391,7 +401,8 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       N_new = static_cast<int>(smaller);
     } else {
       if (current.N >= max_N || round + 1 >= kMaxGrids) {
-        outcome = "accuracy " + number(accuracy) + " not reached: estimate " + number(estimate) + " on N = " +
+        outcome = "accuracy " + number(accuracy) + " not reached: estimate " + number(estimate) +
+                  (summary.error_reliable ? "" : " (not confirmed by a third grid level)") + " on N = " +
                   std::to_string(current.N) + ", " +
                   (current.N >= max_N ? "the largest N allowed (accuracy_max_N = " + std::to_string(requested.accuracy_max_N) + ")"
                                       : "after " + std::to_string(kMaxGrids) + " grids");
@@ -406,9 +417,9 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       growth = std::min(kMaxGrowth, std::max(kMinGrowth, growth));
       N_new = static_cast<int>(std::ceil(current.N * growth));
     }
-    N_new = std::min(max_N, std::max(4, N_new + N_new % 2));
+    N_new = std::min(max_N, std::max(2 * kMultiple, N_new + (kMultiple - N_new % kMultiple) % kMultiple));
     const std::vector<int> fixed = fixed_nodes(current);
-    if (N_new < 2 * static_cast<int>(fixed.size() - 1)) N_new = 2 * static_cast<int>(fixed.size() - 1);
+    N_new = std::max(N_new, kMultiple * static_cast<int>(fixed.size() - 1));
     if (N_predicted == 0) {
       rho = monitor(guess, problem.model->ncoords, p);
       floor_and_smooth(guess.t, rho, 1.0);

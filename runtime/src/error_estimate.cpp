@@ -1,7 +1,8 @@
 /**
  * @file error_estimate.cpp
  * Richardson's estimate of the discretization error at the nodes and the extrapolated node values
- * (error_estimate.hpp): which coarse grid a solve can be compared with, and the comparison.
+ * (error_estimate.hpp): which coarse grid a solve can be compared with, the comparison, and its
+ * check by the order observed over a third grid level.
  */
 #include "error_estimate.hpp"
 
@@ -10,6 +11,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "engine.hpp"
 #include "invariant.hpp"
@@ -18,9 +20,9 @@
 namespace pardel::detail {
 namespace {
 
-std::string number(double v) {
+std::string number(double v, int digits = 10) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
   return buf;
 }
 
@@ -41,6 +43,102 @@ void lagrange_weights(double x, int a, int n, double* w) {
       den *= static_cast<double>(i - j);
     }
     w[i] = num / den;
+  }
+}
+
+/** The p at which an error C h^p makes the observed differences d1 = |x_N - x_N/r1| and
+ *  d2 = |x_N/r1 - x_N/(r1 r2)|: d2 / d1 = r1^p (r2^p - 1) / (r1^p - 1), which grows with p
+ *  (r1^p where r1 = r2). */
+double observed_order(double d1, double d2, int r1, int r2) {
+  if (r1 == r2) return std::log(d2 / d1) / std::log(r1);
+  auto quotient = [&](double p) { return std::pow(r1, p) * (std::pow(r2, p) - 1) / (std::pow(r1, p) - 1); };
+  const double target = d2 / d1;
+  double lo = 1e-6, hi = 64;
+  if (!(target > quotient(lo))) return std::log(target) / std::log(r1 * r2);  // below: at most ~0
+  if (target >= quotient(hi)) return hi;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (quotient(mid) < target ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+/** The least observed order q for which the estimate with the nominal p stays within a factor 3
+ *  of an error that falls with order q: r^q - 1 = (r^p - 1) / 3 (1 for p = 2, 6.43 for p = 8 at r = 2). */
+double least_order(int p, int r) { return std::log1p((std::pow(r, p) - 1) / 3) / std::log(r); }
+
+/** The order the estimate uses, what the check of the observed order found, and its note. */
+struct Order {
+  double p = 0;
+  double observed = std::numeric_limits<double>::quiet_NaN();
+  bool reliable = false;
+  std::string note;
+};
+
+/** The check of the nominal order against `third` (docs/solvers.md, "Error estimate"): the largest
+ *  differences over the coordinates at the third level's nodes, which all three grids share. */
+Order check_order(const Problem& problem, const Trajectory& fine, const Trajectory& coarse, int ratio,
+                  const ThirdLevel& third, const std::vector<double>& roundoff) {
+  const int p = problem.discretization->consistency_order;
+  Order out;
+  out.p = p;
+  if (!third.level) {
+    out.note = "; not checked by a third grid level (" + third.why_not + ")";
+    return out;
+  }
+  const Trajectory& c2 = *third.level;
+  PARDEL_INVARIANT(coarse.N == c2.N * third.ratio, "the third level is nested in the coarse one");
+  double d1 = 0, d2 = 0;
+  for (int m = 0; m <= c2.N; ++m)
+    for (int i = 0; i < problem.model->ncoords; ++i) {
+      const double a = c2.node(m)[i], b = coarse.node(m * third.ratio)[i], f = fine.node(m * third.ratio * ratio)[i];
+      d1 = std::max(d1, std::fabs(f - b));
+      d2 = std::max(d2, std::fabs(b - a));
+    }
+  const std::string grids = "N = " + std::to_string(fine.N) + ", " + std::to_string(coarse.N) + " and " +
+                            std::to_string(c2.N);
+  const double level = *std::max_element(roundoff.begin(), roundoff.end());
+  if (d1 <= 100 * level) {
+    out.reliable = true;
+    out.note = "; on " + grids + " the two finer solutions agree to within 100 times round-off, where no order is observed";
+    return out;
+  }
+  out.observed = observed_order(d1, d2, ratio, third.ratio);
+  const std::string observed = "observed order " + number(out.observed, 3) + " on " + grids;
+  if (out.observed >= least_order(p, ratio)) {
+    out.reliable = true;
+    out.note = "; " + observed + " (" + std::to_string(p) + " expected)";
+    return out;
+  }
+  out.p = std::clamp(out.observed, 1.0, static_cast<double>(p));
+  out.note = "; estimate unreliable: " + observed + " where " + std::to_string(p) +
+             " is expected, so the estimate uses order " + number(out.p, 3);
+  return out;
+}
+
+/** fine + e: at a common node its own e, elsewhere the cubic (fewer nodes on tiny grids) through
+ *  the four nearest common nodes, in the node index; the node times too under a clock. */
+void add_corrections(const std::vector<double>& e, const std::vector<double>& et, int ratio, bool clocked,
+                     Trajectory& fine) {
+  const int d = fine.dim, Nc = fine.N / ratio;
+  const int n = std::min(4, Nc + 1);
+  double w[4];
+  for (int k = 0; k <= fine.N; ++k) {
+    double* f = fine.node(k);
+    if (k % ratio == 0) {
+      const double* em = e.data() + static_cast<std::size_t>(k / ratio) * d;
+      for (int i = 0; i < d; ++i) f[i] += em[i];
+      if (clocked) fine.t[static_cast<std::size_t>(k)] += et[static_cast<std::size_t>(k / ratio)];
+      continue;
+    }
+    const double x = static_cast<double>(k) / ratio;
+    const int a = std::clamp(static_cast<int>(std::floor(x)) - (n - 1) / 2, 0, Nc + 1 - n);
+    lagrange_weights(x, a, n, w);
+    for (int j = 0; j < n; ++j) {
+      const double* em = e.data() + static_cast<std::size_t>(a + j) * d;
+      for (int i = 0; i < d; ++i) f[i] += w[j] * em[i];
+      if (clocked) fine.t[static_cast<std::size_t>(k)] += w[j] * et[static_cast<std::size_t>(a + j)];
+    }
   }
 }
 
@@ -96,17 +194,26 @@ void not_estimated(Summary& summary, const std::string& why) {
   summary.error_by_coordinate.clear();
   summary.error_coarse_N = 0;
   summary.extrapolated = false;
+  summary.error_observed_order = std::numeric_limits<double>::quiet_NaN();
+  summary.error_reliable = false;
   summary.error_note = "not estimated: " + why;
 }
 
-void richardson(const Problem& problem, const Trajectory& coarse, int ratio, bool extrapolate, Trajectory& fine,
-                Summary& summary) {
+void richardson(const Problem& problem, const Trajectory& coarse, int ratio, const ThirdLevel& third, bool extrapolate,
+                Trajectory& fine, Summary& summary) {
   PARDEL_INVARIANT(fine.N == coarse.N * ratio && fine.dim == coarse.dim, "the coarse grid is nested in the fine one");
-  const int p = problem.discretization->consistency_order;
-  const double factor = std::pow(static_cast<double>(ratio), p) - 1;
   const int nc = problem.model->ncoords, d = fine.dim, Nc = coarse.N;
   const bool clocked = problem.clock != ClockMode::none && fine.t.size() == static_cast<std::size_t>(fine.N) + 1 &&
                        coarse.t.size() == static_cast<std::size_t>(Nc) + 1;
+  // Below the round-off of a coordinate's values two solutions differ by rounding alone.
+  std::vector<double> roundoff(static_cast<std::size_t>(nc), 0.0);
+  for (int i = 0; i < nc; ++i) {
+    double size = 0;
+    for (int k = 0; k <= fine.N; ++k) size = std::max(size, std::fabs(fine.node(k)[i]));
+    roundoff[static_cast<std::size_t>(i)] = 8 * std::numeric_limits<double>::epsilon() * size;
+  }
+  const Order order = check_order(problem, fine, coarse, ratio, third, roundoff);
+  const double factor = std::pow(static_cast<double>(ratio), order.p) - 1;
   // e at the common nodes, every component; the node times' under a clock.
   std::vector<double> e((static_cast<std::size_t>(Nc) + 1) * static_cast<std::size_t>(d));
   std::vector<double> et(clocked ? static_cast<std::size_t>(Nc) + 1 : 0, 0.0);
@@ -123,52 +230,30 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, boo
       et[static_cast<std::size_t>(m)] =
           (fine.t[static_cast<std::size_t>(m) * ratio] - coarse.t[static_cast<std::size_t>(m)]) / factor;
   }
-  // Below the round-off of the coordinates' values both solutions differ by rounding alone: such a
-  // difference does not resolve the error, which is reported as that level instead (not less).
+  // Such a difference does not resolve the error, which is reported as the round-off level instead (not less).
   bool at_roundoff = false;
-  for (int i = 0; i < nc; ++i) {
-    double size = 0;
-    for (int k = 0; k <= fine.N; ++k) size = std::max(size, std::fabs(fine.node(k)[i]));
-    const double level = 8 * std::numeric_limits<double>::epsilon() * size;
-    if (by_coordinate[static_cast<std::size_t>(i)] < level) {
-      by_coordinate[static_cast<std::size_t>(i)] = level;
+  for (std::size_t i = 0; i < by_coordinate.size(); ++i)
+    if (by_coordinate[i] < roundoff[i]) {
+      by_coordinate[i] = roundoff[i];
       at_roundoff = true;
     }
-  }
   summary.error_estimate = *std::max_element(by_coordinate.begin(), by_coordinate.end());
   summary.error_by_coordinate = std::move(by_coordinate);
   summary.error_coarse_N = Nc;
   summary.extrapolated = false;
+  summary.error_observed_order = order.observed;
+  summary.error_reliable = order.reliable;
   const std::string every = ratio == 2 ? "other" : std::to_string(ratio) + "th";
   summary.error_note = "max over the " + std::to_string(Nc + 1) + " common nodes and the coordinates of |x_" +
                        std::to_string(fine.N) + " - x_" + std::to_string(Nc) + "| / (" + std::to_string(ratio) + "^" +
-                       std::to_string(p) + " - 1), the solution on N = " + std::to_string(fine.N) +
+                       number(order.p, 3) + " - 1), the solution on N = " + std::to_string(fine.N) +
                        " against that on every " + every + " node";
   if (at_roundoff)
     summary.error_note += "; below the round-off level of a coordinate (8 eps max|x|) the difference is rounding "
                           "alone, and that level is reported instead";
+  summary.error_note += order.note;
   if (!extrapolate) return;
-  // fine + e: at a common node its own e, elsewhere the cubic (fewer nodes on tiny grids) through
-  // the four nearest common nodes, in the node index.
-  const int n = std::min(4, Nc + 1);
-  double w[4];
-  for (int k = 0; k <= fine.N; ++k) {
-    double* f = fine.node(k);
-    if (k % ratio == 0) {
-      const double* em = e.data() + static_cast<std::size_t>(k / ratio) * d;
-      for (int i = 0; i < d; ++i) f[i] += em[i];
-      if (clocked) fine.t[static_cast<std::size_t>(k)] += et[static_cast<std::size_t>(k / ratio)];
-      continue;
-    }
-    const double x = static_cast<double>(k) / ratio;
-    const int a = std::clamp(static_cast<int>(std::floor(x)) - (n - 1) / 2, 0, Nc + 1 - n);
-    lagrange_weights(x, a, n, w);
-    for (int j = 0; j < n; ++j) {
-      const double* em = e.data() + static_cast<std::size_t>(a + j) * d;
-      for (int i = 0; i < d; ++i) f[i] += w[j] * em[i];
-      if (clocked) fine.t[static_cast<std::size_t>(k)] += w[j] * et[static_cast<std::size_t>(a + j)];
-    }
-  }
+  add_corrections(e, et, ratio, clocked, fine);
   summary.extrapolated = true;
 }
 

@@ -3,7 +3,8 @@
  * Internal: Richardson's estimate of the discretization error of a converged solve
  * (Options::error_estimate, Summary::error_estimate) from the solution on a coarser nested grid,
  * and the Richardson-extrapolated node values (Options::extrapolate). solve.cpp makes the coarse
- * solve; this part decides which coarse grid can be used and compares the two solutions.
+ * solve (and a third, coarser one that checks the order the error falls with); this part decides
+ * which coarse grid can be used and compares the solutions.
  */
 #ifndef PARDEL_RUNTIME_ERROR_ESTIMATE_HPP
 #define PARDEL_RUNTIME_ERROR_ESTIMATE_HPP
@@ -27,17 +28,28 @@ Trajectory every_other_node(const Trajectory& fine, int ratio);
  *  there. On true, *ratio is set. */
 bool nested_level(const Problem& problem, const Trajectory& fine, const Trajectory& coarse, int* ratio);
 
+/** A third grid level for the check of the observed order: `level` lies on every ratio-th node of
+ *  the coarse grid; where there is none, `level` is null and `why_not` says why. */
+struct ThirdLevel {
+  const Trajectory* level = nullptr;
+  int ratio = 0;
+  std::string why_not;
+};
+
 /**
  * Richardson's estimate from the converged solutions on the fine grid and on every ratio-th of its
- * nodes: e_k = (x_fine,k - x_coarse,k/ratio) / (ratio^p - 1) at the common nodes, p the
- * discretization's consistency order, over the coordinates (the first ncoords components of a
- * node). Fills summary.error_estimate (max |e|), error_by_coordinate and error_coarse_N. With
- * `extrapolate`, replaces `fine` by the extrapolated values (every component, and the node times
- * under a clock): fine + e at the common nodes, fine + the cubic interpolation of e in the node
- * index at the others.
+ * nodes: e_k = (x_fine,k - x_coarse,k/ratio) / (ratio^p - 1) at the common nodes over the
+ * coordinates (the first ncoords components of a node), p the discretization's consistency order,
+ * checked against `third`: where the error falls from the third level to the fine one with an
+ * observed order too low for that p to give an estimate within a factor 3 of the error, the
+ * estimate uses the observed order (clamped to [1, p]) and is marked unreliable. Fills
+ * summary.error_estimate (max |e|), error_by_coordinate, error_coarse_N, error_observed_order and
+ * error_reliable. With `extrapolate`, replaces `fine` by the extrapolated values (every component,
+ * and the node times under a clock): fine + e at the common nodes, fine + the cubic interpolation
+ * of e in the node index at the others.
  */
-void richardson(const Problem& problem, const Trajectory& coarse, int ratio, bool extrapolate, Trajectory& fine,
-                Summary& summary);
+void richardson(const Problem& problem, const Trajectory& coarse, int ratio, const ThirdLevel& third, bool extrapolate,
+                Trajectory& fine, Summary& summary);
 
 /** Sets the summary's estimate to "not estimated" with the reason (`why`, after "not estimated: "). */
 void not_estimated(Summary& summary, const std::string& why);

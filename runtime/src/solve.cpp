@@ -5,8 +5,8 @@
  * (levels.hpp: which grids, where each starts), resume and warm starts, the result and the point
  * assessment, around the iteration at each level (iteration.hpp: node-time updates, stopping
  * rules, history); the automatic method's second attempt, and the error estimate of a converged
- * solve (error_estimate.hpp: Richardson against a coarser nested grid). A method only supplies
- * evaluate/iterate; pardel::solve is this solve over OneProcess.
+ * solve (error_estimate.hpp: Richardson against a coarser nested grid, checked over a third).
+ * A method only supplies evaluate/iterate; pardel::solve is this solve over OneProcess.
  */
 #include <algorithm>
 #include <chrono>
@@ -117,13 +117,18 @@ class Driver : public detail::Iteration {
   bool checked_regular_ = false;
 };
 
+/** The last two grid levels below problem.N that a converged whole-system Newton solve solved to
+ *  the tolerance, the finer first (N = 0: none), for the error estimate. */
+struct SolvedLevels {
+  Trajectory below, further;
+};
+
 /** What a solve_once does besides solving. */
 struct OnceFlags {
   bool assess = true;      ///< assess the converged point (Summary::point)
   bool one_level = false;  ///< solve on problem.N alone, without refinement levels or grid sequencing
-  /** When given: a converged solve's whole-system Newton grid level below problem.N (solved to the
-   *  tolerance), for the error estimate; left empty (N = 0) where there is none. */
-  Trajectory* coarser_level = nullptr;
+  /** When given: filled with the solve's levels (left empty where there are none). */
+  SolvedLevels* coarser_levels = nullptr;
 };
 
 /** The input checks of a solve of `requested` (resolved into `options`), the levels it visits
@@ -222,10 +227,12 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     if (topology->holds_result() && starts.extrapolates()) starts.previous() = std::move(previous);
   };
   steps.run = [&](bool last) { return driver.run_level(last); };
+  Trajectory further;  // the level before the previous one, for the error estimate's third level
   steps.settled = [&] {
     // The level's solution on every process: the start of the next level.
     Trajectory solution;
     topology->gather(true, solution);
+    if (flags.coarser_levels && !topology->releases_whole_trajectories()) further = starts.previous();
     starts.settled(std::move(solution));
   };
   const long l = detail::run_levels(levels, first, resume, warm, steps);
@@ -238,8 +245,10 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
   }
   // Nested iteration's levels below N were solved to the tolerance (a coarse level of the other
   // methods' refinement only settled): the last of them can serve the error estimate.
-  if (flags.coarser_level && summary.converged() && levels.size() >= 2 && detail::whole_system_newton(options.method))
-    *flags.coarser_level = std::move(starts.previous());
+  if (flags.coarser_levels && summary.converged() && levels.size() >= 2 && detail::whole_system_newton(options.method)) {
+    flags.coarser_levels->below = std::move(starts.previous());
+    flags.coarser_levels->further = std::move(further);
+  }
   assess_point(options, flags, method, *topology, summary);
   finished();
   detail::note_stopped_level(problem, trajectory, summary);
@@ -293,11 +302,11 @@ Summary combined(Summary first, Summary second) {
 /** The solve without the error estimate: the automatic method minimizes first; where no minimum
  *  is found near the start and a saddle would do, Newton on the DEL residual tries again from the
  *  same start, where the topology runs it (where not, the message says why the second attempt was
- *  not made). *coarser_level: as OnceFlags::coarser_level, of the attempt whose result is returned. */
+ *  not made). *coarser_levels: as OnceFlags::coarser_levels, of the attempt whose result is returned. */
 Summary solve_attempts(const Problem& problem, const Options& requested, Trajectory& trajectory,
-                       Trajectory* coarser_level, const TopologyFactory& make) {
+                       SolvedLevels* coarser_levels, const TopologyFactory& make) {
   OnceFlags flags;
-  flags.coarser_level = coarser_level;
+  flags.coarser_levels = coarser_levels;
   if (!saddles_answer(problem, requested)) return solve_once(problem, requested, trajectory, flags, make);
   Options options = requested;
   options.method = Method::stationary_newton;
@@ -319,44 +328,27 @@ Summary solve_attempts(const Problem& problem, const Options& requested, Traject
   return combined(std::move(first), std::move(second));
 }
 
-/**
- * The error estimate of a converged solve (Options::error_estimate; docs/solvers.md, "Error
- * estimate"): Richardson against `level`, the solve's own coarser grid level, where it is nested
- * node for node in the final grid; otherwise against a solve on every other node of the final grid,
- * started from the solution there, with the method that converged and the same options but one
- * grid, no assessment and no estimate of its own; Options::keep_going interrupts it.
- */
-void estimate_error(const Problem& problem, const Options& requested, const Trajectory& level, Trajectory& trajectory,
-                    Summary& summary, const TopologyFactory& make) {
-  if (!requested.error_estimate) return detail::not_estimated(summary, "switched off (error_estimate = false)");
-  const std::string not_here = make()->error_estimate_refusal();
-  if (!not_here.empty()) return detail::not_estimated(summary, not_here);
-  if (!summary.converged())
-    return detail::not_estimated(summary, std::string("the solve ended ") + to_string(summary.termination));
-  if (problem.N < 4) return detail::not_estimated(summary, "N = " + std::to_string(problem.N) + " is below 4");
-  const auto start = std::chrono::steady_clock::now();
-  auto account = [&] {
-    summary.error_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    summary.wall_seconds += summary.error_seconds;
-  };
-  int ratio = 0;
-  if (detail::nested_level(problem, trajectory, level, &ratio)) {
-    detail::richardson(problem, level, ratio, requested.extrapolate, trajectory, summary);
-    summary.error_note += "; N = " + std::to_string(level.N) + " is a grid level the solve had solved to the tolerance";
-    return account();
+/** The grid of every ratio-th node of `problem`'s (its times where it has given ones). */
+Problem coarser_problem(const Problem& problem, int ratio) {
+  Problem coarse = problem;
+  coarse.N = problem.N / ratio;
+  if (!problem.times.empty()) {
+    coarse.times.resize(static_cast<std::size_t>(coarse.N) + 1);
+    for (int m = 0; m <= coarse.N; ++m)
+      coarse.times[static_cast<std::size_t>(m)] = problem.times[static_cast<std::size_t>(ratio * m)];
   }
-  const std::string refusal = detail::coarse_grid_refusal(problem);
-  if (!refusal.empty()) return detail::not_estimated(summary, refusal);
-  Problem coarse_problem = problem;
-  coarse_problem.N = problem.N / 2;
-  if (!problem.times.empty()) {  // a given grid: its every other node
-    coarse_problem.times.resize(static_cast<std::size_t>(coarse_problem.N) + 1);
-    for (int m = 0; m <= coarse_problem.N; ++m)
-      coarse_problem.times[static_cast<std::size_t>(m)] = problem.times[static_cast<std::size_t>(2 * m)];
-  }
-  Trajectory coarse = detail::every_other_node(trajectory, 2);
+  return coarse;
+}
+
+/** A solve on every other node of `fine_problem`'s grid, started from `fine`'s values there, into
+ *  `coarse`: the method that converged (`method`) and the requested options, but one grid, no
+ *  assessment and no estimate of its own; Options::keep_going interrupts it. */
+Summary solve_every_other_node(const Problem& fine_problem, const Trajectory& fine, const Options& requested,
+                               Method method, const TopologyFactory& make, Trajectory& coarse) {
+  const Problem coarse_problem = coarser_problem(fine_problem, 2);
+  coarse = detail::every_other_node(fine, 2);
   Options options = requested;
-  options.method = summary.method;  // the method that converged (auto resolved, or its second attempt)
+  options.method = method;  // the method that converged (auto resolved, or its second attempt)
   options.resume_from = nullptr;
   options.warm_start = false;
   options.error_estimate = false;
@@ -372,19 +364,93 @@ void estimate_error(const Problem& problem, const Options& requested, const Traj
   OnceFlags flags;
   flags.assess = false;
   flags.one_level = true;
-  const Summary coarse_summary = solve_once(coarse_problem, options, coarse, flags, make);
-  if (!coarse_summary.converged()) {
-    const std::string grid = "N = " + std::to_string(coarse_problem.N);
-    detail::not_estimated(summary, coarse_summary.termination == Termination::interrupted
-                                       ? "interrupted during the solve on the coarse grid " + grid
-                                       : "the solve on the coarse grid " + grid + " ended " +
-                                             to_string(coarse_summary.termination) + ": " + coarse_summary.message);
-    return account();
+  return solve_once(coarse_problem, options, coarse, flags, make);
+}
+
+/** Why the solve on a coarse grid failed, for a note. */
+std::string coarse_failure(const Summary& coarse_summary, int N) {
+  const std::string grid = "N = " + std::to_string(N);
+  return coarse_summary.termination == Termination::interrupted
+             ? "interrupted during the solve on the coarse grid " + grid
+             : "the solve on the coarse grid " + grid + " ended " + to_string(coarse_summary.termination) + ": " +
+                   coarse_summary.message;
+}
+
+std::string solved_in(int N, long iterations) {
+  return "N = " + std::to_string(N) + " solved from the solution's values there in " + std::to_string(iterations) +
+         " iteration" + (iterations == 1 ? "" : "s");
+}
+
+/** The third level for the estimate against `coarse` (every ratio-th node of `problem`'s grid): one
+ *  of the solve's own levels where it is nested in `coarse`, else a solve on every other node of
+ *  `coarse` where that grid allows it; appends to `how` how it was had. */
+detail::ThirdLevel third_level(const Problem& problem, const Options& requested, Method method,
+                               const SolvedLevels& levels, const Trajectory& coarse, int ratio,
+                               const TopologyFactory& make, Trajectory& solved, std::string& how) {
+  detail::ThirdLevel third;
+  for (const Trajectory* level : {&levels.below, &levels.further})
+    if (level != &coarse && detail::nested_level(problem, coarse, *level, &third.ratio)) {
+      third.level = level;
+      how += "; N = " + std::to_string(level->N) + " is another grid level the solve had solved";
+      return third;
+    }
+  const Problem coarse_problem = coarser_problem(problem, ratio);
+  third.why_not = detail::coarse_grid_refusal(coarse_problem);
+  if (!third.why_not.empty()) return third;
+  const Summary s = solve_every_other_node(coarse_problem, coarse, requested, method, make, solved);
+  if (!s.converged()) {
+    third.why_not = coarse_failure(s, solved.N);
+    return third;
   }
-  detail::richardson(problem, coarse, 2, requested.extrapolate, trajectory, summary);
-  summary.error_note += "; N = " + std::to_string(coarse.N) + " solved from the solution's values there in " +
-                        std::to_string(coarse_summary.iterations) + " iteration" +
-                        (coarse_summary.iterations == 1 ? "" : "s");
+  third.level = &solved;
+  third.ratio = 2;
+  how += "; " + solved_in(solved.N, s.iterations);
+  return third;
+}
+
+/**
+ * The error estimate of a converged solve (Options::error_estimate; docs/solvers.md, "Error
+ * estimate"): Richardson against the solve's own coarser grid level where it is nested node for
+ * node in the final grid, otherwise against a solve on every other node of the final grid (started
+ * from the solution there); checked by the order observed over a third, coarser level
+ * (third_level).
+ */
+void estimate_error(const Problem& problem, const Options& requested, const SolvedLevels& levels,
+                    Trajectory& trajectory, Summary& summary, const TopologyFactory& make) {
+  if (!requested.error_estimate) return detail::not_estimated(summary, "switched off (error_estimate = false)");
+  const std::string not_here = make()->error_estimate_refusal();
+  if (!not_here.empty()) return detail::not_estimated(summary, not_here);
+  if (!summary.converged())
+    return detail::not_estimated(summary, std::string("the solve ended ") + to_string(summary.termination));
+  if (problem.N < 4) return detail::not_estimated(summary, "N = " + std::to_string(problem.N) + " is below 4");
+  const auto start = std::chrono::steady_clock::now();
+  auto account = [&] {
+    summary.error_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.wall_seconds += summary.error_seconds;
+  };
+  int ratio = 0;
+  std::string how;
+  Trajectory solved;
+  const Trajectory* coarse = &levels.below;
+  if (detail::nested_level(problem, trajectory, levels.below, &ratio)) {
+    how = "; N = " + std::to_string(levels.below.N) + " is a grid level the solve had solved to the tolerance";
+  } else {
+    const std::string refusal = detail::coarse_grid_refusal(problem);
+    if (!refusal.empty()) return detail::not_estimated(summary, refusal);
+    const Summary s = solve_every_other_node(problem, trajectory, requested, summary.method, make, solved);
+    if (!s.converged()) {
+      detail::not_estimated(summary, coarse_failure(s, solved.N));
+      return account();
+    }
+    coarse = &solved;
+    ratio = 2;
+    how = "; " + solved_in(solved.N, s.iterations);
+  }
+  Trajectory third_solved;
+  const detail::ThirdLevel third =
+      third_level(problem, requested, summary.method, levels, *coarse, ratio, make, third_solved, how);
+  detail::richardson(problem, *coarse, ratio, third, requested.extrapolate, trajectory, summary);
+  summary.error_note += how;
   account();
 }
 
@@ -394,9 +460,9 @@ namespace detail {
 
 Summary solve_over(const Problem& problem, const Options& requested, Trajectory& trajectory,
                    const TopologyFactory& make) {
-  Trajectory level;
-  Summary summary = solve_attempts(problem, requested, trajectory, &level, make);
-  estimate_error(problem, requested, level, trajectory, summary, make);
+  SolvedLevels levels;
+  Summary summary = solve_attempts(problem, requested, trajectory, &levels, make);
+  estimate_error(problem, requested, levels, trajectory, summary, make);
   // Richardson's rule assumes an error C h^p with C independent of h; along the soft direction of
   // a nearly degenerate minimum the solutions of different grids move by more than that.
   if (std::isfinite(summary.error_estimate) && summary.point.nearly_degenerate)

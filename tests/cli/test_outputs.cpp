@@ -188,6 +188,10 @@ TEST(Outputs, SummaryHasTheErrorEstimateOrNullWithItsReason) {
   EXPECT_EQ(j["error"]["by_coordinate"]["x"].get<double>(), estimate);
   EXPECT_EQ(j["error"]["coarse_N"].get<int>(), 20);
   EXPECT_FALSE(j["error"]["extrapolated"].get<bool>());
+  // The check over a third grid level (N = 10) observes the order 2 of the discretization.
+  EXPECT_NEAR(j["error"]["observed_order"].get<double>(), 2, 0.2);
+  EXPECT_EQ(j["error"]["observed_order"].get<double>(), summary.error_observed_order);
+  EXPECT_TRUE(j["error"]["reliable"].get<bool>());
   EXPECT_EQ(j["error"]["note"].get<std::string>(), summary.error_note);
 
   Summary not_converged;
@@ -197,6 +201,8 @@ TEST(Outputs, SummaryHasTheErrorEstimateOrNullWithItsReason) {
   EXPECT_TRUE(n["error_estimate"].is_null());
   EXPECT_TRUE(n["error"]["by_coordinate"].empty());
   EXPECT_EQ(n["error"]["coarse_N"].get<int>(), 0);
+  EXPECT_TRUE(n["error"]["observed_order"].is_null());
+  EXPECT_FALSE(n["error"]["reliable"].get<bool>());
   EXPECT_EQ(n["error"]["note"].get<std::string>(), "not estimated: the solve ended max_iterations");
 }
 

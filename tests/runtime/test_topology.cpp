@@ -134,7 +134,7 @@ TEST(Topology, AnInterruptedSolveResumesOverAnotherTopologyBitForBit) {
   resumed.resume_from = &first.state;
   int levels = 0;
   const pardel::Summary rest = forwarded(problem, resumed, tr, true, &levels);
-  EXPECT_EQ(levels, 2) << "the resumed level, then the error estimate's coarse grid";
+  EXPECT_EQ(levels, 3) << "the resumed level, then the error estimate's coarse grid and the third level that checks it";
   EXPECT_EQ(rest.termination, whole.termination) << rest.message;
   EXPECT_EQ(rest.error_estimate, whole.error_estimate);
   EXPECT_EQ(rest.iterations, whole.iterations);

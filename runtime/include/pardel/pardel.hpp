@@ -404,13 +404,24 @@ struct Summary {
   /** Richardson's estimate of the discretization error of the coordinates at the nodes
    *  (Options::error_estimate): max over the common nodes of the two grids and over the
    *  coordinates of |x_N - x_coarse| / (r^p - 1), r the ratio of the grids and p the
-   *  discretization's consistency_order; NaN when not estimated (error_note says why). */
+   *  discretization's consistency_order (the observed order where error_reliable is false because
+   *  it fell short); NaN when not estimated (error_note says why). */
   double error_estimate = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> error_by_coordinate;  ///< the same per coordinate (ncoords values; empty when not estimated)
   int error_coarse_N = 0;       ///< the coarse grid it was estimated against (0: not estimated)
   double error_seconds = 0;     ///< time the estimate took (its coarse solve), included in wall_seconds
   bool extrapolated = false;    ///< the returned trajectory holds the extrapolated values (Options::extrapolate)
   std::string error_note;       ///< one line: how the estimate was made, or "not estimated: " and why
+  /** The order at which the error was observed to fall over three nested grid levels (N, N/r and
+   *  a third, coarser one; docs/solvers.md, "Error estimate"); NaN where it was not measured (no
+   *  third level, or the solutions agree to round-off). */
+  double error_observed_order = std::numeric_limits<double>::quiet_NaN();
+  /** Whether a third grid level confirmed the estimate: the observed order is high enough for the
+   *  estimate to be within a factor 3 of the error, or the solutions agree to round-off. False when
+   *  not estimated, not checked (no third level; error_note says why), or when the observed order
+   *  falls short (then error_estimate uses the observed order, and error_note says "estimate
+   *  unreliable"). An adaptive solve accepts only a grid whose estimate is confirmed. */
+  bool error_reliable = false;
   /** An adaptive solve (Options::accuracy): the N of every grid it solved, in order (the last is
    *  the returned one), and one line on the outcome ("accuracy 1e-08 reached on N = 96 after 3
    *  grids", or why not); both empty otherwise. The returned trajectory carries the grid's times. */
