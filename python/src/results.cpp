@@ -103,14 +103,17 @@ Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const
 py::dict result_dict(const Scene& scene, const Summary& summary, const Trajectory& trajectory, bool stopped_by_callback) {
   py::dict result;
   const std::string model_source = app::scene_model_source(scene);
+  const nlohmann::ordered_json doc = app::summary_json(scene, summary, trajectory, Certificate{}, model_source);
   // Paths that are not UTF-8 have U+FFFD for their invalid bytes, as in summary.json.
-  result["summary"] = json_value(app::summary_json(scene, summary, trajectory, Certificate{}, model_source));
+  result["summary"] = json_value(doc);
   result["stopped_by_callback"] = stopped_by_callback;
   result["t"] = vector(trajectory.t);
   result["q"] = matrix(trajectory.q, static_cast<std::size_t>(trajectory.N) + 1, static_cast<std::size_t>(trajectory.dim));
-  const BoundaryMomenta momenta = app::momenta_on_trajectory_grid(scene.problem, trajectory);
-  result["p0"] = vector(momenta.p0);
-  result["pN"] = vector(momenta.pN);
+  // The boundary momenta the summary holds (app::momenta_on_trajectory_grid; null: none), not
+  // computed twice.
+  const nlohmann::ordered_json& momenta = doc.at("boundary_momenta");
+  result["p0"] = vector(momenta.is_null() ? std::vector<double>{} : momenta.at("p0").get<std::vector<double>>());
+  result["pN"] = vector(momenta.is_null() ? std::vector<double>{} : momenta.at("pN").get<std::vector<double>>());
   const std::size_t n = summary.history.size();
   py::array_t<std::int64_t> it(n), N(n);
   std::vector<double> res(n), act(n), sec(n);
