@@ -89,36 +89,52 @@ class BlockTridiagonal {
    * with the fixed ends and fixed components as zeros).
    */
   void assemble(const Context& ctx, double mu, bool difference = false) {
-    const int d = d_;
-    const std::size_t dd = static_cast<std::size_t>(d) * d;
+    const std::size_t dd = static_cast<std::size_t>(d_) * d_;
 #pragma omp parallel for if (ctx.parallel(n_)) num_threads(ctx.threads) schedule(static)
     for (int i = 0; i < n_; ++i) {
-      const int k = i + 1;
-      const std::size_t kk = static_cast<std::size_t>(k);
-      Mat& Dk = diag_[static_cast<std::size_t>(i)];
-      Dk = RowMap(ctx.D22.data() + (kk - 1) * dd, d, d);
-      Dk += RowMap(ctx.D11.data() + kk * dd, d, d);
-      Mat& Ck = off_[static_cast<std::size_t>(i)];
-      if (k < ctx.N - 1)
-        Ck = RowMap(ctx.D12.data() + kk * dd, d, d);
-      else
-        Ck.setZero();
-      const unsigned char* f = ctx.is_free.data() + kk * d;
-      const unsigned char* fn = ctx.is_free.data() + (kk + 1) * d;
-      for (int a = 0; a < d; ++a) {
-        if (!f[a]) {
-          Dk.row(a).setZero();
-          Dk.col(a).setZero();
-          Dk(a, a) = 1;
-          Ck.row(a).setZero();
-        } else if (difference) {
-          Dk(a, a) += 2 * mu;
-          if (k < ctx.N - 1 && fn[a]) Ck(a, a) -= mu;
-        } else {
-          Dk(a, a) += mu;
+      const std::size_t k = static_cast<std::size_t>(i) + 1;
+      node_blocks(ctx.D22.data() + (k - 1) * dd, ctx.D11.data() + k * dd, ctx.D12.data() + k * dd,
+                  ctx.is_free.data() + k * d_, i + 2 == ctx.N, mu, difference, d_, &diag_[static_cast<std::size_t>(i)],
+                  off_[static_cast<std::size_t>(i)]);
+    }
+  }
+
+  /**
+   * The blocks of one unknown node k (in 1..N-1; `last`: k = N-1) from its derivative arrays:
+   * with `Dk`, D_k = D22(k-1) + D11(k) (`D22_prev`, `D11`), and C_k = D12(k) (`D12`; zero at the
+   * last node); a fixed component (free[a] = 0, `free` the node's flags followed by the next
+   * node's) gets an identity row and column in D_k and a zero row in C_k, a fixed component of the
+   * next node a zero column in C_k; the shift mu adds mu I to D_k, or with `difference` the
+   * second-difference matrix mu (2 I on D_k, -I on C_k between free components). Every topology
+   * assembles its blocks through it (one process: assemble(); ranks: their owned nodes).
+   */
+  static void node_blocks(const double* D22_prev, const double* D11, const double* D12, const unsigned char* free,
+                          bool last, double mu, bool difference, int d, Mat* Dk, Mat& Ck) {
+    if (Dk) {
+      *Dk = RowMap(D22_prev, d, d);
+      *Dk += RowMap(D11, d, d);
+    }
+    if (!last)
+      Ck = RowMap(D12, d, d);
+    else
+      Ck.setZero();
+    const unsigned char* f = free;
+    const unsigned char* fn = free + d;
+    for (int a = 0; a < d; ++a) {
+      if (!f[a]) {
+        if (Dk) {
+          Dk->row(a).setZero();
+          Dk->col(a).setZero();
+          (*Dk)(a, a) = 1;
         }
-        if (!fn[a]) Ck.col(a).setZero();
+        Ck.row(a).setZero();
+      } else if (difference) {
+        if (Dk) (*Dk)(a, a) += 2 * mu;
+        if (!last && fn[a]) Ck(a, a) -= mu;
+      } else if (Dk) {
+        (*Dk)(a, a) += mu;
       }
+      if (!fn[a]) Ck.col(a).setZero();
     }
   }
 

@@ -163,50 +163,21 @@ class DistributedSpace {
    *  BlockTridiagonal::assemble builds them for the whole problem. */
   void assemble(const Context& ctx, double mu) {
     const Layout& L = local_.layout;
-    const int d = ctx.dim;
-    const std::size_t dd = static_cast<std::size_t>(d) * d;
     const int n = solver_.owned();
 #pragma omp parallel for if (ctx.parallel(n)) num_threads(ctx.threads) schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const int g = local_.u0 + i;
-      const std::size_t j = static_cast<std::size_t>(L.local(g));
-      Mat& Dk = solver_.diag(i);
-      Dk = RowMap(ctx.D22.data() + (j - 1) * dd, d, d);
-      Dk += RowMap(ctx.D11.data() + j * dd, d, d);
-      coupling(ctx, g, mu, solver_.off(i), &Dk);
-    }
-    if (L.has_left()) coupling(ctx, local_.u0 - 1, mu, solver_.left_coupling(), nullptr);
+    for (int i = 0; i < n; ++i) node_blocks(ctx, local_.u0 + i, mu, &solver_.diag(i), solver_.off(i));
+    if (L.has_left()) node_blocks(ctx, local_.u0 - 1, mu, nullptr, solver_.left_coupling());
   }
 
-  /** C_k = D12(k) between nodes k and k+1 with the constraint and shift rules of assemble; with
-   *  Dk also the shift and constraint rows of the diagonal block of node k. */
-  void coupling(const Context& ctx, int g, double mu, Mat& Ck, Mat* Dk) const {
+  /** The blocks of the global node g from the rank's derivative arrays (BlockTridiagonal's rule). */
+  void node_blocks(const Context& ctx, int g, double mu, Mat* Dk, Mat& Ck) const {
     const Layout& L = local_.layout;
     const int d = ctx.dim;
     const std::size_t dd = static_cast<std::size_t>(d) * d;
     const std::size_t j = static_cast<std::size_t>(L.local(g));
-    if (g < L.N - 1)
-      Ck = RowMap(ctx.D12.data() + j * dd, d, d);
-    else
-      Ck.setZero();
-    const unsigned char* f = local_.global_free.data() + j * d;
-    const unsigned char* fn = local_.global_free.data() + (j + 1) * d;
-    for (int a = 0; a < d; ++a) {
-      if (!f[a]) {
-        if (Dk) {
-          Dk->row(a).setZero();
-          Dk->col(a).setZero();
-          (*Dk)(a, a) = 1;
-        }
-        Ck.row(a).setZero();
-      } else if (difference_) {
-        if (Dk) (*Dk)(a, a) += 2 * mu;
-        if (g < L.N - 1 && fn[a]) Ck(a, a) -= mu;
-      } else {
-        if (Dk) (*Dk)(a, a) += mu;
-      }
-      if (!fn[a]) Ck.col(a).setZero();
-    }
+    pardel::detail::BlockTridiagonal<D>::node_blocks(
+        Dk ? ctx.D22.data() + (j - 1) * dd : nullptr, ctx.D11.data() + j * dd, ctx.D12.data() + j * dd,
+        local_.global_free.data() + j * d, g == L.N - 1, mu, difference_, d, Dk, Ck);
   }
 
   /** x (owned unknowns) in the local node layout with the neighbours' unknowns in the halo slots
