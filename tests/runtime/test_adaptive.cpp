@@ -173,23 +173,35 @@ struct TroeschExact {
   }
 };
 
+/** Troesch's problem at lambda = 8 on 16 nodes under `disc`, the first grid of an adaptive solve. */
+pardel::Problem troesch_problem(const char* disc) {
+  pardel::Problem p;
+  p.model = &troesch_model;
+  p.discretization = pardel::find_discretization(troesch_model, disc);
+  p.params = {8.0, 0.0};
+  p.N = 16;
+  p.q0 = {0.0};
+  p.qN = {1.0};
+  return p;
+}
+
+/** `p` solved by Newton on adaptive grids to `accuracy` from the straight line; `tr` the answer. */
+pardel::Summary solve_adaptive(const pardel::Problem& p, double accuracy, pardel::Trajectory& tr) {
+  tr = pardel::linear_guess(p);
+  pardel::Options o = newton();
+  o.accuracy = accuracy;
+  return pardel::solve(p, o, tr);
+}
+
 TEST(Adaptive, TroeschAgainstItsExactSolution) {
   const TroeschExact exact(8.0);
   // std::ellint_1 near m = 1 is good to about 1e-12 here; times that far off move u by at most
   // u'(1) = 2 sinh(4) < 55 times as much, far below the 1e-8 compared with.
   ASSERT_LT(std::fabs(exact.t_of(1.0, exact.c) - 1), 1e-11);
   for (const char* disc : {"galerkin_gauss(s=2)", "galerkin_gauss(s=4)"}) {
-    pardel::Problem p;
-    p.model = &troesch_model;
-    p.discretization = pardel::find_discretization(troesch_model, disc);
-    p.params = {8.0, 0.0};
-    p.N = 16;
-    p.q0 = {0.0};
-    p.qN = {1.0};
-    pardel::Trajectory tr = pardel::linear_guess(p);
-    pardel::Options o = newton();
-    o.accuracy = 1e-8;
-    const pardel::Summary s = pardel::solve(p, o, tr);
+    const pardel::Problem p = troesch_problem(disc);
+    pardel::Trajectory tr;
+    const pardel::Summary s = solve_adaptive(p, 1e-8, tr);
     ASSERT_TRUE(s.converged()) << disc << ": " << s.brief_report() << "\n" << s.grid_note;
     EXPECT_LE(s.error_estimate, 1e-8) << disc << ": " << s.grid_note;
     EXPECT_EQ(s.grid_sizes.back(), tr.N);
@@ -217,17 +229,9 @@ TEST(Adaptive, TroeschAgainstItsExactSolution) {
 TEST(Adaptive, TroeschAtOrderEightMeetsAMillionthInTruth) {
   const TroeschExact exact(8.0);
   for (const char* disc : {"galerkin_gauss(s=2)", "galerkin_gauss(s=4)"}) {
-    pardel::Problem p;
-    p.model = &troesch_model;
-    p.discretization = pardel::find_discretization(troesch_model, disc);
-    p.params = {8.0, 0.0};
-    p.N = 16;
-    p.q0 = {0.0};
-    p.qN = {1.0};
-    pardel::Trajectory tr = pardel::linear_guess(p);
-    pardel::Options o = newton();
-    o.accuracy = 1e-6;
-    const pardel::Summary s = pardel::solve(p, o, tr);
+    const pardel::Problem p = troesch_problem(disc);
+    pardel::Trajectory tr;
+    const pardel::Summary s = solve_adaptive(p, 1e-6, tr);
     ASSERT_TRUE(s.converged()) << disc << ": " << s.brief_report() << "\n" << s.grid_note;
     std::string sizes;
     for (int n : s.grid_sizes) sizes += " " + std::to_string(n);
