@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Fuzzing job of continuous integration: configures build-fuzz (or $1) with clang, builds the
-# libFuzzer targets of tests/fuzz/ (the .lag reader, the scene reader, the checkpoint reader, the
-# sweep-file reader, --set overrides of valid scenes and the trajectory CSV reader, instrumented with ASan + UBSan +
-# coverage) and runs each for a fixed number of executions from the seed corpus.
+# Fuzzing job of continuous integration: builds, in the instrumented tree that it shares with the
+# sanitizer job (build-san, or $1; configured by tools/ci/configure-sanitized.sh: clang, ASan +
+# UBSan + coverage, -O1), the libFuzzer targets of tests/fuzz/ (the .lag reader, the scene reader,
+# the checkpoint reader, the sweep-file reader, --set overrides of valid scenes and the trajectory
+# CSV reader) and runs each for a fixed number of executions from the seed corpus. When the
+# sanitizer job has built the tree already, only the six fuzz programs are compiled and linked.
 # Fails on any crash, contract violation (abort), leak, UB report or input slower than -timeout
 # (10 s; 60 s for the symbolic pipeline, where GiNaC under ASan takes up to a few seconds on a
 # valid model of order 2 with gauss2 on an idle 2-core machine, a hang still fails).
@@ -16,7 +18,7 @@
 #              TRAJECTORY_RUNS (200000), EXTRA_MAX_SECONDS (per run of these four: 55), MAX_LEN (4096)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-build_dir="${1:-build-fuzz}"
+build_dir="${1:-build-san}"
 jobs="${JOBS:-2}"
 lag_runs="${LAG_RUNS:-200000}"
 lag_pipeline_runs="${LAG_PIPELINE_RUNS:-5000}"
@@ -29,26 +31,13 @@ trajectory_runs="${TRAJECTORY_RUNS:-200000}"
 extra_max_seconds="${EXTRA_MAX_SECONDS:-55}"
 max_len="${MAX_LEN:-4096}"
 
-if ! command -v clang++ >/dev/null; then
-  echo "fuzz.sh: clang++ not found (Debian packages clang and libclang-rt-dev)" >&2
-  exit 1
-fi
-
-# Libraries get coverage instrumentation without libFuzzer's main; the fuzz targets link it.
-san_flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # A one-time allocation of the CLN library at start-up (see the file) is not pardel's leak.
 export LSAN_OPTIONS="suppressions=$PWD/tools/ci/lsan.supp:print_suppressions=0"
 
-CC=clang CXX=clang++ cmake -S . -B "$build_dir" -G Ninja \
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_C_FLAGS="$san_flags" \
-  -DCMAKE_CXX_FLAGS="$san_flags" \
-  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DPARDEL_BUILD_BENCHMARKS=OFF \
-  -DPARDEL_WITH_CUDA=OFF
+# The shared configuration (a no-op on a tree that it configured already).
+bash tools/ci/configure-sanitized.sh "$build_dir"
 cmake --build "$build_dir" -j "$jobs" --target fuzz_lag_parser fuzz_scene_parser fuzz_checkpoint_reader \
   fuzz_sweep_reader fuzz_scene_overrides fuzz_trajectory_reader
 
