@@ -1,11 +1,13 @@
 /**
  * @file batch_device.cuh
- * The device side of solve_batch_cuda for one model and discretization (Kernel, dimension D):
- * the sweep kernel (one node per thread, the nodes of one problem in consecutive blocks, a block
- * reduction of what the nodes found and one atomic fold per block into the problem's record), the
- * decision kernel (one problem per thread: batch_sweep::decide) and the launch loop, which looks
- * at the count of running problems every check_every sweeps and at nothing else. Included by the
- * generated per-model registration sources (runtime/cuda/CMakeLists.txt).
+ * The device side of solve_batch_cuda for one model and discretization (Kernel, dimension D): the
+ * sweep kernel and the launch loop, which looks at the count of running problems every
+ * check_every sweeps and at nothing else. A sweep is one launch: each problem has a few blocks
+ * (enough to fill the device once), whose threads take the problem's nodes in turn, one node at a
+ * time; each block reduces what its nodes found and folds it into the problem's record with one
+ * atomic per value, and the problem's last block to arrive makes the decision
+ * (batch_sweep::decide). Included by the generated per-model registration sources
+ * (runtime/cuda/CMakeLists.txt).
  */
 #ifndef PARDEL_CUDA_BATCH_DEVICE_CUH
 #define PARDEL_CUDA_BATCH_DEVICE_CUH
@@ -41,67 +43,107 @@ __device__ inline void atomic_first(int* at, int v) {
   if (v >= 0) atomicMin(reinterpret_cast<unsigned int*>(at), static_cast<unsigned int>(v));
 }
 
+/** A problem's record as the other blocks' atomics left it (read past the L1 cache). */
+template <int D>
+__device__ inline bs::Stats<D> load_folded(const bs::Stats<D>* s) {
+  bs::Stats<D> r;
+  r.residual = __ldcg(&s->residual);
+  r.scale = __ldcg(&s->scale);
+  r.qmax = __ldcg(&s->qmax);
+  for (int i = 0; i < D; ++i) {
+    r.comp_residual[i] = __ldcg(&s->comp_residual[i]);
+    r.comp_scale[i] = __ldcg(&s->comp_scale[i]);
+  }
+  r.bad_residual = __ldcg(&s->bad_residual);
+  r.singular = __ldcg(&s->singular);
+  r.bad_value = __ldcg(&s->bad_value);
+  return r;
+}
+
+/**
+ * Sweep `it` (reads iterate it from `in`, writes iterate it+1 to `out`): blocks_per_problem
+ * blocks per problem, whose threads take nodes part * kBlock + threadIdx.x, then the same plus
+ * blocks_per_problem * kBlock, and so on. `arrived` counts, per problem, the blocks that have
+ * folded their findings; the last one decides, clears the record and the count for the next
+ * sweep, and takes a stopped problem off `running`.
+ */
 template <class Kernel, int D>
-__global__ void __launch_bounds__(kBlock) sweep_kernel(int N, int blocks_per_problem, const double* __restrict__ in,
-                                                       double* __restrict__ out, const double* __restrict__ t,
-                                                       const double* __restrict__ h, const double* __restrict__ p,
-                                                       int np, bs::Settings set,
-                                                       const bs::ProblemState<D>* __restrict__ state,
-                                                       bs::Stats<D>* stats) {
+__global__ void __launch_bounds__(kBlock) sweep_kernel(int N, int blocks_per_problem, long it,
+                                                       const double* __restrict__ in, double* __restrict__ out,
+                                                       const double* __restrict__ t, const double* __restrict__ h,
+                                                       const double* __restrict__ p, int np, bs::Settings set,
+                                                       bs::ProblemState<D>* state, bs::Stats<D>* stats, int* arrived,
+                                                       int* running) {
   const int b = blockIdx.x / blocks_per_problem;
   if (state[b].status != bs::running) return;  // the whole block: the reduction below needs all or none
-  const int k = (blockIdx.x % blocks_per_problem) * kBlock + threadIdx.x;
-  const long nodes = static_cast<long>(N) + 1;
+  const long part = blockIdx.x % blocks_per_problem;
+  const long nodes = static_cast<long>(N) + 1, stride = static_cast<long>(blocks_per_problem) * kBlock;
   const double* q = in + b * nodes * D;
   double* o = out + b * nodes * D;
   const double* pb = p + static_cast<long>(b) * np;
   bs::Stats<D> mine;
   bs::clear(mine);
-  if (k == 0 || k == N) {
-    for (int i = 0; i < D; ++i) o[static_cast<long>(k) * D + i] = q[static_cast<long>(k) * D + i];
-  } else if (k < N) {
+  for (long k = part * kBlock + threadIdx.x; k < nodes; k += stride) {
+    if (k == 0 || k == N) {
+      for (int i = 0; i < D; ++i) o[k * D + i] = q[k * D + i];
+      continue;
+    }
     bs::Interval<D> left, right;
-    Kernel::sweep(h[k - 1], t[k - 1], t[k], q + static_cast<long>(k - 1) * D, q + static_cast<long>(k) * D, pb,
-                  left.D1, left.D2, left.D11, left.D22);
-    Kernel::sweep(h[k], t[k], t[k + 1], q + static_cast<long>(k) * D, q + static_cast<long>(k + 1) * D, pb, right.D1,
-                  right.D2, right.D11, right.D22);
-    bs::update_node<Kernel, D>(k, q, t, h, pb, left, right, set, o + static_cast<long>(k) * D, mine);
+    Kernel::sweep(h[k - 1], t[k - 1], t[k], q + (k - 1) * D, q + k * D, pb, left.D1, left.D2, left.D11, left.D22);
+    Kernel::sweep(h[k], t[k], t[k + 1], q + k * D, q + (k + 1) * D, pb, right.D1, right.D2, right.D11, right.D22);
+    bs::update_node<Kernel, D>(static_cast<int>(k), q, t, h, pb, left, right, set, o + k * D, mine);
   }
   using Reduce = cub::BlockReduce<bs::Stats<D>, kBlock>;
   __shared__ typename Reduce::TempStorage scratch;
   const bs::Stats<D> all = Reduce(scratch).Reduce(mine, MergeStats<D>());
-  if (threadIdx.x == 0) {
-    bs::Stats<D>& s = stats[b];
-    atomic_larger(&s.residual, all.residual);
-    atomic_larger(&s.scale, all.scale);
-    atomic_larger(&s.qmax, all.qmax);
-    for (int i = 0; i < D; ++i) {
-      atomic_larger(&s.comp_residual[i], all.comp_residual[i]);
-      atomic_larger(&s.comp_scale[i], all.comp_scale[i]);
-    }
-    atomic_first(&s.bad_residual, all.bad_residual);
-    atomic_first(&s.singular, all.singular);
-    atomic_first(&s.bad_value, all.bad_value);
+  if (threadIdx.x != 0) return;
+  bs::Stats<D>& s = stats[b];
+  atomic_larger(&s.residual, all.residual);
+  atomic_larger(&s.scale, all.scale);
+  atomic_larger(&s.qmax, all.qmax);
+  for (int i = 0; i < D; ++i) {
+    atomic_larger(&s.comp_residual[i], all.comp_residual[i]);
+    atomic_larger(&s.comp_scale[i], all.comp_scale[i]);
   }
+  atomic_first(&s.bad_residual, all.bad_residual);
+  atomic_first(&s.singular, all.singular);
+  atomic_first(&s.bad_value, all.bad_value);
+  __threadfence();  // this block's folds before its arrival
+  if (atomicAdd(&arrived[b], 1) != blocks_per_problem - 1) return;
+  // The problem's last block: every block's folds are in the record.
+  __threadfence();
+  const bs::Stats<D> folded = load_folded(&s);
+  bs::ProblemState<D> st = state[b];
+  bs::decide(st, folded, it, set);
+  state[b] = st;
+  bs::clear(s);
+  arrived[b] = 0;
+  if (st.status != bs::running) atomicSub(running, 1);
 }
 
 template <int D>
-__global__ void start_kernel(int B, bs::ProblemState<D>* state, bs::Stats<D>* stats, const int* invalid) {
+__global__ void start_kernel(int B, bs::ProblemState<D>* state, bs::Stats<D>* stats, const int* invalid, int* arrived) {
   const int b = blockIdx.x * blockDim.x + threadIdx.x;
   if (b >= B) return;
   bs::start(state[b]);
   if (invalid[b]) state[b].status = bs::not_started;
   bs::clear(stats[b]);
+  arrived[b] = 0;
 }
 
-template <int D>
-__global__ void decide_kernel(int B, long it, bs::Settings set, bs::ProblemState<D>* state, bs::Stats<D>* stats,
-                              int* running) {
-  const int b = blockIdx.x * blockDim.x + threadIdx.x;
-  if (b >= B || state[b].status != bs::running) return;
-  bs::decide(state[b], stats[b], it, set);
-  bs::clear(stats[b]);
-  if (state[b].status != bs::running) atomicSub(running, 1);
+/** Blocks per problem: `wanted` if given (at most one per kBlock nodes), else as many as fill
+ *  the device once with the whole batch. */
+template <class Kernel, int D>
+int blocks_per_problem(int B, long nodes, int wanted) {
+  const long most = (nodes + kBlock - 1) / kBlock;
+  if (wanted > 0) return static_cast<int>(wanted < most ? wanted : most);
+  int device = 0, sms = 1, per_sm = 1;
+  cudaGetDevice(&device);
+  cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device);
+  cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, sweep_kernel<Kernel, D>, kBlock, 0);
+  const long resident = static_cast<long>(sms > 0 ? sms : 1) * (per_sm > 0 ? per_sm : 1);
+  const long fill = (resident + B - 1) / B;
+  return static_cast<int>(fill < most ? fill : most);
 }
 
 /** Device buffers, freed on every path. */
@@ -136,7 +178,7 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   double* p = buf.get<double>(static_cast<std::size_t>(B) * in.np, err);
   auto* state = buf.get<bs::ProblemState<D>>(static_cast<std::size_t>(B), err);
   auto* stats = buf.get<bs::Stats<D>>(static_cast<std::size_t>(B), err);
-  int* flags = buf.get<int>(static_cast<std::size_t>(B) + 1, err);  // invalid[B], then the running count
+  int* flags = buf.get<int>(2 * static_cast<std::size_t>(B) + 1, err);  // invalid[B], the running count, arrived[B]
   if (err != cudaSuccess) return std::string("device allocation failed: ") + cudaGetErrorString(err);
   struct Events {  // start, sweeps begin, sweeps end, copies back done; destroyed on every path
     cudaEvent_t e[4];
@@ -159,19 +201,18 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   if (err == cudaSuccess) err = cudaMemcpy(flags, in.invalid, sizeof(int) * B, cudaMemcpyHostToDevice);
   if (err == cudaSuccess) err = cudaMemcpy(flags + B, &running, sizeof(int), cudaMemcpyHostToDevice);
   if (err != cudaSuccess) return std::string("copy to the device failed: ") + cudaGetErrorString(err);
-  const int per_problem = static_cast<int>((nodes + kBlock - 1) / kBlock);
+  const int per_problem = blocks_per_problem<Kernel, D>(B, nodes, in.blocks_per_problem);
   const long blocks = static_cast<long>(per_problem) * B;
-  const int decide_blocks = (B + 127) / 128;
-  start_kernel<D><<<decide_blocks, 128>>>(B, state, stats, flags);
+  int* arrived = flags + B + 1;
+  start_kernel<D><<<(B + 127) / 128, 128>>>(B, state, stats, flags, arrived);
   cudaEventRecord(e1);
   long it = 0;
   while (running > 0) {
     for (int c = 0; c < in.check_every; ++c, ++it) {
       const double* from = it % 2 == 0 ? q0 : q1;
       double* to = it % 2 == 0 ? q1 : q0;
-      sweep_kernel<Kernel, D><<<static_cast<unsigned>(blocks), kBlock>>>(N, per_problem, from, to, t, h, p, in.np,
-                                                                          in.settings, state, stats);
-      decide_kernel<D><<<decide_blocks, 128>>>(B, it, in.settings, state, stats, flags + B);
+      sweep_kernel<Kernel, D><<<static_cast<unsigned>(blocks), kBlock>>>(N, per_problem, it, from, to, t, h, p, in.np,
+                                                                          in.settings, state, stats, arrived, flags + B);
     }
     err = cudaMemcpy(&running, flags + B, sizeof(int), cudaMemcpyDeviceToHost);  // waits for the sweeps
     if (err != cudaSuccess) return std::string("a device sweep failed: ") + cudaGetErrorString(err);

@@ -159,6 +159,8 @@ BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const
   batch.threads = 1;
   batch.refusal = options_refusal(base, options);
   if (batch.refusal.empty() && settings.check_every < 1) batch.refusal = "CudaSettings::check_every must be >= 1";
+  if (batch.refusal.empty() && settings.blocks_per_problem < 0)
+    batch.refusal = "CudaSettings::blocks_per_problem must be >= 0 (0: chosen to fill the device)";
   const DeviceEntry* entry = nullptr;
   if (batch.refusal.empty() && !(entry = find_entry(*base.model, *base.discretization)))
     cuda_supports(*base.model, *base.discretization, &batch.refusal);
@@ -231,6 +233,7 @@ BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const
   in.settings.max_iterations = options.max_iterations;
   in.settings.divergence_factor = options.divergence_factor;
   in.check_every = settings.check_every;
+  in.blocks_per_problem = settings.blocks_per_problem;
   in.keep_going = options.keep_going;
   cuda_detail::DeviceBatchResult out;
   out.q = q.data();  // the guesses are on the device once uploaded: the answers come back here

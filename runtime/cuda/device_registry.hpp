@@ -26,6 +26,7 @@ struct DeviceBatch {
   const int* invalid = nullptr; ///< B flags: 1 for a problem left out
   batch_sweep::Settings settings;
   int check_every = 32;
+  int blocks_per_problem = 0;  ///< CudaSettings::blocks_per_problem
   std::function<bool()> keep_going;
 };
 

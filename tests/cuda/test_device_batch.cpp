@@ -75,7 +75,8 @@ std::vector<pardel::BatchProblem> random_batch(const pardel::Problem& base, int 
 }
 
 /** The number of problems that converged (on both). */
-int compare(const pardel::Problem& base, const pardel::Options& options, const std::vector<pardel::BatchProblem>& batch) {
+int compare(const pardel::Problem& base, const pardel::Options& options, const std::vector<pardel::BatchProblem>& batch,
+            int blocks_per_problem = 0) {
   std::string why;
   if (!pardel::cuda_device_available(&why)) {
     std::printf("skipped: %s\n", why.c_str());
@@ -83,6 +84,7 @@ int compare(const pardel::Problem& base, const pardel::Options& options, const s
   }
   pardel::CudaSettings settings;
   settings.check_every = 7;  // not a divisor of the iteration counts: the device stops each problem at its own
+  settings.blocks_per_problem = blocks_per_problem;
   const pardel::BatchSummary gpu = pardel::solve_batch_cuda(base, options, batch, settings);
   EXPECT_TRUE(gpu.refusal.empty()) << gpu.refusal;
   if (!gpu.refusal.empty()) return 0;
@@ -147,6 +149,10 @@ TEST(DeviceBatchRefusals, MethodsKnotsAndModelsTheDeviceLacks) {
   std::string why;
   EXPECT_FALSE(pardel::cuda_supports(other, disc, &why));
   EXPECT_NE(why.find("zermelo (trapezoid)"), std::string::npos) << why;
+  pardel::CudaSettings negative;
+  negative.blocks_per_problem = -1;
+  s = pardel::solve_batch_cuda(base, options_of(pardel::Method::jacobi_newton, 10), one, negative);
+  EXPECT_NE(s.refusal.find("blocks_per_problem"), std::string::npos) << s.refusal;
 }
 
 TEST(DeviceBatch, FuelNavigationIteratesAfterNineSweeps) {
@@ -205,6 +211,24 @@ TEST(DeviceBatch, BratuDrivenToOverflowStopsEachProblemAlone) {
   std::vector<pardel::BatchProblem> batch = random_batch(base, 12, 0.1, 0.5, 0.5, 6);
   for (int b = 0; b < 12; b += 3) batch[b].guess.q[12] = 800;  // exp(800) overflows
   compare(base, options_of(pardel::Method::jacobi_newton, 5000), batch);
+}
+
+TEST(DeviceBatch, ManyBlocksPerProblemAndThreadsThatTakeSeveralNodes) {
+  PARDEL_NEEDS_DEVICE();
+  // N = 1500: 12 blocks of 128 nodes. Five blocks per problem (each thread takes two or three
+  // nodes, five blocks fold into a record before the last decides), then the automatic choice.
+  const pardel::Problem base = problem_of(fuel_nav_model, 40, 1500, {0, 0}, {3, 2});
+  const std::vector<pardel::BatchProblem> batch = random_batch(base, 6, 0.5, 0, 0.7, 7);
+  compare(base, options_of(pardel::Method::jacobi_newton, 9), batch, 5);
+  compare(base, options_of(pardel::Method::jacobi_newton, 9), batch, 0);
+  compare(base, options_of(pardel::Method::jacobi_newton, 9), batch, 1);
+  // Overflow at nodes in different blocks: the first one is named, whichever block folds first.
+  const pardel::Problem bratu = problem_of(bratu_model, 1, 1500, {0}, {0});
+  std::vector<pardel::BatchProblem> hot = random_batch(bratu, 4, 0.1, 0.5, 0.5, 8);
+  hot[1].guess.q[1300] = 800;
+  hot[1].guess.q[700] = 800;
+  hot[2].guess.q[200] = 800;
+  compare(bratu, options_of(pardel::Method::jacobi_newton, 400), hot, 5);
 }
 
 TEST(DeviceSolve, OptionsDeviceCudaRunsSolveOnTheDevice) {

@@ -13,7 +13,10 @@
  * Each batch is also written for the JAX peer (tools/gpu/jax_peer.py): a JSON description and the
  * guesses as raw float64, and the device's answers beside them.
  *
- *   bench_device --out DIR [--batch 10000] [--cpu-sample 64] [--sweep-N 10000000] [--batches-only 1]
+ * --profile 1 runs only a few sweeps of the Zermelo batch and of the large-N problem, for a
+ * profiler (tools/gpu/run.sh runs it under Nsight Compute where `ncu` is on PATH).
+ *
+ *   bench_device --out DIR [--batch 10000] [--cpu-sample 64] [--sweep-N 10000000] [--batches-only 1] [--profile 1]
  */
 #include <omp.h>
 
@@ -41,6 +44,7 @@ struct Args {
   int sweep_N = 10000000;
   int scaling_sample = 32;
   bool batches_only = false;  ///< --batches-only 1: no large-N sweep, no scaling
+  bool profile = false;       ///< --profile 1: a few sweeps of each kind, nothing compared
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -186,6 +190,7 @@ int main(int argc, char** argv) {
     else if (k == "--sweep-N") a.sweep_N = std::atoi(v.c_str());
     else if (k == "--scaling-sample") a.scaling_sample = std::atoi(v.c_str());
     else if (k == "--batches-only") a.batches_only = v == "1";
+    else if (k == "--profile") a.profile = v == "1";
     else {
       std::fprintf(stderr, "bench_device: unknown option %s\n", k.c_str());
       return 2;
@@ -214,6 +219,20 @@ int main(int argc, char** argv) {
   fuel.N = 100;
   fuel.q0 = {0, 0};
   fuel.qN = {6, 5};
+  if (a.profile) {
+    pardel::CudaSettings s;
+    s.assess = false;
+    const auto batch = polyline_batch(zermelo, {{1, 3.5}, {4, 5.5}}, 0.5, a.batch, 1);
+    const pardel::BatchSummary z = pardel::solve_batch_cuda(zermelo, jacobi_newton(4), batch, s);
+    pardel::Problem big = fuel;
+    big.N = a.sweep_N;
+    const pardel::BatchSummary f = pardel::solve_batch_cuda(big, jacobi_newton(4), std::vector<pardel::BatchProblem>(1), s);
+    std::printf("profile runs: Zermelo batch %s, fuel at N = %d %s\n", z.refusal.empty() ? "done" : z.refusal.c_str(),
+                a.sweep_N, f.refusal.empty() ? "done" : f.refusal.c_str());
+    std::fprintf(json, "  \"profile\": true\n}\n");
+    std::fclose(json);
+    return 0;
+  }
   std::vector<BatchRow> rows;
   rows.push_back(run_batch(a, "zermelo_N80", zermelo, {{1, 3.5}, {4, 5.5}}, 0.5, 100000));
   rows.push_back(run_batch(a, "fuel_nav_N100", fuel, {{2, 1.5}, {4, 3.5}}, 1.0, 100000));

@@ -39,6 +39,9 @@ struct CudaBatchTimes {
 struct CudaSettings {
   int check_every = 32;  ///< sweeps between the host's reads of the count of running problems
   bool assess = true;    ///< assess the point of each converged problem on the host (assess_point)
+  /// thread blocks of 128 threads per problem in a sweep (0: as many as fill the device once with
+  /// the whole batch, at most one per 128 nodes); the threads of a problem take its nodes in turn
+  int blocks_per_problem = 0;
 };
 
 /**
