@@ -24,6 +24,9 @@ namespace pardel::cuda_detail {
 namespace bs = pardel::batch_sweep;
 
 constexpr int kBlock = 128;
+#ifndef PARDEL_CUDA_MIN_BLOCKS
+#define PARDEL_CUDA_MIN_BLOCKS 1
+#endif
 
 template <int D>
 struct MergeStats {
@@ -68,7 +71,7 @@ __device__ inline bs::Stats<D> load_folded(const bs::Stats<D>* s) {
  * sweep, and takes a stopped problem off `running`.
  */
 template <class Kernel, int D>
-__global__ void __launch_bounds__(kBlock) sweep_kernel(int N, int blocks_per_problem, long it,
+__global__ void __launch_bounds__(kBlock, PARDEL_CUDA_MIN_BLOCKS) sweep_kernel(int N, int blocks_per_problem, long it,
                                                        const double* __restrict__ in, double* __restrict__ out,
                                                        const double* __restrict__ t, const double* __restrict__ h,
                                                        const double* __restrict__ p, int np, bs::Settings set,

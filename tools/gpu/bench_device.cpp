@@ -13,10 +13,12 @@
  * Each batch is also written for the JAX peer (tools/gpu/jax_peer.py): a JSON description and the
  * guesses as raw float64, and the device's answers beside them.
  *
- * --profile 1 runs only a few sweeps of the Zermelo batch and of the large-N problem, for a
- * profiler (tools/gpu/run.sh runs it under Nsight Compute where `ncu` is on PATH).
+ * --profile 1 runs only a few sweeps (--profile-sweeps, default 4) of the Zermelo batch and of the
+ * large-N problem and prints their time per sweep, for a profiler (tools/gpu/run.sh runs it under
+ * Nsight Compute where `ncu` is on PATH).
  *
- *   bench_device --out DIR [--batch 10000] [--cpu-sample 64] [--sweep-N 10000000] [--batches-only 1] [--profile 1]
+ *   bench_device --out DIR [--batch 10000] [--cpu-sample 64] [--sweep-N 10000000] [--batches-only 1]
+ *                [--profile 1 [--profile-sweeps 4]]
  */
 #include <omp.h>
 
@@ -45,6 +47,7 @@ struct Args {
   int scaling_sample = 32;
   bool batches_only = false;  ///< --batches-only 1: no large-N sweep, no scaling
   bool profile = false;       ///< --profile 1: a few sweeps of each kind, nothing compared
+  long profile_sweeps = 4;    ///< --profile-sweeps: their number
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -191,6 +194,7 @@ int main(int argc, char** argv) {
     else if (k == "--scaling-sample") a.scaling_sample = std::atoi(v.c_str());
     else if (k == "--batches-only") a.batches_only = v == "1";
     else if (k == "--profile") a.profile = v == "1";
+    else if (k == "--profile-sweeps") a.profile_sweeps = std::atol(v.c_str());
     else {
       std::fprintf(stderr, "bench_device: unknown option %s\n", k.c_str());
       return 2;
@@ -220,16 +224,24 @@ int main(int argc, char** argv) {
   fuel.q0 = {0, 0};
   fuel.qN = {6, 5};
   if (a.profile) {
+    // A few sweeps of each kind (--profile-sweeps), timed by the device's events.
     pardel::CudaSettings s;
     s.assess = false;
+    s.check_every = static_cast<int>(a.profile_sweeps) + 1;
+    pardel::CudaBatchTimes tz, tf;
     const auto batch = polyline_batch(zermelo, {{1, 3.5}, {4, 5.5}}, 0.5, a.batch, 1);
-    const pardel::BatchSummary z = pardel::solve_batch_cuda(zermelo, jacobi_newton(4), batch, s);
+    const pardel::BatchSummary z = pardel::solve_batch_cuda(zermelo, jacobi_newton(a.profile_sweeps), batch, s, &tz);
     pardel::Problem big = fuel;
     big.N = a.sweep_N;
-    const pardel::BatchSummary f = pardel::solve_batch_cuda(big, jacobi_newton(4), std::vector<pardel::BatchProblem>(1), s);
-    std::printf("profile runs: Zermelo batch %s, fuel at N = %d %s\n", z.refusal.empty() ? "done" : z.refusal.c_str(),
-                a.sweep_N, f.refusal.empty() ? "done" : f.refusal.c_str());
-    std::fprintf(json, "  \"profile\": true\n}\n");
+    const pardel::BatchSummary f =
+        pardel::solve_batch_cuda(big, jacobi_newton(a.profile_sweeps), std::vector<pardel::BatchProblem>(1), s, &tf);
+    std::printf("profile runs: Zermelo batch of %d (N = 80): %s, %.1f us per sweep (%ld sweeps); fuel navigation at "
+                "N = %d: %s, %.3f ms per sweep\n",
+                a.batch, z.refusal.empty() ? "done" : z.refusal.c_str(), tz.sweeps / std::max<long>(1, tz.sweeps_run) * 1e6,
+                tz.sweeps_run, a.sweep_N, f.refusal.empty() ? "done" : f.refusal.c_str(),
+                tf.sweeps / std::max<long>(1, tf.sweeps_run) * 1e3);
+    std::fprintf(json, "  \"profile\": {\"zermelo_us\": %.6g, \"fuel_ms\": %.6g}\n}\n",
+                 tz.sweeps / std::max<long>(1, tz.sweeps_run) * 1e6, tf.sweeps / std::max<long>(1, tf.sweeps_run) * 1e3);
     std::fclose(json);
     return 0;
   }

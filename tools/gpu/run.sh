@@ -20,7 +20,7 @@ python=${PYTHON:-python3}
 batch=${BATCH:-10000}
 bench_flags=${BENCH_FLAGS:-}
 peer_batch=${PEER_BATCH:-}
-jax_batches=${JAX_BATCHES:-zermelo_N80 fuel_nav_N100}
+jax_batches=${JAX_BATCHES-zermelo_N80 fuel_nav_N100}
 jax_limit=${JAX_LIMIT:-100}
 work=${WORK:-$out/work}
 mkdir -p "$out" "$work"
@@ -67,9 +67,9 @@ fi
 if [ "${PROFILE:-1}" != 0 ]; then
   ncu=$(command -v ncu || ls /usr/local/cuda/bin/ncu 2>/dev/null || true)
   if [ -n "$ncu" ]; then
-    echo "== Nsight Compute: the sweep kernel (a Zermelo batch of $batch, fuel navigation at N = 10^7)"
+    echo "== Nsight Compute: the sweep kernel (sweeps 3 and 4 of a Zermelo batch of $batch, 0 and 1 of fuel navigation at N = 10^7)"
     mkdir -p "$work/profile"
-    timeout 150 "$ncu" -k regex:sweep_kernel --launch-count 10 --section SpeedOfLight --section Occupancy \
+    timeout 150 "$ncu" -k regex:sweep_kernel --launch-skip 3 --launch-count 4 --section SpeedOfLight --section Occupancy \
       --section LaunchStats --section MemoryWorkloadAnalysis \
       "$bin/bench_device" --out "$work/profile" --profile 1 --batch "$batch" >"$out/ncu.txt" 2>&1 || echo "ncu ended with $?"
     grep -E "sweep_kernel|Duration|Memory Throughput|DRAM Throughput|Compute \(SM\)|Achieved Occupancy|Theoretical Occupancy|Registers Per|Block Limit Registers" "$out/ncu.txt" | head -n 80
