@@ -144,10 +144,11 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
 MachineMemory machine_memory() {
   MachineMemory m;
   m.available = proc_kb(read_file("/proc/meminfo"), "MemAvailable");
-  m.address_used = proc_kb(read_file("/proc/self/status"), "VmSize");
   rlimit limit{};
-  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
     m.address_limit = static_cast<double>(limit.rlim_cur);
+    m.address_used = proc_kb(read_file("/proc/self/status"), "VmSize");  // only weighed against a limit
+  }
   return m;
 }
 

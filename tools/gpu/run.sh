@@ -31,6 +31,7 @@ started=$(date +%s)
   echo "== machine"
   nvidia-smi --query-gpu=name,memory.total,driver_version,clocks.max.sm --format=csv 2>&1
   nproc
+  lscpu 2>/dev/null | grep -E "^(Model name|Socket|Core|Thread|NUMA node\(s\)|CPU\(s\))"
   echo "commit: ${PARDEL_COMMIT:-$(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown)}"
 } | tee "$out/machine.txt"
 

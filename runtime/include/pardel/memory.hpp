@@ -38,7 +38,7 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
 struct MachineMemory {
   double available = -1;      ///< MemAvailable of /proc/meminfo, bytes
   double address_limit = -1;  ///< RLIMIT_AS (soft), bytes
-  double address_used = -1;   ///< VmSize of this process now (/proc/self/status), bytes
+  double address_used = -1;   ///< VmSize of this process now (/proc/self/status), bytes; read only under a limit
 };
 
 MachineMemory machine_memory();
