@@ -1,0 +1,339 @@
+"""What pardel's solves return: Result (one solve), Interrupted (a solve stopped by Ctrl-C, carrying
+its Result), BatchResult (pardel.solve_batch), and SweepResult with its SweepVariant and
+SweepSolution (pardel.sweep)."""
+from __future__ import annotations
+
+import json
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ._checks import _shown
+from ._pardel import PardelError
+
+
+def _number_text(value, form):
+    """A number of a summary for repr: `form` for a number, "nan" for None (null: not finite)."""
+    if value is None:
+        return "nan"
+    try:
+        return form % value
+    except TypeError:
+        return repr(value)
+
+
+class Result:
+    """What a solve returned.
+
+    t (N+1 node times), q ((N+1) x dim: coords, then derivatives for order >= 2), status (the
+    summary.json status: converged, max_iterations, diverged, non_finite, interrupted, stalled),
+    message, iterations, residual, action, cost (the physical cost's value; cost_name,
+    cost_definition), point (kind, inertia, lambda_min, ... as in summary.json), p0 and pN (the
+    discrete boundary momenta -D1 Ld(q0, q1) and D2 Ld(q_{N-1}, q_N)), history (arrays iteration,
+    N, residual, action, seconds), error_estimate (Richardson's estimate of the discretization error
+    of the coordinates at the nodes, NaN when not estimated), error_by_coordinate (dict by name,
+    empty when not estimated), error_note (how it was made, or "not estimated: " and why),
+    extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
+    solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
+    wall_seconds, model (the model's name), coords (its coordinate names), stopped_by_callback
+    (whether on_iteration stopped the solve), checkpoint (the folder of the checkpoint this
+    interrupted solve wrote, or None), summary (the whole summary.json dictionary);
+    converged (status == "converged") and coordinate(name). A Result pickles whole.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    p0: np.ndarray
+    pN: np.ndarray
+    history: Dict[str, np.ndarray]
+    coords: List[str]
+    status: str
+    message: str
+    iterations: int
+    residual: Optional[float]
+    action: Optional[float]
+    cost: Optional[float]
+    cost_name: str
+    cost_definition: str
+    point: Dict[str, Any]
+    error_estimate: float
+    error_by_coordinate: Dict[str, float]
+    error_note: str
+    extrapolated: bool
+    grid_sizes: List[int]
+    grid_note: str
+    method: str
+    N: int
+    final_time: float
+    wall_seconds: float
+    model: str
+    stopped_by_callback: bool
+    checkpoint: Optional[str]
+    summary: Dict[str, Any]
+
+    def __init__(self, raw: Dict[str, Any], model_coords: Sequence[str]) -> None:
+        self.summary = raw["summary"]
+        s = self.summary
+        self.t = np.asarray(raw["t"])
+        self.q = np.asarray(raw["q"])
+        self.p0 = np.asarray(raw["p0"])
+        self.pN = np.asarray(raw["pN"])
+        self.history = {k: np.asarray(v) for k, v in raw["history"].items()}
+        self.coords = list(model_coords)
+        self.status = s["status"]
+        self.message = s["message"]
+        self.iterations = s["iterations"]
+        self.residual = s["residual"]
+        self.action = s["action"]
+        self.cost = s["cost"]["value"]
+        self.cost_name = s["cost"]["name"]
+        self.cost_definition = s["cost"]["definition"]
+        self.point = s["point"]
+        # summary.json writes a missing estimate as null; here it is NaN, as in the C++ Summary.
+        self.error_estimate = float("nan") if s["error_estimate"] is None else s["error_estimate"]
+        self.error_by_coordinate = dict(s["error"]["by_coordinate"])
+        self.error_note = s["error"]["note"]
+        self.extrapolated = s["error"]["extrapolated"]
+        self.grid_sizes = list(s["grid"]["sizes"])
+        self.grid_note = s["grid"]["note"]
+        self.method = s["method"]
+        self.N = s["N"]
+        self.final_time = s["final_time"]
+        self.wall_seconds = s["wall_seconds"]
+        self.model = s["model"]
+        self.stopped_by_callback = raw["stopped_by_callback"]
+        self.checkpoint = None
+
+    @property
+    def converged(self) -> bool:
+        """Whether the solve converged (status == "converged")."""
+        return self.status == "converged"
+
+    def coordinate(self, name: str) -> np.ndarray:
+        """The values of one coordinate (by name) at the nodes."""
+        if name not in self.coords:
+            raise PardelError("pardel.Result.coordinate: unknown coordinate %s (the model's: %s)" % (
+                _shown(name), ", ".join(self.coords)))
+        return self.q[:, self.coords.index(name)]
+
+    def __repr__(self) -> str:
+        # summary.json writes a non-finite residual, action or cost as null (None here).
+        return "pardel.Result(%s: %s iterations, residual %s, %s = %s, %s)" % (
+            self.status, self.iterations, _number_text(self.residual, "%.3g"), self.cost_name,
+            _number_text(self.cost, "%.6g"), (self.point or {}).get("kind"))
+
+    __str__ = __repr__
+
+
+class Interrupted(KeyboardInterrupt):
+    """A solve stopped by Ctrl-C (SIGINT) or by a KeyboardInterrupt raised in on_iteration: a
+    KeyboardInterrupt that carries what the solve had reached. result: the Result of the stopped
+    solve (status "interrupted" and its last iterate, or the status it had reached when the stop
+    came after it ended, e.g. during the point assessment of a converged solve); checkpoint: the
+    folder of the checkpoint it wrote (solve's or solve_scene's checkpoint argument, or resume's
+    folder), which pardel.resume continues, or None."""
+
+    result: "Result"
+    checkpoint: Optional[str]
+
+    def __init__(self, where: str, result: "Result", checkpoint: Optional[str]) -> None:
+        text = "%s: interrupted at iteration %d (status %s, residual %s); the last iterate is this exception's .result" % (
+            where, result.iterations, result.status, _number_text(result.residual, "%.3g"))
+        if checkpoint is not None:
+            text += "; checkpoint written to %s: continue with pardel.resume(%r)" % (checkpoint, checkpoint)
+        super().__init__(text)
+        self.result = result
+        self.checkpoint = checkpoint
+
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        return (_interrupted, (str(self), self.result, self.checkpoint))
+
+
+def _interrupted(text, result, checkpoint):
+    """Interrupted as pickled: its message, result and checkpoint."""
+    error = Interrupted.__new__(Interrupted)
+    KeyboardInterrupt.__init__(error, text)
+    error.result, error.checkpoint = result, checkpoint
+    return error
+
+
+def _finish(where, raw, coords, checkpoint):
+    """The Result of a solve of the compiled core (raw), or the exception that stopped it raised:
+    a KeyboardInterrupt as Interrupted carrying the result, any other as it was raised."""
+    result = Result(raw, coords)
+    result.checkpoint = checkpoint if raw["checkpoint_written"] else None
+    pending = raw["pending"]
+    if pending is None:
+        return result
+    if isinstance(pending, KeyboardInterrupt):
+        raise Interrupted(where, result, result.checkpoint) from pending
+    if raw["pending_trace"] is not None:
+        raise pending.with_traceback(raw["pending_trace"])
+    raise pending
+
+
+class BatchResult:
+    """What pardel.solve_batch returned: results (a Result per problem, in order; len() and
+    indexing reach them too), and over the batch: status (array of str), converged (array of
+    bool), iterations, residual, action and cost (arrays), t and q (arrays of shape (B, N+1) and
+    (B, N+1, dim); NaN rows for a problem whose trajectory is on another grid), threads (problems
+    solved at once) and wall_seconds. Pickles whole."""
+
+    results: List[Result]
+    status: np.ndarray
+    converged: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    action: np.ndarray
+    cost: np.ndarray
+    t: np.ndarray
+    q: np.ndarray
+    threads: int
+    wall_seconds: float
+
+    def __init__(self, raw: Dict[str, Any], model_coords: Sequence[str]) -> None:
+        self.results = [Result(r, model_coords) for r in raw["results"]]
+        self.threads = raw["threads"]
+        self.wall_seconds = raw["wall_seconds"]
+        self.status = np.array([r.status for r in self.results], dtype=object)
+        self.converged = np.array([r.converged for r in self.results], dtype=bool)
+        self.iterations = np.array([r.iterations for r in self.results], dtype=np.int64)
+
+        def numbers(name):
+            return np.array([np.nan if getattr(r, name) is None else getattr(r, name) for r in self.results],
+                            dtype=float)
+
+        self.residual, self.action, self.cost = numbers("residual"), numbers("action"), numbers("cost")
+        shape = max((r.q.shape for r in self.results), key=lambda s: s[0], default=(0, 0))
+        self.q = np.full((len(self.results),) + shape, np.nan)
+        self.t = np.full((len(self.results), shape[0]), np.nan)
+        for i, r in enumerate(self.results):
+            if r.q.shape == shape:
+                self.q[i] = r.q
+                self.t[i] = r.t
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+    def __getitem__(self, i: int) -> Result:
+        return self.results[i]
+
+    def __iter__(self) -> Iterator[Result]:
+        return iter(self.results)
+
+    def __repr__(self) -> str:
+        return "pardel.BatchResult(%d problems, %d converged, %d threads, %.3g s)" % (
+            len(self.results), int(self.converged.sum()), self.threads, self.wall_seconds)
+
+
+class SweepVariant:
+    """One variant of a sweep (a row of variants.csv): id, configuration (its index), values (the
+    varied keys' values as TOML text, by key), guess ("scene", "listed 0", "random 3") and
+    guess_points (the polyline's vertices, [] for the scene's own guess), status, message,
+    iterations, residual, action, cost, seconds, certificate (the point's verdict when converged,
+    else None), solution (the id of the distinct solution it reached, or None), and t, q (its
+    trajectory as arrays when converged, else None: the sweep keeps only converged trajectories)."""
+
+    id: int
+    configuration: int
+    values: Dict[str, str]
+    guess: str
+    guess_points: List[List[float]]
+    status: str
+    message: str
+    iterations: int
+    residual: float
+    action: float
+    cost: float
+    seconds: float
+    certificate: Optional[str]
+    solution: Optional[int]
+    t: Optional[np.ndarray]
+    q: Optional[np.ndarray]
+
+    def __init__(self, raw: Dict[str, Any], values: Dict[str, str]) -> None:
+        for key, value in raw.items():
+            setattr(self, key, value)
+        self.values = values
+        self.guess_points = [list(p) for p in raw["guess_points"]]
+        if self.t is not None:
+            self.t = np.asarray(self.t)
+            self.q = np.asarray(self.q)
+
+    @property
+    def converged(self) -> bool:
+        """Whether the variant's solve converged (status == "converged")."""
+        return self.status == "converged"
+
+    def __repr__(self) -> str:
+        return "pardel.SweepVariant(%d, %s: %s, cost %.10g, solution %s)" % (
+            self.id, self.guess, self.status, self.cost, self.solution)
+
+
+class SweepSolution:
+    """A distinct local solution of a sweep (a row of solutions.csv): id, configuration, rank (1 =
+    lowest cost in its configuration), cost, action, residual, variants (the ids of the variants
+    that reached it), first_variant (the representative), certificate, and t, q (the
+    representative's trajectory, what solution_<id>.csv holds)."""
+
+    id: int
+    configuration: int
+    rank: int
+    cost: float
+    action: float
+    residual: float
+    variants: List[int]
+    first_variant: int
+    certificate: Optional[str]
+    t: Optional[np.ndarray]
+    q: Optional[np.ndarray]
+
+    def __init__(self, raw: Dict[str, Any], representative: SweepVariant) -> None:
+        for key, value in raw.items():
+            setattr(self, key, value)
+        self.variants = list(raw["variants"])
+        self.certificate = representative.certificate
+        self.t = representative.t
+        self.q = representative.q
+
+    def __repr__(self) -> str:
+        return "pardel.SweepSolution(%d: configuration %d, rank %d, cost %.10g, %d variants, %s)" % (
+            self.id, self.configuration, self.rank, self.cost, len(self.variants), self.certificate)
+
+
+class SweepResult:
+    """What pardel.sweep returned: variants (a SweepVariant per variant, in variant order),
+    solutions (a SweepSolution per distinct solution, by configuration then cost), best (the
+    lowest-cost solution or None), summary (the dictionary of sweep.json), and from it
+    configurations, cost_name, converged (how many variants converged), failures (counts by
+    status) and wall_seconds; out is the folder the files were written to, or None."""
+
+    variants: List[SweepVariant]
+    solutions: List[SweepSolution]
+    best: Optional[SweepSolution]
+    summary: Dict[str, Any]
+    configurations: int
+    cost_name: str
+    converged: int
+    failures: Dict[str, int]
+    wall_seconds: float
+    out: Optional[str]
+
+    def __init__(self, raw: Dict[str, Any], out: Optional[str]) -> None:
+        self.summary = json.loads(raw["summary"])
+        s = self.summary
+        axes = list(raw["axes"])
+        values = [dict(zip(axes, v)) for v in raw["configuration_values"]]
+        self.variants = [SweepVariant(v, values[v["configuration"]]) for v in raw["variants"]]
+        self.solutions = [SweepSolution(g, self.variants[g["first_variant"]]) for g in raw["solutions"]]
+        self.best = None if s["best"] is None else self.solutions[s["best"]["id"] - 1]
+        self.configurations = s["configurations"]
+        self.cost_name = s["cost"]["name"]
+        self.converged = s["converged"]
+        self.failures = s["failures"]
+        self.wall_seconds = s["wall_seconds"]
+        self.out = out
+
+    def __repr__(self) -> str:
+        return "pardel.SweepResult(%s: %d variants, %d converged, %d distinct solutions)" % (
+            self.summary["sweep"], len(self.variants), self.converged, len(self.solutions))
