@@ -3,7 +3,6 @@ its Result), BatchResult (pardel.solve_batch), and SweepResult with its SweepVar
 SweepSolution (pardel.sweep)."""
 from __future__ import annotations
 
-import json
 from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -320,7 +319,7 @@ class SweepResult:
     out: Optional[str]
 
     def __init__(self, raw: Dict[str, Any], out: Optional[str]) -> None:
-        self.summary = json.loads(raw["summary"])
+        self.summary = raw["summary"]
         s = self.summary
         axes = list(raw["axes"])
         values = [dict(zip(axes, v)) for v in raw["configuration_values"]]

@@ -2,7 +2,6 @@
 kernels, each checking its arguments and calling the compiled core."""
 from __future__ import annotations
 
-import json
 import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
@@ -333,7 +332,7 @@ def check(scene: Scene, q: Guess = None) -> Dict[str, Any]:
     `pardel check`), the members of pardel::Certificate that --json leaves out."""
     _check_scene("pardel.check", "scene", scene)
     arr, t = _guess_arrays(q, "pardel.check", "q")
-    return json.loads(_pardel.check_scene(scene._core, arr, t))
+    return _pardel.check_scene(scene._core, arr, t)
 
 
 def kernels(model: ModelLike, discretization: str, h: float, t0: float, t1: float, q0: ArrayLike, q1: ArrayLike,

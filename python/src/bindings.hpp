@@ -139,7 +139,7 @@ py::dict resume_checkpoint(const std::string& dir, const py::object& threads, co
                            const py::dict& options);
 py::dict solve_batch_scene(Scene scene, const py::object& q0, const py::object& qN, const py::object& params,
                            const py::object& guess, const py::object& threads);
-std::string check_scene(Scene scene, const py::object& q, const py::object& t);
+py::object check_scene(Scene scene, const py::object& q, const py::object& t);
 py::dict kernels(const ModelHandle& handle, const std::string& discretization, double h, double t0, double t1,
                  const std::vector<double>& q0, const std::vector<double>& q1, const std::vector<double>& params);
 py::dict run_sweep(const std::string& path, const std::vector<std::string>& overrides, int threads,

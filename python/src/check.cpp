@@ -16,10 +16,10 @@
 namespace pardel::python {
 
 /** `pardel check`: the certificate, residual and action at a trajectory (the scene's guess when
- *  q is None), as JSON text in the layout of `pardel check --json` (app::certificate_json, every
+ *  q is None), as a dict in the layout of `pardel check --json` (app::certificate_json, every
  *  member of pardel::Certificate), the certificate dictionary with one more key: report (the text
  *  `pardel check` prints). */
-std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
+py::object check_scene(Scene scene, const py::object& q, const py::object& t) {
   Trajectory trajectory = initial_trajectory(scene, q, t);
   if (!q.is_none()) scene.problem.N = trajectory.N;
   Certificate certificate;
@@ -38,7 +38,7 @@ std::string check_scene(Scene scene, const py::object& q, const py::object& t) {
   nlohmann::ordered_json c = app::certificate_json(certificate, static_cast<std::size_t>(-1));
   c["report"] = certificate.report();
   j["certificate"] = std::move(c);
-  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  return json_value(j);
 }
 
 /** The kernels of a model at one interval (what `pardel kernels` prints). */

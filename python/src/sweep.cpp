@@ -23,7 +23,7 @@ namespace pardel::python {
  * released, while this thread checks Python's signals every 50 ms; a pending exception
  * (KeyboardInterrupt) stops the running solve, the variants not yet started end "interrupted", and
  * it is raised once the results are grouped (and written to `out` when given). The results come
- * back as plain values, sweep.json's dictionary as text, and the trajectories of the converged
+ * back as plain values, sweep.json's dictionary as a dict, and the trajectories of the converged
  * variants as arrays.
  */
 py::dict run_sweep(const std::string& path, const std::vector<std::string>& overrides, int threads,
@@ -86,8 +86,7 @@ py::dict run_sweep(const std::string& path, const std::vector<std::string>& over
     groups.append(d);
   }
   py::dict result;
-  result["summary"] =
-      app::sweep_json(sweep, results, solutions, info).dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+  result["summary"] = json_value(app::sweep_json(sweep, results, solutions, info));
   result["axes"] = [&sweep] {
     std::vector<std::string> keys;
     for (const auto& axis : sweep.axes) keys.push_back(axis.key);
