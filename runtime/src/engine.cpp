@@ -73,6 +73,7 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   ctx.evaluated = Evaluated::nothing;
   ctx.residual = 0;
   ctx.action = 0;
+  ctx.action_known = false;
 }
 
 int knot_node(const Problem& problem, std::size_t a, int N, std::string* message) {
@@ -406,6 +407,7 @@ void update_times(Context& ctx, Positions positions) {
     }
   }
   ctx.evaluated = Evaluated::nothing;
+  ctx.action_known = false;
 }
 
 int first_non_finite_node(const Context& ctx, const std::vector<double>& q) {

@@ -69,6 +69,7 @@ bool Iteration::run_level(bool last) {
         std::swap(ctx_.t, ctx_.t_kept);
         std::swap(ctx_.hk, ctx_.hk_kept);
         ctx_.evaluated = Evaluated::nothing;
+        ctx_.action_known = false;
         partition_.update_times(ctx_, Positions::follow_times);
         if (times_stop_increasing()) return false;
         bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
@@ -106,7 +107,10 @@ bool Iteration::run_level(bool last) {
     if (step_failed(outcome, last, r, target, &settled)) return settled;
     std::swap(ctx_.q, ctx_.q_next);
     partition_.iterate_changed(ctx_);
-    if (!outcome.next_evaluated) ctx_.evaluated = Evaluated::nothing;
+    if (!outcome.next_evaluated) {
+      ctx_.evaluated = Evaluated::nothing;
+      ctx_.action_known = false;
+    }
     ++iteration_;
     ++level_.level_it;
     ++level_.since_clock;
@@ -309,6 +313,7 @@ bool Iteration::non_finite_residual(int node) {
     std::swap(ctx_.q, ctx_.q_next);  // back to the last finite iterate
     partition_.iterate_changed(ctx_);
     ctx_.evaluated = Evaluated::nothing;
+    ctx_.action_known = false;
     ctx_.residual = last_good_residual_;
     msg += "; the last finite iterate (iteration " + std::to_string(iteration_ - 1) + ") is returned";
     --iteration_;
@@ -373,7 +378,7 @@ void Iteration::summarize() {
   s_.N = partition_.global_N(ctx_);
   s_.iterations = iteration_;
   s_.residual = ctx_.residual;
-  s_.action = partition_.action(ctx_);
+  s_.action = ctx_.action_known ? ctx_.action : partition_.action(ctx_);
   s_.final_time = partition_.final_time(ctx_);
   s_.residual_floor = ctx_.residual_floor;
   s_.tolerance = target_residual();

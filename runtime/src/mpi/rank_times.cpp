@@ -149,6 +149,7 @@ void update_times_distributed(Local& local, Positions positions) {
     ctx.hk[jj] = ctx.clock == ClockMode::free_final_time ? hs : ctx.t[jj + 1] - ctx.t[jj];
   }
   ctx.evaluated = Evaluated::nothing;
+  ctx.action_known = false;
 }
 
 }  // namespace pardel::mpi::detail
