@@ -10,7 +10,8 @@ pardel: pardel.solve (Newton, rtol 1e-13) on uniform grids N = 2, 4, 8, ... for 
 discretization the model lists; scipy: solve_bvp on the same first-order system at tol = 1e-3 ...
 1e-10 from a 5-node mesh. The error of a solve is the largest |x - x_exact| of the coordinates'
 values over its own nodes (pardel's grid, solve_bvp's final mesh); the time is the wall time of
-the call (the least of `--repeat` calls, one core: OMP_NUM_THREADS=1 is set here); for pardel
+the call (the least of at least `--repeat` calls, repeated until they took 0.2 s, at most 500;
+one core: OMP_NUM_THREADS=1 is set here); for pardel
 also the solve's own wall time (the least Result.wall_seconds of the calls: the solve with its
 error estimate, without the Python call's scene and model set-up).
 Writes docs/images/work_precision.csv and .png and prints one table per problem.
@@ -107,14 +108,20 @@ def problems():
     return out
 
 
-def timed(call, repeat, inner=None):
-    """The least wall time of `repeat` calls, the result of the last call, and the least of
-    inner(result) (the solve's own time) over the calls."""
+def timed(call, repeat, inner=None, min_seconds=0.2, most=500):
+    """The least wall time of at least `repeat` calls, repeated until they took `min_seconds`
+    in all (at most `most` calls: the least time of a sub-millisecond call is stable only over
+    many), the result of the last call, and the least of inner(result) (the solve's own time)
+    over the calls."""
     best, best_inner, result = float("inf"), float("inf"), None
-    for _ in range(repeat):
+    calls, spent = 0, 0.0
+    while calls < repeat or (spent < min_seconds and calls < most):
         start = time.perf_counter()
         result = call()
-        best = min(best, time.perf_counter() - start)
+        took = time.perf_counter() - start
+        best = min(best, took)
+        spent += took
+        calls += 1
         if inner is not None:
             best_inner = min(best_inner, inner(result))
     return best, result, best_inner
