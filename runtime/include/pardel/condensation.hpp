@@ -90,7 +90,11 @@ inline void lu_solve(int n, const double* A, const int* piv, double* b, int stri
 /**
  * Newton's method on dS/dz = 0 from the starting values. Converged when a step changes every
  * entry of z by at most 8 eps times the size of its coordinate (|z_i| and the node values of the
- * same coordinate), or when the steps stop decreasing below 1e-8 of that size (round-off).
+ * same coordinate); when the step that quadratic convergence predicts next is that small (the
+ * largest relative step r_k at most 1e-6 and below the one before, and r_k^3 / r_(k-1)^2 at most
+ * 8 eps: Newton's steps shrink like r_(k+1) = K r_k^2 with K = r_k / r_(k-1)^2), which saves the
+ * evaluation that would only confirm it; or when the steps stop decreasing below 1e-8 of that
+ * size (round-off).
  * @tparam D the dimension of a node point, N the number of coordinates, M = interior values
  */
 template <int D, int N, int M>
@@ -118,6 +122,9 @@ bool solve_interior(const Interval& f, double h, double t0, double t1, const dou
       ratio = size > 0 ? std::fmax(ratio, step / size) : (step > 0 ? std::numeric_limits<double>::infinity() : ratio);
     }
     if (small) return true;
+    if (std::isfinite(previous) && ratio < previous && ratio <= 1e-6 &&
+        ratio * ratio * ratio <= 8 * eps * previous * previous)
+      return true;
     if (ratio >= previous && ratio <= 1e-8) return true;
     previous = ratio;
   }
