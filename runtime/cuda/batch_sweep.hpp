@@ -2,7 +2,8 @@
  * @file batch_sweep.hpp
  * The single-source core of the batched Jacobi and Jacobi-Newton sweeps: one node's update and
  * one problem's decision after a sweep, as PARDEL_HD functions that the device solver
- * (batch_device.cu) runs one node per thread and one problem per thread, and that host_sweeps()
+ * (batch_device.cuh) runs one node at a time per thread and once per problem in the problem's
+ * last block to finish a sweep, and that host_sweeps()
  * below runs in plain loops (the host path, compiled by any C++ compiler and tested on every
  * build). The arithmetic of a node's update and the stopping rules are those of the CPU solver
  * (runtime/src/jacobi.cpp and runtime/src/iteration.cpp) for problems without knots or a clock:
@@ -321,7 +322,7 @@ PARDEL_HD inline void decide(ProblemState<D>& s, const Stats<D>& st, long it, co
  * The host path: B problems of N intervals each (q: two buffers of B (N+1) D values, the first
  * holding the guesses with their boundary values; t, h shared; p: B x np params), swept until
  * every problem has stopped. Returns the sweeps run. The device solver runs the same two
- * functions one node and one problem per thread.
+ * functions on the device (batch_device.cuh).
  */
 template <class Kernel, int D>
 long host_sweeps(int B, int N, double* q0, double* q1, const double* t, const double* h, const double* p, int np,
