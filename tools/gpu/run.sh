@@ -71,9 +71,9 @@ if [ "${PROFILE:-1}" != 0 ]; then
     echo "== Nsight Compute: the sweep kernel (sweeps 3 and 4 of a Zermelo batch of $batch, 0 and 1 of fuel navigation at N = 10^7)"
     mkdir -p "$work/profile"
     timeout 150 "$ncu" -k regex:sweep_kernel --launch-skip 3 --launch-count 4 --section SpeedOfLight --section Occupancy \
-      --section LaunchStats --section MemoryWorkloadAnalysis \
+      --section LaunchStats --section MemoryWorkloadAnalysis --section WarpStateStats --section SchedulerStats \
       "$bin/bench_device" --out "$work/profile" --profile 1 --batch "$batch" >"$out/ncu.txt" 2>&1 || echo "ncu ended with $?"
-    grep -E "sweep_kernel|Duration|Memory Throughput|DRAM Throughput|Compute \(SM\)|Achieved Occupancy|Theoretical Occupancy|Registers Per|Block Limit Registers" "$out/ncu.txt" | head -n 80
+    grep -E "sweep_kernel|Duration|Memory Throughput|DRAM Throughput|Compute \(SM\)|Achieved Occupancy|Theoretical Occupancy|Registers Per|Block Limit Registers|Warp Cycles Per Issued|Issued Warp Per Scheduler|No Eligible|Stall" "$out/ncu.txt" | head -n 100
   else
     echo "== no ncu: no profile"
   fi
