@@ -31,6 +31,17 @@ std::string quoted_alternatives(const std::vector<std::string>& names) {
   return out;
 }
 
+/** The enum-valued key `section.key` of `table`, read by `parse` into `out`; an unknown name is
+ *  refused at its value with the names `names()` lists. */
+template <class E>
+void read_choice(const SceneReader& r, const toml::table* table, const char* section, const char* key,
+                 bool (*parse)(std::string_view, E*), std::vector<std::string> (*names)(), E* out) {
+  const std::string dotted = std::string(section) + "." + key;
+  if (const auto text = r.string(table, key, dotted); text && !parse(*text, out))
+    r.fail(*table->get(key), dotted,
+           fmt::format("unknown {} '{}' (expected {})", key, *text, quoted_alternatives(names())));
+}
+
 bool looks_like_path(const std::string& spec) {
   return spec.find('/') != std::string::npos ||
          (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
@@ -227,31 +238,11 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   if (const auto damping = r.bounded_number(solver, "damping", "solver.damping", "damping")) options.damping = *damping;
   if (const auto m = r.bounded_integer(solver, "newton_substeps", "solver.newton_substeps", "newton_substeps"))
     options.newton_substeps = static_cast<int>(*m);
-  if (const auto shift = r.string(solver, "newton_shift", "solver.newton_shift")) {
-    if (!parse_newton_shift(*shift, &options.newton_shift)) {
-      r.fail(*solver->get("newton_shift"), "solver.newton_shift",
-             fmt::format("unknown newton_shift '{}' (expected {})", *shift, quoted_alternatives(newton_shift_names())));
-    }
-  }
-  if (const auto mode = r.string(solver, "iterative_refinement", "solver.iterative_refinement")) {
-    if (!parse_refinement(*mode, &options.iterative_refinement)) {
-      r.fail(*solver->get("iterative_refinement"), "solver.iterative_refinement",
-             fmt::format("unknown iterative_refinement '{}' (expected {})", *mode,
-                         quoted_alternatives(refinement_names())));
-    }
-  }
-  if (const auto ls = r.string(solver, "linear_solver", "solver.linear_solver")) {
-    if (!parse_linear_solver(*ls, &options.linear_solver)) {
-      r.fail(*solver->get("linear_solver"), "solver.linear_solver",
-             fmt::format("unknown linear_solver '{}' (expected {})", *ls, quoted_alternatives(linear_solver_names())));
-    }
-  }
-  if (const auto device = r.string(solver, "device", "solver.device")) {
-    if (!parse_device(*device, &options.device)) {
-      r.fail(*solver->get("device"), "solver.device",
-             fmt::format("unknown device '{}' (expected {})", *device, quoted_alternatives(device_names())));
-    }
-  }
+  read_choice(r, solver, "solver", "newton_shift", parse_newton_shift, newton_shift_names, &options.newton_shift);
+  read_choice(r, solver, "solver", "iterative_refinement", parse_refinement, refinement_names,
+              &options.iterative_refinement);
+  read_choice(r, solver, "solver", "linear_solver", parse_linear_solver, linear_solver_names, &options.linear_solver);
+  read_choice(r, solver, "solver", "device", parse_device, device_names, &options.device);
   if (const auto threads = r.bounded_integer(solver, "threads", "solver.threads", "threads"))
     options.threads = static_cast<int>(*threads);
   if (const toml::table* refine = r.table(*solver, "refine", "solver.refine")) {
