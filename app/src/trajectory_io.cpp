@@ -7,14 +7,17 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <string_view>
 
 #include "pardel/regular_file.hpp"
 
@@ -28,10 +31,30 @@ std::vector<std::string> state_column_names(const pardel_model& model) {
   return names;
 }
 
+namespace {
+
+/** Appends `value` as format_double writes it, without a temporary string. */
+void append_double(std::string& out, double value) {
+  if (std::isnan(value)) {
+    out += "nan";
+    return;
+  }
+  if (std::isinf(value)) {
+    out += value > 0 ? "inf" : "-inf";
+    return;
+  }
+  // printf's %.17g, which std::to_chars with a precision is specified to match.
+  char digits[32];
+  const auto written = std::to_chars(digits, digits + sizeof digits, value, std::chars_format::general, 17);
+  out.append(digits, written.ptr);
+}
+
+}  // namespace
+
 std::string format_double(double value) {
-  if (std::isnan(value)) return "nan";
-  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  return fmt::format("{:.17g}", value);
+  std::string out;
+  append_double(out, value);
+  return out;
 }
 
 double node_velocity(const Trajectory& trajectory, int k, int i) {
@@ -62,12 +85,23 @@ std::string trajectory_csv(const pardel_model& model, const Trajectory& trajecto
     for (int i = 0; i < nc; ++i) out += "," + std::string(model.coords[i]) + "'";
   }
   out += '\n';
+  const int columns = 2 + dim + (add_velocity ? nc : 0);
+  out.reserve(out.size() + static_cast<std::size_t>(trajectory.N + 1) * static_cast<std::size_t>(columns) * 24);
+  char index[16];
   for (int k = 0; k <= trajectory.N; ++k) {
-    out += std::to_string(k) + "," + format_double(trajectory.t[k]);
+    out.append(index, std::to_chars(index, index + sizeof index, k).ptr);
+    out += ',';
+    append_double(out, trajectory.t[k]);
     const double* q = trajectory.node(k);
-    for (int j = 0; j < dim; ++j) out += "," + format_double(q[j]);
+    for (int j = 0; j < dim; ++j) {
+      out += ',';
+      append_double(out, q[j]);
+    }
     if (add_velocity) {
-      for (int i = 0; i < nc; ++i) out += "," + format_double(node_velocity(trajectory, k, i));
+      for (int i = 0; i < nc; ++i) {
+        out += ',';
+        append_double(out, node_velocity(trajectory, k, i));
+      }
     }
     out += '\n';
   }
@@ -76,29 +110,43 @@ std::string trajectory_csv(const pardel_model& model, const Trajectory& trajecto
 
 namespace {
 
-std::vector<std::string> split_csv_line(const std::string& line, std::vector<int>* columns) {
-  std::vector<std::string> cells;
+/** The cells of one CSV line as views into it, each without its leading spaces and trailing
+ *  spaces and carriage returns, and the 1-based column where each starts; `cells` and `columns`
+ *  are cleared first (their storage is reused from line to line). */
+void split_csv_line(const std::string& line, std::vector<std::string_view>* cells, std::vector<int>* columns) {
+  cells->clear();
+  columns->clear();
+  const std::string_view text(line);
   std::size_t start = 0;
   for (;;) {
-    const std::size_t comma = line.find(',', start);
+    const std::size_t comma = text.find(',', start);
     columns->push_back(static_cast<int>(start) + 1);
-    cells.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
-    if (comma == std::string::npos) break;
+    std::string_view cell = text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+    while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.remove_suffix(1);
+    while (!cell.empty() && cell.front() == ' ') cell.remove_prefix(1);
+    cells->push_back(cell);
+    if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
-  for (auto& cell : cells) {
-    while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.pop_back();
-    while (!cell.empty() && cell.front() == ' ') cell.erase(cell.begin());
-  }
-  return cells;
 }
 
-bool parse_number(const std::string& text, double* value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
+/** Reads a cell that is a number as strtod reads it (the whole cell, in range; a cell that
+ *  underflows or overflows is not a number). `cell` is a view into a NUL-terminated line, and the
+ *  character after it, if any, is a space, a carriage return or a comma. */
+bool parse_number(std::string_view cell, double* value) {
+  if (cell.empty()) return false;
+  // The common case without strtod's cost: the same correctly rounded value where from_chars reads
+  // the whole cell to a normal number or zero; anything else (a leading '+', hexadecimal, a
+  // subnormal value, out of range) is left to strtod.
+  const auto [end, error] = std::from_chars(cell.data(), cell.data() + cell.size(), *value);
+  if (error == std::errc() && end == cell.data() + cell.size() &&
+      (*value == 0 || std::fabs(*value) >= std::numeric_limits<double>::min())) {
+    return true;
+  }
+  char* stop = nullptr;
   errno = 0;
-  *value = std::strtod(text.c_str(), &end);
-  return end == text.c_str() + text.size() && errno != ERANGE;
+  *value = std::strtod(cell.data(), &stop);
+  return stop == cell.data() + cell.size() && errno != ERANGE;
 }
 
 /** The lines of an opened file, read in chunks of 64 KiB; a line is at most kMaxLine bytes and the
@@ -166,8 +214,10 @@ Trajectory read_trajectory_csv(const std::string& path, const pardel_model& mode
   };
   std::string line;
   if (!in->next(&line, 1)) throw fail(1, 1, "empty file; expected a header row k,t,...");
+  std::vector<std::string_view> header_cells;
   std::vector<int> header_cols;
-  const auto header = split_csv_line(line, &header_cols);
+  split_csv_line(line, &header_cells, &header_cols);
+  const std::vector<std::string> header(header_cells.begin(), header_cells.end());
   // The node index and the time are the first columns named k and t; every other column is found
   // by its name, which must be unique: a coordinate named k or t (trajectory_csv writes k,t,k,...)
   // is the second column of that name, and any other repeated name is refused.
@@ -201,11 +251,12 @@ Trajectory read_trajectory_csv(const std::string& path, const pardel_model& mode
   Trajectory trajectory;
   trajectory.dim = model.dim;
   long line_number = 1;
+  std::vector<std::string_view> cells;
+  std::vector<int> cols;
   while (in->next(&line, line_number + 1)) {
     ++line_number;
     if (line.empty() || line == "\r") continue;
-    std::vector<int> cols;
-    const auto cells = split_csv_line(line, &cols);
+    split_csv_line(line, &cells, &cols);
     if (cells.size() != header.size()) {
       throw fail(line_number, 1, fmt::format("{} cells, expected {} as in the header", cells.size(), header.size()));
     }

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -160,6 +163,28 @@ TEST_F(TrajectoryFiles, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,0.5,1\n"), ":3:1: error: 3 cells, expected 4 as in the header");
   EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,1,1,1\n"), ":3:1: error: 2 nodes; a trajectory needs at least 3 (N >= 2)");
   EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,0.5,nan,1\n2,1,1,1\n"), ":3:7: error: column 'x': value nan is not finite");
+  // Out of range as strtod reads it (ERANGE): a subnormal value, an underflow to 0, an overflow.
+  EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,0.5,1e-310,1\n2,1,1,1\n"), ":3:7: error: column 'x': '1e-310' is not a number");
+  EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,0.5,1,1e-400\n2,1,1,1\n"), ":3:9: error: column 'y': '1e-400' is not a number");
+  EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,0.5,1e400,1\n2,1,1,1\n"), ":3:7: error: column 'x': '1e400' is not a number");
+  EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,0.5,1.5e,1\n2,1,1,1\n"), ":3:7: error: column 'x': '1.5e' is not a number");
+  EXPECT_EQ(error("k,t,x,y\n0,0,0,0\n1,0.5,1 2,1\n2,1,1,1\n"), ":3:7: error: column 'x': '1 2' is not a number");
+}
+
+TEST_F(TrajectoryFiles, NumbersAreReadAsStrtodReadsThem) {
+  // Forms std::from_chars does not take and strtod does (a leading '+', a tab, hexadecimal), the
+  // smallest normal number, a negative zero, spaces and a carriage return around the cells.
+  const pardel_model& model = *find_model("fuel_nav");
+  const std::string p = write("forms.csv",
+                              "k , t,x,y\r\n"
+                              "0,0, +1.5 ,\t2\r\n"
+                              "1,0.5,0x1p-3,2.2250738585072014e-308\n"
+                              "+2, 1 ,-0,1E+2\n");
+  const Trajectory read = read_trajectory_csv(p, model);
+  ASSERT_EQ(read.N, 2);
+  EXPECT_EQ(read.t, (std::vector<double>{0, 0.5, 1}));
+  EXPECT_EQ(read.q, (std::vector<double>{1.5, 2, 0.125, 2.2250738585072014e-308, 0, 100}));
+  EXPECT_TRUE(std::signbit(read.q[4]));
 }
 
 TEST_F(TrajectoryFiles, AtomicWriteReplacesAndLeavesNoTemporary) {
@@ -178,6 +203,19 @@ TEST_F(TrajectoryFiles, AtomicWriteReplacesAndLeavesNoTemporary) {
 }
 
 TEST(FormatDouble, SeventeenSignificantDigits) {
+  // The text of printf's %.17g, on values spread over the whole range of doubles.
+  std::uint64_t bits = 0x9E3779B97F4A7C15ull;
+  for (int i = 0; i < 20000; ++i) {
+    bits ^= bits << 13;
+    bits ^= bits >> 7;
+    bits ^= bits << 17;
+    double value;
+    std::memcpy(&value, &bits, sizeof value);
+    if (!std::isfinite(value)) continue;
+    char expected[40];
+    std::snprintf(expected, sizeof expected, "%.17g", value);
+    ASSERT_EQ(format_double(value), expected);
+  }
   EXPECT_EQ(format_double(0.1), "0.10000000000000001");
   EXPECT_EQ(format_double(1.0 / 3.0), "0.33333333333333331");
   EXPECT_EQ(format_double(std::nan("")), "nan");
