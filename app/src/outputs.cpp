@@ -160,6 +160,7 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   j["cost"] = {{"name", cost.name}, {"value", cost.value}, {"definition", cost.definition}};
   j["final_time"] = summary.final_time;
   j["wall_seconds"] = summary.wall_seconds;
+  j["assessment_seconds"] = summary.assessment_seconds;
   j["method"] = to_string(summary.method);
   j["N"] = summary.N;
   j["threads"] = summary.threads;

@@ -34,7 +34,7 @@ class Result:
     empty when not estimated), error_note (how it was made, or "not estimated: " and why),
     extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
     solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
-    wall_seconds, model (the model's name), coords (its coordinate names), stopped_by_callback
+    wall_seconds, assessment_seconds (the point assessment's part of it), model (the model's name), coords (its coordinate names), stopped_by_callback
     (whether on_iteration stopped the solve), checkpoint (the folder of the checkpoint this
     interrupted solve wrote, or None), summary (the whole summary.json dictionary);
     converged (status == "converged") and coordinate(name). A Result pickles whole.
@@ -65,6 +65,7 @@ class Result:
     N: int
     final_time: float
     wall_seconds: float
+    assessment_seconds: float
     model: str
     stopped_by_callback: bool
     checkpoint: Optional[str]
@@ -99,6 +100,7 @@ class Result:
         self.N = s["N"]
         self.final_time = s["final_time"]
         self.wall_seconds = s["wall_seconds"]
+        self.assessment_seconds = s["assessment_seconds"]
         self.model = s["model"]
         self.stopped_by_callback = raw["stopped_by_callback"]
         self.checkpoint = None

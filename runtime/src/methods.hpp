@@ -40,8 +40,9 @@ const MethodRow* method_row(const std::string& name);
 const MethodRow* method_rows_begin();
 const MethodRow* method_rows_end();
 
-/** Newton's own arrays (newton.cpp): copies of the interval arrays, four vectors (right-hand side,
- *  step and two of the secular iteration), the Hessian (memory.cpp). */
+/** Newton's own arrays (newton.cpp): four vectors (right-hand side, step and two of the secular
+ *  iteration) and the Hessian (memory.cpp); not TrialEvaluation's second set of interval arrays,
+ *  which a level takes only from its first refused step on. */
 double newton_bytes(double N, int d, bool cyclic);
 /** The bytes of a BlockTridiagonal Hessian and its factors at N intervals (memory.cpp). */
 double block_tridiagonal_bytes(double N, int d, bool cyclic);

@@ -170,9 +170,13 @@ void assess_point(const Options& options, const OnceFlags& flags, std::unique_pt
     summary.point.note = "not assessed";
   } else if (!detail::point_assessed(summary.termination)) {
     summary.point = detail::not_assessed(summary.termination);
-  } else if (!method->assess(topology.context(), summary.point)) {
-    method.reset();
-    topology.assess(options, summary.point);
+  } else {
+    const auto start = std::chrono::steady_clock::now();
+    if (!method->assess(topology.context(), summary.point)) {
+      method.reset();
+      topology.assess(options, summary.point);
+    }
+    summary.assessment_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 }
 

@@ -36,7 +36,7 @@ class StationaryNewton : public Method_ {
     const std::size_t n = space_.size();
     for (std::vector<double>* v : {&rhs_, &p_, &w_}) assign_within(*v, n, ctx.capacity(n), 0.0);
     ensure_interval_arrays(ctx, Evaluated::full);
-    trial_.size_like(ctx);
+    trial_.begin_level();
   }
 
   int evaluate(Context& ctx) override {
@@ -64,7 +64,7 @@ class StationaryNewton : public Method_ {
     double alpha = 1;  // p_ holds alpha times the Newton direction
     for (int halving = 0; halving <= kMaxHalvings; ++halving) {
       space_.trial_point(ctx, p_.data());
-      trial_.swap_with(ctx);
+      trial_.before_trial(ctx);
       if (space_.evaluate(ctx, ctx.q_next) < 0) {
         const double phi = merit(ctx);
         if (std::isfinite(phi) && phi <= phi0 + kArmijo * alpha * slope) {
@@ -75,7 +75,7 @@ class StationaryNewton : public Method_ {
           return done;
         }
       }
-      trial_.swap_with(ctx);  // back to the evaluation at q
+      trial_.refused(ctx, [&] { space_.evaluate(ctx, ctx.q); });  // back to the evaluation at q
       ctx.residual = r0;
       ctx.action = F0;
       alpha *= 0.5;

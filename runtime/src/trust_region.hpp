@@ -80,10 +80,49 @@ inline StepOutcome newton_stalled(long iteration, double residual, double residu
   return out;
 }
 
-/** A second set of the context's interval arrays: a trial point is evaluated into the context's
- *  set after swapping, and a refused trial swaps the evaluation at q back. */
+/**
+ * Where the evaluation of a trial point goes (trust-region Newton, stationary-newton): into the
+ * context's interval arrays, with the evaluation at q kept in a second set of them while a level's
+ * trials can be refused. The second set is taken only from the first refusal of a level on: until
+ * then a trial is evaluated over the arrays at q, and that refusal evaluates q again (one kernel
+ * pass) and keeps the set for the rest of the level. A level whose steps are all accepted, as the
+ * fine levels of a nested solve are, so never touches it (at N = 2e6 of a 2-D model 300 MB of the
+ * solve's 1.3 GB). Either way the context after a refusal is the same to the bit: the arrays and
+ * residual at q, and the round-off level and per-component sizes of the refused trial's pass.
+ */
 class TrialEvaluation {
  public:
+  /** A new level (or grid): nothing kept yet. */
+  void begin_level() { kept_ = false; }
+
+  /** Before a trial point is evaluated into the context. */
+  void before_trial(Context& ctx) {
+    if (kept_) swap_with(ctx);
+  }
+
+  /** After a refused trial: the evaluation at ctx.q back in the context, by a swap or, the first
+   *  time on a level, by `evaluate_at_q` (the full evaluation and residual pass at ctx.q). */
+  template <class EvaluateAtQ>
+  void refused(Context& ctx, EvaluateAtQ&& evaluate_at_q) {
+    if (kept_) {
+      swap_with(ctx);
+      return;
+    }
+    const double floor = ctx.residual_floor, scale = ctx.residual_scale;
+    comp_residual_ = ctx.comp_residual;
+    comp_scale_ = ctx.comp_scale;
+    comp_hq_ = ctx.comp_hq;
+    evaluate_at_q();
+    ctx.residual_floor = floor;
+    ctx.residual_scale = scale;
+    ctx.comp_residual.swap(comp_residual_);
+    ctx.comp_scale.swap(comp_scale_);
+    ctx.comp_hq.swap(comp_hq_);
+    size_like(ctx);
+    kept_ = true;
+  }
+
+ private:
   /** Sized like the context's arrays (which must hold a full evaluation's sizes). */
   void size_like(const Context& ctx) {
     auto fit = [&ctx](std::vector<double>& mine, const std::vector<double>& theirs) {
@@ -108,8 +147,9 @@ class TrialEvaluation {
     std::swap(ctx.res, res_);
   }
 
- private:
+  bool kept_ = false;  ///< the second set holds the evaluation at q during a trial (swapped in)
   std::vector<double> Ld_, D1_, D2_, D11_, D12_, D22_, res_;
+  std::vector<double> comp_residual_, comp_scale_, comp_hq_;  ///< the refused trial's, across the evaluation at q
 };
 
 
@@ -124,7 +164,7 @@ class TrustRegionNewton : public Method_ {
     const std::size_t n = space_.size();
     for (std::vector<double>* v : {&rhs_, &p_, &u_, &w_}) assign_within(*v, n, ctx.capacity(n), 0.0);
     ensure_interval_arrays(ctx, Evaluated::full);
-    trial_.size_like(ctx);
+    trial_.begin_level();
     delta_ = 0;
     lambda_ = 0;
     assembled_lambda_ = -1;
@@ -211,7 +251,7 @@ class TrustRegionNewton : public Method_ {
       const double sHs = space_.quadratic_form(p_.data()) - assembled_lambda_ * step.norm * step.norm;
       const double pred = -(gs + 0.5 * sHs);
       space_.trial_point(ctx, p_.data());
-      trial_.swap_with(ctx);
+      trial_.before_trial(ctx);
       const int bad = space_.evaluate(ctx, ctx.q_next);
       const double Fn = space_.action(ctx), rn = ctx.residual;
       const bool finite = bad < 0 && std::isfinite(Fn);
@@ -253,7 +293,7 @@ class TrustRegionNewton : public Method_ {
         done.next_evaluated = true;
         return done;
       }
-      trial_.swap_with(ctx);  // restore the evaluation at q
+      trial_.refused(ctx, [&] { space_.evaluate(ctx, ctx.q); });  // the evaluation at q again
       ctx.residual = r0;
       if (!finite) {
         if (nonfinite_trials++ == 0) nonfinite_node = bad;

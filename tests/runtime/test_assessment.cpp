@@ -67,6 +67,29 @@ TEST(Assessment, AMinimumJustBeforeAConjugatePointIsNearlyDegenerate) {
               1e-9 * s.point.soft_motion);
 }
 
+TEST(Assessment, ItsTimeIsPartOfTheSolvesAndZeroWhereNothingWasAssessed) {
+  pardel::Problem p;
+  p.model = &hand::harmonic;
+  p.discretization = &hand::harmonic.discretizations[0];
+  p.params = {1.3};
+  p.T = 2;
+  p.N = 400;
+  p.q0 = {0.3};
+  p.qN = {-0.7};
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  EXPECT_GT(s.assessment_seconds, 0);
+  EXPECT_LT(s.assessment_seconds, s.wall_seconds);
+  pardel::Options one_step;
+  one_step.max_iterations = 1;
+  one_step.method = pardel::Method::jacobi;
+  auto again = pardel::linear_guess(p);
+  const pardel::Summary stopped = pardel::solve(p, one_step, again);
+  ASSERT_EQ(stopped.termination, pardel::Termination::max_iterations) << stopped.brief_report();
+  EXPECT_EQ(stopped.assessment_seconds, 0) << stopped.point.note;
+}
+
 #ifdef PARDEL_HAVE_ASSESSMENT_MODELS
 
 constexpr double kPi = 3.14159265358979323846;

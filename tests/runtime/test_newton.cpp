@@ -12,6 +12,7 @@
 
 #include "hand_models.hpp"
 #include "pardel/pardel.hpp"
+#include "trust_region.hpp"
 
 namespace {
 
@@ -256,5 +257,41 @@ TEST(Newton, FuelOptimalDoesNotStallAtLargeN) {
   }
 }
 #endif
+
+/** A refused trial leaves the context as it was before the trial, to the bit: the interval arrays
+ *  and residual at q, with the refused trial's round-off level and component sizes; the first
+ *  refusal of a level by evaluating q again, the later ones by swapping the kept second set. */
+TEST(TrialEvaluation, ARefusedTrialRestoresTheEvaluationAtQToTheBit) {
+  const auto problem = hand_problem(hand::bratu, 2.0, 1.0, 50, 0.2, -0.1);
+  pardel::detail::Context ctx;
+  std::string error;
+  ASSERT_TRUE(pardel::detail::context_at(problem, pardel::linear_guess(problem), 1, ctx, &error)) << error;
+  pardel::detail::ensure_interval_arrays(ctx, pardel::detail::Evaluated::full);
+  auto evaluate = [&ctx](const std::vector<double>& q) {
+    pardel::detail::eval_full(ctx, q);
+    pardel::detail::compute_residual(ctx);
+  };
+  evaluate(ctx.q);
+  const std::vector<std::vector<double>> at_q = {ctx.Ld, ctx.D1, ctx.D2, ctx.D11, ctx.D12, ctx.D22, ctx.res};
+  pardel::detail::TrialEvaluation trial;
+  trial.begin_level();
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    ctx.q_next = ctx.q;
+    for (int k = 1; k < ctx.N; ++k) ctx.q_next[static_cast<std::size_t>(k)] += 0.3 * (attempt + 1) * std::sin(0.7 * k);
+    trial.before_trial(ctx);
+    evaluate(ctx.q_next);
+    const double floor = ctx.residual_floor, scale = ctx.residual_scale;
+    const std::vector<double> comp_residual = ctx.comp_residual, comp_scale = ctx.comp_scale, comp_hq = ctx.comp_hq;
+    ASSERT_NE(ctx.D11, at_q[3]) << "the trial point has other second derivatives";
+    trial.refused(ctx, [&] { evaluate(ctx.q); });
+    const std::vector<std::vector<double>> now = {ctx.Ld, ctx.D1, ctx.D2, ctx.D11, ctx.D12, ctx.D22, ctx.res};
+    for (std::size_t a = 0; a < at_q.size(); ++a) EXPECT_EQ(now[a], at_q[a]) << "array " << a << ", attempt " << attempt;
+    EXPECT_EQ(ctx.residual_floor, floor);
+    EXPECT_EQ(ctx.residual_scale, scale);
+    EXPECT_EQ(ctx.comp_residual, comp_residual);
+    EXPECT_EQ(ctx.comp_scale, comp_scale);
+    EXPECT_EQ(ctx.comp_hq, comp_hq);
+  }
+}
 
 }  // namespace
