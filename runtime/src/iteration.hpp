@@ -45,6 +45,12 @@ class Partition {
   virtual int global_N(const Context& ctx) const { return ctx.N; }
   /** t_N, the time of the grid's last node (the same on every process). */
   virtual double final_time(const Context& ctx) { return ctx.t.back(); }
+  /** Iterative refinement of ctx.q (iterative_refinement.hpp) where the unknowns' placement has
+   *  it, filling the summary's refinement fields; none by default. */
+  virtual void refine(const Options& options, Summary& summary) {
+    (void)options;
+    (void)summary;
+  }
 };
 
 /** The counters of one grid level (members so that an interruption can capture them). */
@@ -72,6 +78,11 @@ class Iteration {
 
   Context& context() { return ctx_; }
   long iterations() const { return iteration_; }
+  /** Whether the current iterate is the one refined_at_round_off refined (no step since). */
+  bool refined() const { return refined_ && refined_iteration_ == iteration_; }
+  /** What refined_at_round_off did ("" where it did not run or kept no correction), for the
+   *  summary's refinement note once the solve has ended. */
+  const std::string& refined_note() const { return refined_note_; }
 
   // An interrupted solve's state: its counters,
   // history and wall time into `st`; back from it to resume the level (every counter) or for a
@@ -90,6 +101,7 @@ class Iteration {
   bool intermediate_level_settled(bool last, double r, double target, bool* settled);
   bool answer_at_tolerance(bool last, double r, double target, bool* settled);
   bool stalled_at_round_off(double r, double target);
+  bool refined_at_round_off(double r, double target);
   bool times_unsettled(int placements);
   bool times_stop_increasing();
   bool reached_max_iterations(double r, double target);
@@ -133,6 +145,9 @@ class Iteration {
   double best_residual_ = std::numeric_limits<double>::infinity();
   long best_iteration_ = 0;
   bool have_initial_ = false;
+  bool refined_ = false;  ///< refined_at_round_off ran the refinement (once a solve)
+  long refined_iteration_ = -1;  ///< the iteration count when it did
+  std::string refined_note_;
 };
 
 }  // namespace pardel::detail

@@ -241,7 +241,15 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
   };
   const long l = detail::run_levels(levels, first, resume, warm, steps);
   if (l < 0) return finished();
-  if (summary.converged()) topology->refine(options, summary);
+  if (summary.converged() && !driver.refined()) {
+    topology->refine(options, summary);
+    if (!driver.refined_note().empty())
+      summary.refinement_note = driver.refined_note() + (summary.refinement_note.empty()
+                                                              ? std::string()
+                                                              : "; at the converged point: " + summary.refinement_note);
+  } else if (!driver.refined_note().empty()) {
+    summary.refinement_note = driver.refined_note();
+  }
   driver.write_result(trajectory);
   if (summary.termination == Termination::interrupted) {
     driver.capture(summary.state, static_cast<int>(l), trajectory);

@@ -76,7 +76,7 @@ class Topology : public Partition {
   // ---- the converged point
   /** Iterative refinement of a converged solution (iterative_refinement.hpp), where the topology
    *  has it. */
-  virtual void refine(const Options& options, Summary& summary) = 0;
+  void refine(const Options& options, Summary& summary) override = 0;
   /** The point assessment at the context's iterate from a new factorization (the method's storage
    *  released before). Collective. */
   virtual void assess(const Options& options, PointAssessment& out) = 0;

@@ -35,7 +35,8 @@ PROBLEMS = {
         lambda k, t: (cmath.exp(1j * math.pi / 8) ** k * cmath.exp(cmath.exp(1j * math.pi / 8) * t)).real),
 }
 JET_KEYS = ["q", "v", "a", "j"]
-DEFAULT_N = [3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 14, 16, 20, 24, 28, 32, 40, 48, 64, 80, 96, 128, 160, 240, 320, 480, 640]
+DEFAULT_N = [3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 14, 16, 20, 24, 28, 32, 40, 48, 64, 80, 96, 128, 160, 240, 320, 480, 640, 800,
+             1000]
 
 
 def discretizations(build, lag):
