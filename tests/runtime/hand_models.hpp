@@ -5,7 +5,8 @@
  *  - Bratu L = u'^2/2 - lambda exp(u), trapezoid (u'' + lambda e^u = 0);
  *  - forced particle L = x'^2/2 + t x (time-dependent) with clock h (1 + c x^2);
  *  - cubic spline L = |q''|^2/2 (order 2) with the trapezoid(alpha) family of the seed.
- * Each model is a pardel_model as pardel-gen would emit it.
+ * Each model is a pardel_model as pardel-gen would emit it; hand::problem() poses a boundary-value
+ * problem with one of them.
  */
 #ifndef PARDEL_TESTS_RUNTIME_HAND_MODELS_HPP
 #define PARDEL_TESTS_RUNTIME_HAND_MODELS_HPP
@@ -13,6 +14,7 @@
 #include <cmath>
 
 #include "pardel/kernel_abi.h"
+#include "pardel/pardel.hpp"
 
 namespace hand {
 
@@ -212,6 +214,20 @@ inline const pardel_discretization spline_discs[] = {
 inline const pardel_model spline = {PARDEL_KERNEL_ABI_VERSION, "hand_spline", "tests/runtime/hand_models.hpp",
                                     2, 1, 2, spline_coords, 1, spline_params, spline_defaults, 0, nullptr, 1,
                                     spline_discs, nullptr, PARDEL_COST_ACTION};
+
+/** A problem with a one-coordinate model of this file (its first discretization): one parameter,
+ *  t in [0, T] on N intervals, from a to b. */
+inline pardel::Problem problem(const pardel_model& m, double param, double T, int N, double a, double b) {
+  pardel::Problem p;
+  p.model = &m;
+  p.discretization = &m.discretizations[0];
+  p.params = {param};
+  p.T = T;
+  p.N = N;
+  p.q0 = {a};
+  p.qN = {b};
+  return p;
+}
 
 }  // namespace hand
 

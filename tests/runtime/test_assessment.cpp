@@ -68,14 +68,7 @@ TEST(Assessment, AMinimumJustBeforeAConjugatePointIsNearlyDegenerate) {
 }
 
 TEST(Assessment, ItsTimeIsPartOfTheSolvesAndZeroWhereNothingWasAssessed) {
-  pardel::Problem p;
-  p.model = &hand::harmonic;
-  p.discretization = &hand::harmonic.discretizations[0];
-  p.params = {1.3};
-  p.T = 2;
-  p.N = 400;
-  p.q0 = {0.3};
-  p.qN = {-0.7};
+  const pardel::Problem p = hand::problem(hand::harmonic, 1.3, 2, 400, 0.3, -0.7);
   auto tr = pardel::linear_guess(p);
   const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
   ASSERT_TRUE(s.converged()) << s.brief_report();

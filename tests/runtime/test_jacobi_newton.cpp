@@ -16,15 +16,7 @@
 namespace {
 
 pardel::Problem harmonic_problem(double omega, double T, int N, double a, double b) {
-  pardel::Problem p;
-  p.model = &hand::harmonic;
-  p.discretization = pardel::find_discretization(hand::harmonic, "trapezoid");
-  p.params = {omega};
-  p.T = T;
-  p.N = N;
-  p.q0 = {a};
-  p.qN = {b};
-  return p;
+  return hand::problem(hand::harmonic, omega, T, N, a, b);  // its first discretization: trapezoid
 }
 
 /** x_{k+1} = (2 - h^2 w^2) x_k - x_{k-1}: x_k = a cos(k th) + (b - a cos(N th)) sin(k th) / sin(N th). */

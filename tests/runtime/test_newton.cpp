@@ -16,17 +16,6 @@
 
 namespace {
 
-pardel::Problem hand_problem(const pardel_model& m, double param, double T, int N, double a, double b) {
-  pardel::Problem p;
-  p.model = &m;
-  p.discretization = &m.discretizations[0];
-  p.params = {param};
-  p.T = T;
-  p.N = N;
-  p.q0 = {a};
-  p.qN = {b};
-  return p;
-}
 
 /** Bratu: theta = sqrt(2 lambda) cosh(theta/4), lower branch, by Newton from theta = 1. */
 double bratu_theta(double lambda) {
@@ -53,7 +42,7 @@ pardel::Options newton_options(int threads = 1) {
 }
 
 TEST(Newton, HarmonicMatchesExactDiscreteSolution) {
-  const auto problem = hand_problem(hand::harmonic, 1.0, 2.0, 40, 0.3, -0.7);
+  const auto problem = hand::problem(hand::harmonic, 1.0, 2.0, 40, 0.3, -0.7);
   auto traj = pardel::linear_guess(problem);
   auto opt = newton_options();
   opt.tol = 1e-13;
@@ -71,7 +60,7 @@ TEST(Newton, ConvergedMessageSaysWhenTheRoundOffLevelSetsTheTarget) {
   // The harmonic oscillator's discrete solution is known: with the default rtol its DEL equations
   // are resolved to rtol and the message says nothing more; with rtol far below double precision
   // the target is 10x the round-off level, and the message says how little that resolves.
-  const auto problem = hand_problem(hand::harmonic, 1.0, 2.0, 40, 0.3, -0.7);
+  const auto problem = hand::problem(hand::harmonic, 1.0, 2.0, 40, 0.3, -0.7);
   auto traj = pardel::linear_guess(problem);
   const auto plain = pardel::solve(problem, pardel::Options{}, traj);
   ASSERT_TRUE(plain.converged()) << plain.brief_report();
@@ -90,7 +79,7 @@ TEST(Newton, ConvergedMessageSaysWhenTheRoundOffLevelSetsTheTarget) {
 TEST(Newton, BratuMatchesExactSolution) {
   for (double lambda : {1.0, 3.0}) {
     const int N = 200;
-    const auto problem = hand_problem(hand::bratu, lambda, 1.0, N, 0.0, 0.0);
+    const auto problem = hand::problem(hand::bratu, lambda, 1.0, N, 0.0, 0.0);
     auto traj = pardel::linear_guess(problem);
     const auto s = pardel::solve(problem, newton_options(), traj);
     ASSERT_TRUE(s.converged()) << "lambda " << lambda << ": " << s.brief_report();
@@ -105,7 +94,7 @@ TEST(Newton, BratuMatchesExactSolution) {
 
 TEST(Newton, NoConvergenceBeyondBratuFold) {
   // lambda_c ~ 3.5138: no solution exists beyond it.
-  const auto problem = hand_problem(hand::bratu, 4.0, 1.0, 100, 0.0, 0.0);
+  const auto problem = hand::problem(hand::bratu, 4.0, 1.0, 100, 0.0, 0.0);
   auto traj = pardel::linear_guess(problem);
   auto opt = newton_options();
   opt.max_iterations = 2000;
@@ -117,7 +106,7 @@ TEST(Newton, NoConvergenceBeyondBratuFold) {
 
 TEST(Newton, NoConvergenceBeyondTheConjugatePoint) {
   // omega T = 4 > pi: the unique DEL solution is a saddle; the action is unbounded below.
-  const auto problem = hand_problem(hand::harmonic, 1.0, 4.0, 40, 1.0, 1.0);
+  const auto problem = hand::problem(hand::harmonic, 1.0, 4.0, 40, 1.0, 1.0);
   auto traj = pardel::linear_guess(problem);
   const auto s = pardel::solve(problem, newton_options(), traj);
   EXPECT_FALSE(s.converged()) << s.brief_report();
@@ -133,7 +122,7 @@ TEST(Newton, NoConvergenceBeyondTheConjugatePoint) {
 
 TEST(Newton, CyclicReductionAgreesWithLdlt) {
   const int N = 1500;
-  const auto problem = hand_problem(hand::bratu, 2.0, 1.0, N, 0.0, 0.5);
+  const auto problem = hand::problem(hand::bratu, 2.0, 1.0, N, 0.0, 0.5);
   auto a = pardel::linear_guess(problem);
   auto sa = pardel::solve(problem, newton_options(), a);
   auto opt = newton_options();
@@ -147,7 +136,7 @@ TEST(Newton, CyclicReductionAgreesWithLdlt) {
 
 TEST(Newton, BitIdenticalForOneAndTwoThreads) {
   const int N = 3000;
-  const auto problem = hand_problem(hand::bratu, 2.0, 1.0, N, 0.0, 0.5);
+  const auto problem = hand::problem(hand::bratu, 2.0, 1.0, N, 0.0, 0.5);
   for (auto solver : {pardel::LinearSolver::block_ldlt, pardel::LinearSolver::cyclic_reduction}) {
     auto o1 = newton_options(1);
     o1.linear_solver = solver;
@@ -262,7 +251,7 @@ TEST(Newton, FuelOptimalDoesNotStallAtLargeN) {
  *  and residual at q, with the refused trial's round-off level and component sizes; the first
  *  refusal of a level by evaluating q again, the later ones by swapping the kept second set. */
 TEST(TrialEvaluation, ARefusedTrialRestoresTheEvaluationAtQToTheBit) {
-  const auto problem = hand_problem(hand::bratu, 2.0, 1.0, 50, 0.2, -0.1);
+  const auto problem = hand::problem(hand::bratu, 2.0, 1.0, 50, 0.2, -0.1);
   pardel::detail::Context ctx;
   std::string error;
   ASSERT_TRUE(pardel::detail::context_at(problem, pardel::linear_guess(problem), 1, ctx, &error)) << error;
