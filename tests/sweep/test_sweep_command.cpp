@@ -185,8 +185,8 @@ TEST(SweepCommand, NoConvergedVariantExitsWithEight) {
 }
 
 TEST(SweepCommand, SigtermStopsTheSweepAndKeepsWhatWasDone) {
-  // Jacobi-Newton needs some 30 000 sweeps (about a second each here) on this scene: ten variants
-  // take far longer than the two seconds before the signal.
+  // Jacobi-Newton needs some 24 000 sweeps on this scene (0.6 s a variant on the development
+  // machine): ten variants take far longer than the two seconds before the signal.
   const TempDir dir("stop");
   const std::string sweep = dir / "slow.toml";
   std::ofstream(sweep) << "scene = \"" << PARDEL_SCENES_DIR << "/zermelo_1.toml\"\n"
@@ -196,7 +196,10 @@ TEST(SweepCommand, SigtermStopsTheSweepAndKeepsWhatWasDone) {
                        " & pid=$!; sleep 2; kill -TERM $pid; wait $pid)");
   EXPECT_EQ(r.code, 6) << r.err;
   EXPECT_NE(r.err.find("pardel sweep: interrupted"), std::string::npos) << r.err;
-  // The variants started are listed (the last one stopped mid-solve); the others are counted.
+  // The variants started are listed; the others are counted. The signal lands mid-solve (that
+  // variant, the last, is listed interrupted) or after a variant converged, during its error
+  // estimate or point assessment, which it stops while the variant stays converged (a solve of
+  // 0.6 s here spends about a tenth there): then every row is converged.
   const auto rows = lines(slurp(dir / "out/variants.csv"));
   ASSERT_GE(rows.size(), 2u);
   ASSERT_LE(rows.size(), 11u);
@@ -205,9 +208,9 @@ TEST(SweepCommand, SigtermStopsTheSweepAndKeepsWhatWasDone) {
     const bool stopped = rows[i].find(",interrupted,") != std::string::npos;
     interrupted += stopped;
     EXPECT_TRUE(stopped || rows[i].find(",converged,") != std::string::npos) << rows[i];
+    if (stopped) EXPECT_EQ(i + 1, rows.size()) << "only the last variant started can be interrupted";
   }
-  EXPECT_GE(interrupted, 1);
-  EXPECT_NE(rows.back().find(",interrupted,"), std::string::npos) << rows.back();
+  EXPECT_LE(interrupted, 1);
   const auto summary = nlohmann::json::parse(slurp(dir / "out/sweep.json"));
   EXPECT_EQ(summary["failures"]["interrupted"], interrupted);
   EXPECT_EQ(summary["variants"], 10);
