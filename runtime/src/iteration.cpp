@@ -227,11 +227,15 @@ bool Iteration::stalled_at_round_off(double r, double target) {
  *  round-off level but a component above its own target: the rounding of the double residual,
  *  which the Hessian of a model of order >= 2 amplifies like N^(2 order), is what keeps Newton from
  *  that component (an order-4 model at N = 1000 crept 800 iterations and stalled). Iterative
- *  refinement in extended precision (docs/solvers.md) runs there, once a solve; its corrections
+ *  refinement in extended precision (docs/solvers.md) runs there after 10 iterations without
+ *  progress, once a solve; its corrections
  *  kept, the iteration goes on from the refined iterate, which the next pass tests as any other. */
 bool Iteration::refined_at_round_off(double r, double target) {
+  // Only once Newton has stopped gaining there (10 iterations without coming 1% closer to the
+  // test): where its next step resolves the component (min_jerk at N = 2e4), the extended
+  // Hessian's refinement would only add its cost.
   if (refined_ || !whole_system_newton(options_.method) || !(r <= target) || !(r <= 10 * ctx_.residual_floor) ||
-      unresolved_component() < 0)
+      iteration_ - best_iteration_ < 10 || unresolved_component() < 0)
     return false;
   refined_ = true;
   refined_iteration_ = iteration_;
