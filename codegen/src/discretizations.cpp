@@ -204,6 +204,8 @@ DiscretizationSpec make_discretization_spec(const DiscretizationFamily& family, 
     spec.ident += std::string("_") + p.key + "_" + ident;
   }
   spec.consistency_order = family.consistency_order(order, spec.stages);
+  if (p.kind == ParameterKind::none || (!p.required && value == default_parameter(family, order)))
+    spec.bare_name = family.name;
   return spec;
 }
 

@@ -328,6 +328,7 @@ std::string ir_to_json(const ModelIR& ir) {
     disc["name"] = text(d.spec.name);
     disc["ident"] = text(d.spec.ident);
     disc["consistency_order"] = d.spec.consistency_order;
+    disc["bare_name"] = d.spec.bare_name.empty() ? Json(nullptr) : text(d.spec.bare_name);
     disc["interior_dim"] = d.interior_dim;
     disc["kernels"] = Json::array();
     for (const KernelIR& k : d.kernels) disc["kernels"].push_back(kernel_json(k));

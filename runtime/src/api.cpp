@@ -105,15 +105,12 @@ std::string rational_text(std::string_view text) {
 }
 
 /**
- * The canonical spelling of a discretization name for `model`, as pardel-gen writes it: spaces
- * removed, a parameter's value as an exact reduced fraction ("trapezoid(alpha=0.7)" is
- * "trapezoid(alpha=7/10)"), and the defaults of a bare name filled in ("trapezoid" of an
- * order >= 2 model is "trapezoid(alpha=1)", "hermite_gauss" is "hermite_gauss(s=ORDER)").
+ * The canonical spelling of a discretization name, as pardel-gen writes it: spaces removed and a
+ * parameter's value as an exact reduced fraction ("trapezoid(alpha=0.7)" is
+ * "trapezoid(alpha=7/10)"). Bare names are resolved by the model's own bare_name entries.
  */
-std::string canonical_discretization(const pardel_model& model, std::string_view name) {
+std::string canonical_discretization(std::string_view name) {
   std::string key = compact(name);
-  if (model.order >= 2 && key == "trapezoid") return "trapezoid(alpha=1)";
-  if (key == "hermite_gauss") return "hermite_gauss(s=" + std::to_string(model.order) + ")";
   const std::size_t open = key.find('('), eq = key.find('=');
   if (open != std::string::npos && eq != std::string::npos && open < eq && key.back() == ')') {
     const std::string value = rational_text(std::string_view(key).substr(eq + 1, key.size() - eq - 2));
@@ -127,9 +124,12 @@ std::string canonical_discretization(const pardel_model& model, std::string_view
 const pardel_discretization* find_discretization(const pardel_model& model, std::string_view name) {
   for (int i = 0; i < model.ndiscretizations; ++i)
     if (model.discretizations[i].name && name == model.discretizations[i].name) return &model.discretizations[i];
-  const std::string key = canonical_discretization(model, name);
+  const std::string key = canonical_discretization(name);
   for (int i = 0; i < model.ndiscretizations; ++i)
-    if (model.discretizations[i].name && key == canonical_discretization(model, model.discretizations[i].name))
+    if (model.discretizations[i].bare_name && key == model.discretizations[i].bare_name)
+      return &model.discretizations[i];
+  for (int i = 0; i < model.ndiscretizations; ++i)
+    if (model.discretizations[i].name && key == canonical_discretization(model.discretizations[i].name))
       return &model.discretizations[i];
   return nullptr;
 }

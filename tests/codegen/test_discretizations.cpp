@@ -176,22 +176,32 @@ TEST(DiscretizationCatalogue, EachOrderHasOneDefault) {
 TEST(DiscretizationCatalogue, TheRuntimeGivesABareNameTheReadersDefault) {
   for (const DiscretizationFamily& family : pardel_codegen::discretization_catalogue()) {
     for (int order = 1; order <= kMaxOrder; ++order) {
-      if (!family.valid_for(order) || family.parameter.required) continue;
+      if (!family.valid_for(order)) continue;
       const std::string bare = family.name;
-      const std::string canonical = parse(order, bare).discretizations[0].name;
-      // Another discretization of the model: the same family with another parameter, if it has one.
-      const std::string with_other_value = bare + "(" + family.parameter.key + "=" + std::to_string(order + 1) + ")";
-      const std::string other = family.parameter.kind == ParameterKind::none
-                                    ? std::string("nonesuch")
-                                    : parse(order, with_other_value).discretizations[0].name;
+      const bool takes_value = family.parameter.kind != ParameterKind::none;
+      // Another discretization of the model: the same family with a value other than the default.
+      const std::string with_other_value =
+          takes_value ? bare + "(" + family.parameter.key + "=" + std::to_string(order + 1) + ")" : "";
+      const auto other = takes_value ? parse(order, with_other_value).discretizations[0]
+                                     : pardel_codegen::DiscretizationSpec{};
+      EXPECT_TRUE(other.bare_name.empty()) << with_other_value << " at order " << order;
+      if (family.parameter.required) {
+        EXPECT_FALSE(refusal(order, bare).empty()) << bare << " at order " << order;
+        continue;
+      }
+      const auto spec = parse(order, bare).discretizations[0];
+      EXPECT_EQ(spec.bare_name, bare) << "order " << order;
+      // The runtime, given the two as a generated model carries them, finds the reader's default.
       std::vector<pardel_discretization> discs(2);
-      discs[0].name = other.c_str();
-      discs[1].name = canonical.c_str();
+      discs[0].name = takes_value ? other.name.c_str() : "nonesuch";
+      discs[1].name = spec.name.c_str();
+      discs[1].bare_name = spec.bare_name.c_str();
       pardel_model model{};
       model.order = order;
       model.ndiscretizations = 2;
       model.discretizations = discs.data();
       EXPECT_EQ(pardel::find_discretization(model, bare), &discs[1]) << bare << " at order " << order;
+      EXPECT_EQ(pardel::find_discretization(model, spec.name), &discs[1]) << spec.name << " at order " << order;
     }
   }
 }

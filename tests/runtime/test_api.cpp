@@ -184,12 +184,14 @@ TEST(Api, FindDiscretizationByName) {
 }
 
 // A name is found in any spelling pardel-gen accepts in a .lag: the generated names are canonical
-// (exact reduced fractions, defaults filled in).
+// (exact reduced fractions), and a bare name finds the discretization that carries it as its
+// bare_name (the generator's default, tests/codegen/test_discretizations.cpp).
 TEST(Api, FindDiscretizationByAnySpellingOfItsParameter) {
-  const pardel_discretization discs[] = {{"trapezoid(alpha=7/10)", 2, nullptr, nullptr, nullptr, nullptr},
-                                         {"trapezoid(alpha=1)", 2, nullptr, nullptr, nullptr, nullptr},
-                                         {"trapezoid(alpha=-1/3)", 2, nullptr, nullptr, nullptr, nullptr},
-                                         {"hermite_gauss(s=2)", 4, nullptr, nullptr, nullptr, nullptr}};
+  const pardel_discretization discs[] = {
+      {"trapezoid(alpha=7/10)", 2, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr},
+      {"trapezoid(alpha=1)", 2, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "trapezoid"},
+      {"trapezoid(alpha=-1/3)", 2, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr},
+      {"hermite_gauss(s=2)", 4, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "hermite_gauss"}};
   pardel_model m{};
   m.name = "spellings";
   m.order = 2;
@@ -210,6 +212,28 @@ TEST(Api, FindDiscretizationByAnySpellingOfItsParameter) {
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=0.71)"), nullptr);
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=7/0)"), nullptr);
   EXPECT_EQ(pardel::find_discretization(m, "hermite_gauss(s=3)"), nullptr);
+  EXPECT_EQ(pardel::find_discretization(m, "hermite_gauss ( )"), nullptr);
+}
+
+// The bare name is the model's word, not a rule of the runtime's: a model whose only trapezoid
+// carries no bare name is not found by one, and a model may give it to any of its discretizations.
+TEST(Api, ABareNameIsWhatTheModelSaysItIs) {
+  const pardel_discretization discs[] = {
+      {"trapezoid(alpha=1/2)", 2, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr},
+      {"hermite_gauss(s=5)", 10, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "hermite_gauss"}};
+  pardel_model m{};
+  m.name = "own_defaults";
+  m.order = 2;
+  m.ncoords = 1;
+  m.dim = 2;
+  m.ndiscretizations = 2;
+  m.discretizations = discs;
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid"), nullptr);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=1)"), nullptr);
+  EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=0.5)"), &discs[0]);
+  EXPECT_EQ(pardel::find_discretization(m, "hermite_gauss"), &discs[1]);
+  EXPECT_EQ(pardel::find_discretization(m, " hermite_gauss "), &discs[1]);
+  EXPECT_EQ(pardel::find_discretization(m, "hermite_gauss(s=2)"), nullptr);
 }
 
 TEST(Api, SummaryReportsHowTheSolveEnded) {

@@ -26,6 +26,12 @@ struct DiscretizationSpec {
   std::string name;           ///< canonical name: "trapezoid", "trapezoid(alpha=1)", "hermite_gauss(s=3)", ...
   std::string ident;          ///< C-identifier form: "trapezoid", "trapezoid_alpha_1", "hermite_gauss_s_3", ...
   int consistency_order = 2;  ///< order of the discrete Lagrangian
+  /** The family's name when a bare name means this spec for its model (a family without a
+   *  parameter, or the parameter at its default: "hermite_gauss" of "hermite_gauss(s=3)" for an
+   *  order-3 model, "trapezoid" of "trapezoid(alpha=1)" for order 2); empty otherwise. The
+   *  generated model carries it (pardel_discretization::bare_name), so that the runtime resolves
+   *  bare names as the reader does without a table of its own. */
+  std::string bare_name;
 };
 
 /** A named run-time constant. */

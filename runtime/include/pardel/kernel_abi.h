@@ -20,8 +20,9 @@
 #define PARDEL_KERNEL_ABI_H
 
 /* 3: pardel_discretization gained grad_extended (its array's stride changed).
- * 4: and full_extended. */
-#define PARDEL_KERNEL_ABI_VERSION 4
+ * 4: and full_extended.
+ * 5: and bare_name. */
+#define PARDEL_KERNEL_ABI_VERSION 5
 
 /* The qualifier of every generated kernel with double arithmetic only: __host__ __device__ under a
  * CUDA compiler, so that the same generated source runs on the host and on the device (device code
@@ -100,6 +101,11 @@ typedef struct pardel_discretization {
   pardel_extended_grad_kernel grad_extended;
   /** NULL when absent: as grad_extended, and for models of order 1. */
   pardel_extended_full_kernel full_extended;
+  /** The bare name that means this discretization for this model, as the .lag reader reads it:
+   *  "trapezoid" of an order-1 model's "trapezoid" and of an order-2 model's "trapezoid(alpha=1)",
+   *  "hermite_gauss" of "hermite_gauss(s=ORDER)"; NULL where a bare name means another parameter
+   *  or is refused (galerkin_gauss). pardel::find_discretization resolves bare names by it. */
+  const char* bare_name;
 } pardel_discretization;
 
 /** How a model's reported cost is computed from a solution (the .lag's `cost NAME = KIND`). */

@@ -33,7 +33,8 @@ const pardel_model* find_model(std::string_view name);
  * or nullptr. Names are compared in canonical form, so any spelling pardel-gen accepts in a .lag
  * finds the discretization it generated: spaces do not matter, a parameter may be written as a
  * decimal or a fraction ("trapezoid(alpha=0.7)" finds "trapezoid(alpha=7/10)"), and a bare
- * "trapezoid" (order >= 2) or "hermite_gauss" means its default parameter.
+ * name finds the discretization whose pardel_discretization::bare_name it is (its family's
+ * default parameter for the model's order, as the .lag reader gives a bare name).
  */
 const pardel_discretization* find_discretization(const pardel_model& model, std::string_view name);
 
