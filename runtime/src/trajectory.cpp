@@ -86,7 +86,8 @@ Trajectory resample(const Problem& problem, const Trajectory& from, int N) {
   Trajectory tr = empty_for(problem, N);
   const int d = from.dim, M = from.N;
   tr.dim = d;
-  tr.q.assign((static_cast<std::size_t>(N) + 1) * d, 0.0);
+  const std::size_t size = (static_cast<std::size_t>(N) + 1) * static_cast<std::size_t>(d);
+  if (tr.q.size() != size) tr.q.assign(size, 0.0);  // empty_for's zeros otherwise
   const int nc = problem.model ? problem.model->ncoords : d;
   const bool has_derivative = d >= 2 * nc;
   // Old node times (uniform when absent); interpolate in the node parameter s = k/M.
@@ -94,9 +95,21 @@ Trajectory resample(const Problem& problem, const Trajectory& from, int N) {
   for (int k = 0; k <= M; ++k)
     told[static_cast<std::size_t>(k)] =
         from.t.size() == told.size() ? from.t[static_cast<std::size_t>(k)] : problem.t0 + problem.T * k / M;
-  auto slope_fd = [&](int k, int i) {  // d q_i / d s by finite differences of the old nodes
-    const int a = std::max(0, k - 1), b = std::min(M, k + 1);
-    return (from.node(b)[i] - from.node(a)[i]) / (static_cast<double>(b - a) / M);
+  // Without stored derivatives, d q_i / d s at each old node by finite differences of its
+  // neighbours, once per old node (each is the slope of every new node on its two intervals).
+  std::vector<double> slope;
+  if (!has_derivative) {
+    slope.resize((static_cast<std::size_t>(M) + 1) * static_cast<std::size_t>(d));
+    for (int k = 0; k <= M; ++k) {
+      const int a = std::max(0, k - 1), b = std::min(M, k + 1);
+      const double span = static_cast<double>(b - a) / M;
+      for (int i = 0; i < d; ++i)
+        slope[static_cast<std::size_t>(k) * static_cast<std::size_t>(d) + static_cast<std::size_t>(i)] =
+            (from.node(b)[i] - from.node(a)[i]) / span;
+    }
+  }
+  auto slope_fd = [&](int k, int i) {
+    return slope[static_cast<std::size_t>(k) * static_cast<std::size_t>(d) + static_cast<std::size_t>(i)];
   };
   for (int k = 0; k <= N; ++k) {
     const double s = static_cast<double>(k) / N;
