@@ -1,7 +1,8 @@
 /**
  * @file test_trajectory.cpp
  * Initial guesses and resampling: the straight line and the polyline hit the boundary values;
- * resampling reproduces linear data exactly (order 1) and cubic polynomials exactly when
+ * resampling reproduces linear data exactly (order 1), quadratics away from the end intervals (order
+ * 1: central-difference slopes, per coordinate), and cubic polynomials exactly when
  * derivatives are stored (order 2, cubic Hermite), keeps the end times and boundary nodes.
  */
 #include <gtest/gtest.h>
@@ -57,6 +58,38 @@ TEST(Trajectory, ResampleIsExactForLinearDataOfOrderOne) {
   ASSERT_EQ(fine.N, 19);
   for (int k = 0; k <= 19; ++k) EXPECT_NEAR(fine.node(k)[0], 1.0 - 3.0 * k / 19, 1e-14);
   EXPECT_NEAR(fine.t.back(), 3.0, 1e-15);
+}
+
+// Without stored derivatives the slopes are central differences of the old nodes (one-sided at the
+// ends), exact for quadratics: on every old interval away from the ends the cubic Hermite
+// interpolant is the quadratic itself, in each coordinate with its own quadratic.
+TEST(Trajectory, ResampleIsExactForQuadraticsAwayFromTheEndsOfOrderOne) {
+  pardel::Problem p;
+  p.q0 = {0.0, 0.0, 0.0};
+  p.qN = {0.0, 0.0, 0.0};
+  p.t0 = 0.5;
+  p.T = 2;
+  const int M = 9, N = 40;
+  auto f = [](int i, double s) { return (i + 1) * 0.7 - 1.3 * s * (i - 1) + (2.0 - i) * 3.1 * s * s; };
+  pardel::Trajectory coarse;
+  coarse.N = M;
+  coarse.dim = 3;
+  coarse.q.resize(static_cast<std::size_t>(M + 1) * 3);
+  for (int k = 0; k <= M; ++k)
+    for (int i = 0; i < 3; ++i) coarse.node(k)[i] = f(i, static_cast<double>(k) / M);
+  const auto fine = pardel::resample(p, coarse, N);
+  ASSERT_EQ(fine.N, N);
+  int checked = 0;
+  for (int k = 0; k <= N; ++k) {
+    const double s = static_cast<double>(k) / N;
+    if (s * M < 1 || s * M > M - 1) continue;  // the end intervals, with one-sided slopes
+    ++checked;
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(fine.node(k)[i], f(i, s), 1e-13) << "node " << k << " coordinate " << i;
+    EXPECT_NEAR(fine.t[static_cast<std::size_t>(k)], 0.5 + 2 * s, 1e-14);
+  }
+  EXPECT_GT(checked, 30);
+  // At the ends the one-sided slopes are first order: the quadratic term is not reproduced.
+  EXPECT_GT(std::fabs(fine.node(2)[0] - f(0, 2.0 / N)), 1e-6);
 }
 
 TEST(Trajectory, ResampleIsExactForCubicsWithStoredDerivatives) {
