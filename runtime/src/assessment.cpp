@@ -229,11 +229,11 @@ void start_vector(const LanczosOperator& op, int shape, double* v) {
 
 }  // namespace
 
-long fixed_components(const Context& ctx) {
-  const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
-  const std::size_t dz = static_cast<std::size_t>(ctx.dim);
+long fixed_components(const Grid& grid) {
+  const std::size_t n = static_cast<std::size_t>(std::max(grid.N - 1, 0)) * grid.dim;
+  const std::size_t dz = static_cast<std::size_t>(grid.dim);
   long fixed = 0;
-  for (std::size_t i = 0; i < n; ++i) fixed += ctx.is_free[dz + i] ? 0 : 1;
+  for (std::size_t i = 0; i < n; ++i) fixed += grid.is_free[dz + i] ? 0 : 1;
   return fixed;
 }
 

@@ -39,7 +39,7 @@ void assess_minimum(Context& ctx, double lambda_max, const std::function<void(co
 
 /** Fixed components are identity rows of the assembled Hessian: +1 eigenvalues that are not the
  *  action's, taken out of the counts. */
-long fixed_components(const Context& ctx);
+long fixed_components(const Grid& grid);
 
 /** From the inertia in out.positive, negative and zero: a saddle or a degenerate point gets its
  *  kind and note (true); a positive definite Hessian is left to the caller (false). */

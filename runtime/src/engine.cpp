@@ -27,53 +27,63 @@ int resolve_threads(int requested) {
 #endif
 }
 
-void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
+void setup_grid(const Problem& problem, int N, int threads, Grid& grid) {
   const pardel_model& m = *problem.model;
-  ctx.model = problem.model;
-  ctx.disc = problem.discretization;
-  ctx.dim = m.dim;
-  ctx.ncoords = m.ncoords;
-  ctx.order = m.order;
-  ctx.N = N;
-  ctx.threads = threads;
-  ctx.params = problem.params;
-  if (ctx.params.empty() && m.nparams > 0) ctx.params.assign(m.param_defaults, m.param_defaults + m.nparams);
-  ctx.clock = problem.clock;
-  ctx.t0 = problem.t0;
-  ctx.T = problem.T;
+  grid.model = problem.model;
+  grid.disc = problem.discretization;
+  grid.dim = m.dim;
+  grid.ncoords = m.ncoords;
+  grid.order = m.order;
+  grid.N = N;
+  grid.threads = threads;
+  grid.params = problem.params;
+  if (grid.params.empty() && m.nparams > 0) grid.params.assign(m.param_defaults, m.param_defaults + m.nparams);
+  grid.clock = problem.clock;
+  grid.t0 = problem.t0;
+  grid.T = problem.T;
   const std::size_t n1 = static_cast<std::size_t>(N) + 1, d = static_cast<std::size_t>(m.dim);
-  auto fit = [&ctx](auto& v, std::size_t n, auto value) { assign_within(v, n, ctx.capacity(n), value); };
-  fit(ctx.t, n1, 0.0);
-  fit(ctx.hk, static_cast<std::size_t>(N), problem.T / N);
-  for (int k = 0; k <= N; ++k) ctx.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / N;
-  ctx.t[static_cast<std::size_t>(N)] = problem.t0 + problem.T;
+  auto fit = [&grid](auto& v, std::size_t n, auto value) { assign_within(v, n, grid.capacity(n), value); };
+  fit(grid.t, n1, 0.0);
+  fit(grid.hk, static_cast<std::size_t>(N), problem.T / N);
+  for (int k = 0; k <= N; ++k) grid.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / N;
+  grid.t[static_cast<std::size_t>(N)] = problem.t0 + problem.T;
   if (!problem.times.empty() && N == problem.N) {  // a non-uniform grid (Problem::times)
-    for (int k = 0; k <= N; ++k) ctx.t[static_cast<std::size_t>(k)] = problem.times[static_cast<std::size_t>(k)];
-    steps_from_times(ctx);
+    for (int k = 0; k <= N; ++k) grid.t[static_cast<std::size_t>(k)] = problem.times[static_cast<std::size_t>(k)];
+    steps_from_times(grid);
   }
-  fit(ctx.is_free, n1 * d, static_cast<unsigned char>(1));
-  fit(ctx.free_count, n1, m.dim);
-  fit(ctx.q, n1 * d, 0.0);
-  fit(ctx.q_next, n1 * d, 0.0);
+  fit(grid.is_free, n1 * d, static_cast<unsigned char>(1));
+  fit(grid.free_count, n1, m.dim);
+}
+
+void setup_workspace(const Grid& grid, Workspace& work) {
+  const std::size_t n1 = static_cast<std::size_t>(grid.N) + 1, d = static_cast<std::size_t>(grid.dim);
+  auto fit = [&grid](auto& v, std::size_t n, auto value) { assign_within(v, n, grid.capacity(n), value); };
+  fit(work.q, n1 * d, 0.0);
+  fit(work.q_next, n1 * d, 0.0);
   // Interval arrays: allocated by the first evaluation that needs them (ensure_interval_arrays);
   // released here unless a finer level will reuse them.
-  for (std::vector<double>* v : {&ctx.Ld, &ctx.D1, &ctx.D2, &ctx.D11, &ctx.D12, &ctx.D22}) {
-    if (ctx.reserve_N > N)
+  for (std::vector<double>* v : {&work.Ld, &work.D1, &work.D2, &work.D11, &work.D12, &work.D22}) {
+    if (grid.reserve_N > grid.N)
       v->clear();
     else
       std::vector<double>().swap(*v);
   }
-  fit(ctx.res, n1 * d, 0.0);
-  fit(ctx.node_max, n1, 0.0);
-  fit(ctx.node_scale, n1, 0.0);
-  fit(ctx.node_hq, n1, 0.0);
-  ctx.comp_residual.assign(d, 0.0);
-  ctx.comp_scale.assign(d, 0.0);
-  ctx.comp_hq.assign(d, 0.0);
-  ctx.evaluated = Evaluated::nothing;
-  ctx.residual = 0;
-  ctx.action = 0;
-  ctx.action_known = false;
+  fit(work.res, n1 * d, 0.0);
+  fit(work.node_max, n1, 0.0);
+  fit(work.node_scale, n1, 0.0);
+  fit(work.node_hq, n1, 0.0);
+  work.comp_residual.assign(d, 0.0);
+  work.comp_scale.assign(d, 0.0);
+  work.comp_hq.assign(d, 0.0);
+  work.evaluated = Evaluated::nothing;
+  work.residual = 0;
+  work.action = 0;
+  work.action_known = false;
+}
+
+void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
+  setup_grid(problem, N, threads, ctx);
+  setup_workspace(ctx, ctx);
 }
 
 int knot_node(const Problem& problem, std::size_t a, int N, std::string* message) {
@@ -114,24 +124,24 @@ bool apply_constraints(const Problem& problem, Context& ctx, std::string* messag
   return true;
 }
 
-bool constrain_nodes(const Problem& problem, const Context& ctx, int N, int lo, int hi, unsigned char* free, double* q,
+bool constrain_nodes(const Problem& problem, const Grid& grid, int N, int lo, int hi, unsigned char* free, double* q,
                      std::string* message) {
-  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  const std::size_t d = static_cast<std::size_t>(grid.dim);
   auto fix = [&](int k, int from, int to) {
     if (k < lo || k > hi) return;
     for (int i = from; i < to; ++i) free[static_cast<std::size_t>(k - lo) * d + static_cast<std::size_t>(i)] = 0;
   };
-  fix(0, 0, ctx.dim);
-  fix(N, 0, ctx.dim);
+  fix(0, 0, grid.dim);
+  fix(N, 0, grid.dim);
   for (std::size_t a = 0; a < problem.knots.size(); ++a) {
     const Knot& knot = problem.knots[a];
     const int k = knot_node(problem, a, N, message);
     if (k < 0) return false;
     // Order 1: the whole node is fixed; order >= 2: only the coordinates (seed eq2-interpolation).
-    fix(k, 0, ctx.order == 1 ? ctx.dim : ctx.ncoords);
+    fix(k, 0, grid.order == 1 ? grid.dim : grid.ncoords);
     if (k < lo || k > hi) continue;
     double* qk = q + static_cast<std::size_t>(k - lo) * d;
-    for (int i = 0; i < ctx.ncoords; ++i) qk[i] = knot.q[static_cast<std::size_t>(i)];
+    for (int i = 0; i < grid.ncoords; ++i) qk[i] = knot.q[static_cast<std::size_t>(i)];
   }
   return true;
 }
@@ -144,25 +154,25 @@ void place_end_points(const Problem& problem, int N, int lo, int hi, int dim, do
   }
 }
 
-void count_free(Context& ctx) {
-  const std::size_t d = static_cast<std::size_t>(ctx.dim);
-  ctx.free_total = 0;
-  for (std::size_t j = 0; j < ctx.free_count.size(); ++j) {
+void count_free(Grid& grid) {
+  const std::size_t d = static_cast<std::size_t>(grid.dim);
+  grid.free_total = 0;
+  for (std::size_t j = 0; j < grid.free_count.size(); ++j) {
     int count = 0;
-    for (std::size_t i = 0; i < d; ++i) count += ctx.is_free[j * d + i];
-    ctx.free_count[j] = count;
-    ctx.free_total += count;
+    for (std::size_t i = 0; i < d; ++i) count += grid.is_free[j * d + i];
+    grid.free_count[j] = count;
+    grid.free_total += count;
   }
 }
 
-void steps_from_times(Context& ctx) {
-  for (std::size_t k = 0; k < ctx.hk.size(); ++k) ctx.hk[k] = ctx.t[k + 1] - ctx.t[k];
+void steps_from_times(Grid& grid) {
+  for (std::size_t k = 0; k < grid.hk.size(); ++k) grid.hk[k] = grid.t[k + 1] - grid.t[k];
 }
 
-bool take_times(const Problem& problem, const Trajectory& trajectory, Context& ctx) {
-  if (trajectory.t.size() != ctx.t.size()) return false;
-  ctx.t = trajectory.t;
-  if (problem.clock == ClockMode::fixed_total_time) steps_from_times(ctx);
+bool take_times(const Problem& problem, const Trajectory& trajectory, Grid& grid) {
+  if (trajectory.t.size() != grid.t.size()) return false;
+  grid.t = trajectory.t;
+  if (problem.clock == ClockMode::fixed_total_time) steps_from_times(grid);
   return true;
 }
 

@@ -41,7 +41,13 @@ void assign_within(V& v, std::size_t n, std::size_t capacity, const T& value) {
   v.assign(n, value);
 }
 
-struct Context {
+/**
+ * The grid of one level and what the problem fixes on it (Pinocchio's Model): the model and
+ * discretization, sizes, params, node times and steps, and which components are unknowns. Built
+ * by setup_grid (from a problem and N) and then apply_constraints; the solve reads it. Only the
+ * node times change afterwards, and only under a clock (update_times, retiming).
+ */
+struct Grid {
   const pardel_model* model = nullptr;
   const pardel_discretization* disc = nullptr;
   int dim = 0, ncoords = 0, order = 1, N = 0;
@@ -66,6 +72,17 @@ struct Context {
   std::vector<int> free_count;         ///< N+1: free components of each node
   long free_total = 0;
 
+  bool parallel(int n) const { return threads > 1 && n >= kParallelMin; }
+  double h(int k) const { return hk[static_cast<std::size_t>(k)]; }
+  const double* p() const { return params.empty() ? nullptr : params.data(); }
+};
+
+/**
+ * What a solve computes on a grid (Pinocchio's Data): the iterate, the interval arrays at it, the
+ * DEL residual with its round-off level and per-component sizes, the action, and scratch. Sized
+ * for its grid by setup_workspace; the interval arrays by the first evaluation that needs them.
+ */
+struct Workspace {
   std::vector<double> q;       ///< current iterate, (N+1)*dim
   std::vector<double> q_next;  ///< next iterate written by a method
   std::vector<double> q_old;   ///< the iterate before a re-placement of the nodes (fixed_total_time)
@@ -95,17 +112,25 @@ struct Context {
   bool action_known = false;     ///< whether `action` belongs to q
   /** Options::keep_going of the solve, polled by the point assessment (empty: never stopped). */
   std::function<bool()> keep_going;
+};
 
-  bool parallel(int n) const { return threads > 1 && n >= kParallelMin; }
-  double h(int k) const { return hk[static_cast<std::size_t>(k)]; }
+/** A level's solve context: its grid and its workspace, which every method and kernel pass reads
+ *  and writes together; functions that need only one of them take that part. */
+struct Context : Grid, Workspace {
   double* node(std::vector<double>& v, int k) const { return v.data() + static_cast<std::size_t>(k) * dim; }
   const double* node(const std::vector<double>& v, int k) const {
     return v.data() + static_cast<std::size_t>(k) * dim;
   }
-  const double* p() const { return params.empty() ? nullptr : params.data(); }
 };
 
-/** Builds the context for `problem` at N intervals from `trajectory` (resampled by the caller). */
+/** The grid of `problem` at N intervals: sizes, params, uniform node times (or Problem::times at
+ *  its own N), every component free (apply_constraints fixes the constrained ones). */
+void setup_grid(const Problem& problem, int N, int threads, Grid& grid);
+/** The workspace sized for `grid`: iterate and residual arrays zero, interval arrays left for the
+ *  first evaluation (kept allocated when a finer level, grid.reserve_N, will reuse them). */
+void setup_workspace(const Grid& grid, Workspace& work);
+
+/** Builds the context for `problem` at N intervals: setup_grid, then setup_workspace. */
 void setup_context(const Problem& problem, int N, int threads, Context& ctx);
 /** The interior node of knot `a` on a grid of N intervals, or -1 (with `message` naming the knot
  *  and the nearest nodes) when the knot's time is not on one. */
@@ -123,18 +148,18 @@ bool apply_constraints(const Problem& problem, Context& ctx, std::string* messag
  *  all 1 on entry) 0 on the fixed components, the end points and the knots' nodes (all of a node
  *  at order 1, its coordinates at order >= 2), and the knots' coordinates written into `q` (the
  *  same layout); false with `message` for a knot off the grid. */
-bool constrain_nodes(const Problem& problem, const Context& ctx, int N, int lo, int hi, unsigned char* free, double* q,
+bool constrain_nodes(const Problem& problem, const Grid& grid, int N, int lo, int hi, unsigned char* free, double* q,
                      std::string* message);
 /** The problem's end points q0 and qN into `q`, the values of the nodes lo..hi of its grid of N
  *  intervals in node layout, `dim` values a node (where those nodes include node 0 or node N). */
 void place_end_points(const Problem& problem, int N, int lo, int hi, int dim, double* q);
-/** ctx.free_count and ctx.free_total from ctx.is_free. */
-void count_free(Context& ctx);
-/** The steps ctx.hk from the node times ctx.t (a given grid, or the times of fixed_total_time's clock). */
-void steps_from_times(Context& ctx);
-/** The node times of `trajectory` into ctx where it has them for ctx's grid, with the steps from
+/** grid.free_count and grid.free_total from grid.is_free. */
+void count_free(Grid& grid);
+/** The steps grid.hk from the node times grid.t (a given grid, or the times of fixed_total_time's clock). */
+void steps_from_times(Grid& grid);
+/** The node times of `trajectory` into the grid where it has them for it, with the steps from
  *  them under fixed_total_time; whether it had them. */
-bool take_times(const Problem& problem, const Trajectory& trajectory, Context& ctx);
+bool take_times(const Problem& problem, const Trajectory& trajectory, Grid& grid);
 /** A context for the problem at a given trajectory on its grid (its node times under a clock, or
  *  times from the clock when the trajectory has none); false with `error` for an invalid pair. */
 bool context_at(const Problem& problem, const Trajectory& trajectory, int threads, Context& ctx, std::string* error);
