@@ -183,6 +183,19 @@ TEST(Api, FindDiscretizationByName) {
   EXPECT_EQ(pardel::find_discretization(hand::spline, "trapezoid( alpha )"), &hand::spline.discretizations[0]);
 }
 
+/** A one-coordinate order-2 model with the given discretizations and no kernels: what
+ *  find_discretization reads. */
+pardel_model order_two_model(const char* name, const pardel_discretization* discs, int count) {
+  pardel_model m{};
+  m.name = name;
+  m.order = 2;
+  m.ncoords = 1;
+  m.dim = 2;
+  m.ndiscretizations = count;
+  m.discretizations = discs;
+  return m;
+}
+
 // A name is found in any spelling pardel-gen accepts in a .lag: the generated names are canonical
 // (exact reduced fractions), and a bare name finds the discretization that carries it as its
 // bare_name (the generator's default, tests/codegen/test_discretizations.cpp).
@@ -192,13 +205,7 @@ TEST(Api, FindDiscretizationByAnySpellingOfItsParameter) {
       {"trapezoid(alpha=1)", 2, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "trapezoid"},
       {"trapezoid(alpha=-1/3)", 2, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr},
       {"hermite_gauss(s=2)", 4, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "hermite_gauss"}};
-  pardel_model m{};
-  m.name = "spellings";
-  m.order = 2;
-  m.ncoords = 1;
-  m.dim = 2;
-  m.ndiscretizations = 4;
-  m.discretizations = discs;
+  const pardel_model m = order_two_model("spellings", discs, 4);
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=0.7)"), &discs[0]);
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha = 0.70)"), &discs[0]);
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=14/20)"), &discs[0]);
@@ -221,13 +228,7 @@ TEST(Api, ABareNameIsWhatTheModelSaysItIs) {
   const pardel_discretization discs[] = {
       {"trapezoid(alpha=1/2)", 2, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr},
       {"hermite_gauss(s=5)", 10, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "hermite_gauss"}};
-  pardel_model m{};
-  m.name = "own_defaults";
-  m.order = 2;
-  m.ncoords = 1;
-  m.dim = 2;
-  m.ndiscretizations = 2;
-  m.discretizations = discs;
+  const pardel_model m = order_two_model("own_defaults", discs, 2);
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid"), nullptr);
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=1)"), nullptr);
   EXPECT_EQ(pardel::find_discretization(m, "trapezoid(alpha=0.5)"), &discs[0]);
