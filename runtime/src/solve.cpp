@@ -236,7 +236,8 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     // The level's solution on every process: the start of the next level.
     Trajectory solution;
     topology->gather(true, solution);
-    if (flags.coarser_levels && !topology->releases_whole_trajectories()) further = starts.previous();
+    if (flags.coarser_levels && (!topology->releases_whole_trajectories() || topology->holds_result()))
+      further = starts.previous();
     starts.settled(std::move(solution));
   };
   const long l = detail::run_levels(levels, first, resume, warm, steps);
@@ -398,7 +399,8 @@ std::string solved_in(int N, long iterations) {
  *  `coarse` where that grid allows it; appends to `how` how it was had. */
 detail::ThirdLevel third_level(const Problem& problem, const Options& requested, Method method,
                                const SolvedLevels& levels, const Trajectory& coarse, int ratio,
-                               const TopologyFactory& make, Trajectory& solved, std::string& how) {
+                               const TopologyFactory& make, const std::string& no_solve, Trajectory& solved,
+                               std::string& how) {
   detail::ThirdLevel third;
   for (const Trajectory* level : {&levels.below, &levels.further})
     if (level != &coarse && detail::nested_level(problem, coarse, *level, &third.ratio)) {
@@ -406,6 +408,10 @@ detail::ThirdLevel third_level(const Problem& problem, const Options& requested,
       how += "; N = " + std::to_string(level->N) + " is another grid level the solve had solved";
       return third;
     }
+  if (!no_solve.empty()) {
+    third.why_not = no_solve;
+    return third;
+  }
   const Problem coarse_problem = coarser_problem(problem, ratio);
   third.why_not = detail::coarse_grid_refusal(coarse_problem);
   if (!third.why_not.empty()) return third;
@@ -421,25 +427,15 @@ detail::ThirdLevel third_level(const Problem& problem, const Options& requested,
 }
 
 /**
- * The error estimate of a converged solve (Options::error_estimate; docs/solvers.md, "Error
- * estimate"): Richardson against the solve's own coarser grid level where it is nested node for
- * node in the final grid, otherwise against a solve on every other node of the final grid (started
- * from the solution there); checked by the order observed over a third, coarser level
- * (third_level).
+ * The error estimate of a converged solve against its coarse grid: Richardson against the solve's
+ * own coarser grid level where it is nested node for node in the final grid, otherwise (where the
+ * topology makes solves of its own: `no_solve` empty) against a solve on every other node of the
+ * final grid, started from the solution there; checked by the order observed over a third,
+ * coarser level (third_level).
  */
-void estimate_error(const Problem& problem, const Options& requested, const SolvedLevels& levels,
-                    Trajectory& trajectory, Summary& summary, const TopologyFactory& make) {
-  if (!requested.error_estimate) return detail::not_estimated(summary, "switched off (error_estimate = false)");
-  const std::string not_here = make()->error_estimate_refusal();
-  if (!not_here.empty()) return detail::not_estimated(summary, not_here);
-  if (!summary.converged())
-    return detail::not_estimated(summary, std::string("the solve ended ") + to_string(summary.termination));
-  if (problem.N < 4) return detail::not_estimated(summary, "N = " + std::to_string(problem.N) + " is below 4");
-  const auto start = std::chrono::steady_clock::now();
-  auto account = [&] {
-    summary.error_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    summary.wall_seconds += summary.error_seconds;
-  };
+void estimate_against_coarse(const Problem& problem, const Options& requested, const SolvedLevels& levels,
+                             const std::string& no_solve, Trajectory& trajectory, Summary& summary,
+                             const TopologyFactory& make) {
   int ratio = 0;
   std::string how;
   Trajectory solved;
@@ -447,23 +443,43 @@ void estimate_error(const Problem& problem, const Options& requested, const Solv
   if (detail::nested_level(problem, trajectory, levels.below, &ratio)) {
     how = "; N = " + std::to_string(levels.below.N) + " is a grid level the solve had solved to the tolerance";
   } else {
+    if (!no_solve.empty())
+      return detail::not_estimated(summary, "no grid level of the solve lies on every r-th node of N = " +
+                                                std::to_string(problem.N) + ", and " + no_solve);
     const std::string refusal = detail::coarse_grid_refusal(problem);
     if (!refusal.empty()) return detail::not_estimated(summary, refusal);
     const Summary s = solve_every_other_node(problem, trajectory, requested, summary.method, make, solved);
-    if (!s.converged()) {
-      detail::not_estimated(summary, coarse_failure(s, solved.N));
-      return account();
-    }
+    if (!s.converged()) return detail::not_estimated(summary, coarse_failure(s, solved.N));
     coarse = &solved;
     ratio = 2;
     how = "; " + solved_in(solved.N, s.iterations);
   }
   Trajectory third_solved;
   const detail::ThirdLevel third =
-      third_level(problem, requested, summary.method, levels, *coarse, ratio, make, third_solved, how);
+      third_level(problem, requested, summary.method, levels, *coarse, ratio, make, no_solve, third_solved, how);
   detail::richardson(problem, *coarse, ratio, third, requested.extrapolate, trajectory, summary);
   summary.error_note += how;
-  account();
+}
+
+/**
+ * The error estimate of a converged solve (Options::error_estimate; docs/solvers.md, "Error
+ * estimate"), made where the result is held (every process in one, rank 0 over ranks) and shared
+ * with the others; its time is added to wall_seconds. Collective.
+ */
+void estimate_error(const Problem& problem, const Options& requested, const SolvedLevels& levels,
+                    Trajectory& trajectory, Summary& summary, const TopologyFactory& make) {
+  if (!requested.error_estimate) return detail::not_estimated(summary, "switched off (error_estimate = false)");
+  if (!summary.converged())
+    return detail::not_estimated(summary, std::string("the solve ended ") + to_string(summary.termination));
+  if (problem.N < 4) return detail::not_estimated(summary, "N = " + std::to_string(problem.N) + " is below 4");
+  const std::unique_ptr<detail::Topology> topology = make();
+  const std::string no_solve = topology->coarse_solve_refusal();
+  const auto start = std::chrono::steady_clock::now();
+  if (no_solve.empty() || topology->holds_result())
+    estimate_against_coarse(problem, requested, levels, no_solve, trajectory, summary, make);
+  summary.error_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!no_solve.empty()) topology->share_estimate(summary);
+  summary.wall_seconds += summary.error_seconds;
 }
 
 }  // namespace

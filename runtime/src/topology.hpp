@@ -40,8 +40,13 @@ class Topology : public Partition {
   }
   /** The end of a resumed state's refusal when its level does not fit: " is too small for ...". */
   virtual std::string level_misfit() const { return {}; }
-  /** Why the error estimate is not made over this topology (empty: it is). */
-  virtual std::string error_estimate_refusal() const { return {}; }
+  /** Why the error estimate makes no solve of its own over this topology (a coarse grid, a third
+   *  level), empty where it does: the estimate is then made from the solve's own grid levels alone,
+   *  on the process that holds the result, and shared (share_estimate). */
+  virtual std::string coarse_solve_refusal() const { return {}; }
+  /** The summary's error estimate (error_* and extrapolated) of the process that holds the result
+   *  on every process. Collective. */
+  virtual void share_estimate(Summary& summary) { (void)summary; }
 
   // ---- the methods that depend on where the unknowns live (make_method picks among them)
   /** The trust-region Newton over all unknowns of this topology. */

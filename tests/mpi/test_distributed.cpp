@@ -9,7 +9,8 @@
  * rank-order sum, the point assessment (kind, inertia and eigenvalue estimates), refusals (a
  * degenerate Lagrangian with the one-process message), a NaN or an
  * interruption on one rank ending every rank (its iterate not assessed, as in one process), the
- * automatic method's second attempt (one process only, and the summary over ranks says so), and checkpoints: the state of an interrupted solve
+ * automatic method's second attempt (one process only, and the summary over ranks says so), the
+ * error estimate (from the solve's own grid levels over ranks, as in one process), and checkpoints: the state of an interrupted solve
  * over ranks is the one-process state, and resumed over ranks or in one process (so is a
  * one-process state over ranks) it ends as the uninterrupted solve. The
  * acceptance test (LargeGrid.*: pendulum at N = 10^6) runs separately under a ctest label.
@@ -439,6 +440,83 @@ TEST(Levels, AutomaticSequencesGridsAsInOneProcess) {
     std::printf("automatic, N = %d: iterations %ld and %ld, max |q difference| %.3g (bound %.3g)\n", N,
                 b.one.iterations, b.dist.iterations, dq, q_tol);
   }
+}
+
+// The error estimate over ranks is made from the automatic method's own grid levels (N = 12800:
+// its levels 800 and 3200 lie on the final grid's nodes), where the result is held, and shared:
+// the same estimate as one process (its solution agrees to the tolerance), confirmed by the third
+// level, within a factor 3 of the true error against the exact x = A cos t + B sin t, and equal
+// on every rank.
+TEST(ErrorEstimate, OverRanksFromTheSolvesOwnLevels) {
+  const int N = 12800;
+  const double T = 2.5, q0 = 0.3, qN = -0.7;
+  const auto problem = bundled_problem("harmonic", "trapezoid", T, N, {q0}, {qN});
+  pardel::Options options;  // Method::automatic
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  ASSERT_EQ(b.one.termination, pardel::Termination::converged) << b.one.message;
+  ASSERT_EQ(b.dist.termination, pardel::Termination::converged) << b.dist.message;
+  ASSERT_TRUE(std::isfinite(b.dist.error_estimate)) << b.dist.error_note;
+  EXPECT_EQ(b.dist.error_coarse_N, b.one.error_coarse_N);
+  EXPECT_EQ(b.dist.error_coarse_N, N / 4);
+  EXPECT_TRUE(b.dist.error_reliable) << b.dist.error_note;
+  // The estimate is max_k |x_N - x_{N/4}| / (4^2 - 1): it moves by at most (|dx_N| + |dx_{N/4}|) / 15,
+  // where each level's two solutions differ by at most |H^-1|_inf (r_one + r_dist) (their last
+  // residuals there), |H^-1|_inf <= T^2 / (8 h) / (1 - T^2 / pi^2) for this Hessian (as in
+  // Levels.AutomaticSequencesGridsAsInOneProcess).
+  auto last_residual = [](const pardel::Summary& s, int n) {
+    double r = std::numeric_limits<double>::quiet_NaN();
+    for (const pardel::IterationRecord& rec : s.history)
+      if (rec.N == n) r = rec.residual;
+    return r;
+  };
+  auto apart = [&](int n) {
+    return T * T / (8 * (T / n)) / (1 - T * T / (M_PI * M_PI)) * (last_residual(b.one, n) + last_residual(b.dist, n));
+  };
+  const double moved = (apart(N) + apart(N / 4)) / 15;
+  ASSERT_TRUE(std::isfinite(moved));
+  EXPECT_NEAR(b.dist.error_estimate, b.one.error_estimate, moved);
+  ASSERT_EQ(b.dist.error_by_coordinate.size(), 1u);
+  EXPECT_EQ(b.dist.error_by_coordinate[0], b.dist.error_estimate);
+  EXPECT_NE(b.dist.error_note.find("N = 3200 is a grid level the solve had solved"), std::string::npos)
+      << b.dist.error_note;
+  EXPECT_NE(b.dist.error_note.find("N = 800 is another grid level the solve had solved"), std::string::npos)
+      << b.dist.error_note;
+  EXPECT_GT(b.dist.error_seconds, 0);
+  double mine[2] = {b.dist.error_estimate, -b.dist.error_estimate}, all[2] = {0, 0};
+  MPI_Allreduce(mine, all, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  EXPECT_EQ(all[0], -all[1]) << "the estimate differs between ranks";
+  if (world_rank() == 0) {
+    const double B = (qN - q0 * std::cos(T)) / std::sin(T);
+    double truth = 0;
+    for (int k = 0; k <= N; ++k) {
+      const double t = T * k / N;
+      truth = std::max(truth, std::fabs(b.dist_traj.node(k)[0] - (q0 * std::cos(t) + B * std::sin(t))));
+    }
+    EXPECT_GT(b.dist.error_estimate, truth / 3);
+    EXPECT_LT(b.dist.error_estimate, truth * 3);
+    std::printf("estimate over ranks %.4g, one process %.4g (bound on their difference %.3g), true max node error "
+                "%.4g\n",
+                b.dist.error_estimate, b.one.error_estimate, moved, truth);
+  }
+}
+
+// Without a grid level of its own on the final grid's nodes, a solve over ranks is not estimated
+// (the coarse solve that one process makes is not made there), and every rank says why.
+TEST(ErrorEstimate, OverRanksWithoutNestedLevelsSaysWhy) {
+  const auto problem = bundled_problem("harmonic", "trapezoid", 2.0, 40, {0.3}, {-0.7});
+  pardel::Options options;
+  options.method = pardel::Method::newton;
+  options.threads = 1;
+  const Both b = solve_both(problem, options, pardel::linear_guess(problem));
+  ASSERT_EQ(b.dist.termination, pardel::Termination::converged) << b.dist.message;
+  EXPECT_TRUE(std::isfinite(b.one.error_estimate)) << b.one.error_note;
+  EXPECT_TRUE(std::isnan(b.dist.error_estimate));
+  EXPECT_EQ(b.dist.error_coarse_N, 0);
+  EXPECT_NE(b.dist.error_note.find("not estimated: no grid level of the solve lies on every r-th node of N = 40, and "
+                                   "over MPI ranks the estimate uses the solve's own grid levels only"),
+            std::string::npos)
+      << b.dist.error_note;
 }
 
 TEST(Levels, StartAtTheFirstLevelThatFitsTheRanks) {

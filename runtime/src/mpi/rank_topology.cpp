@@ -83,8 +83,27 @@ std::string RankTopology::level_misfit() const {
          " ranks: every rank needs at least 3 nodes (N + 1 >= 3 ranks); resume it on fewer ranks";
 }
 
-std::string RankTopology::error_estimate_refusal() const {
-  return "the error estimate is made in one process only, not over MPI ranks";
+std::string RankTopology::coarse_solve_refusal() const {
+  return "over MPI ranks the estimate uses the solve's own grid levels only (a solve on a coarse grid of its "
+         "own runs in one process)";
+}
+
+void RankTopology::share_estimate(Summary& summary) {
+  const int root = 0;  // holds_result()
+  double reals[3] = {summary.error_estimate, summary.error_observed_order, summary.error_seconds};
+  int ints[4] = {summary.error_coarse_N, summary.error_reliable ? 1 : 0, summary.extrapolated ? 1 : 0,
+                 static_cast<int>(summary.error_by_coordinate.size())};
+  MPI_Bcast(reals, 3, MPI_DOUBLE, root, local_.comm);
+  MPI_Bcast(ints, 4, MPI_INT, root, local_.comm);
+  summary.error_estimate = reals[0];
+  summary.error_observed_order = reals[1];
+  summary.error_seconds = reals[2];
+  summary.error_coarse_N = ints[0];
+  summary.error_reliable = ints[1] != 0;
+  summary.extrapolated = ints[2] != 0;
+  summary.error_by_coordinate.resize(static_cast<std::size_t>(ints[3]));
+  if (ints[3] > 0) MPI_Bcast(summary.error_by_coordinate.data(), ints[3], MPI_DOUBLE, root, local_.comm);
+  broadcast_text(summary.error_note, root, local_.comm);
 }
 
 std::unique_ptr<pardel::detail::Method_> RankTopology::make_newton(const Options& options, int dim) {

@@ -38,7 +38,8 @@ class RankTopology final : public pardel::detail::Topology {
   std::string unsupported(const Problem& problem, const Options& options) const override;
   bool level_fits(int N) const override { return fits_ranks(N, ranks_); }
   std::string level_misfit() const override;
-  std::string error_estimate_refusal() const override;
+  std::string coarse_solve_refusal() const override;
+  void share_estimate(Summary& summary) override;
   std::unique_ptr<pardel::detail::Method_> make_newton(const Options& options, int dim) override;
   std::unique_ptr<pardel::detail::Method_> make_stationary_newton(const Options& options, int dim) override;
   bool set_up(const Problem& problem, int N, int threads, const Trajectory& from, std::string* message) override;
