@@ -237,10 +237,8 @@ std::size_t json_nesting(const std::string& text) {
   return deepest;
 }
 
-}  // namespace
-
-Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
-  const Reader rd(path);
+/** The checkpoint's text parsed as JSON, its format and version checked. */
+json parse_checked(const std::string& text, const Reader& rd) {
   // A checkpoint nests 5 levels deep; far deeper text would exhaust the stack when the body is
   // dumped again for its checksum (200 000 levels crashed pardel), so it is refused before parsing.
   constexpr std::size_t kMaxNesting = 64;
@@ -265,14 +263,22 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
   if (version != Checkpoint::kVersion)
     rd.fail(fmt::format("checkpoint format version {} is not supported (this pardel reads version {})", version,
                         Checkpoint::kVersion));
+  return file;
+}
+
+/** The file's body, its recorded checksum checked against its own. */
+const json& checked_body(const json& file, const Reader& rd) {
   const std::string checksum = rd.text(file, "checksum", "checkpoint");
   const json& body = rd.at(file, "body", "checkpoint");
   const std::string actual = fnv1a_hex(body.dump());
   if (actual != checksum)
     rd.fail(fmt::format("checksum mismatch (recorded {}, computed {}): the file was modified or corrupted", checksum,
                         actual));
+  return body;
+}
 
-  Checkpoint c;
+/** body.scene and body.model into `c`. */
+void read_scene_and_model(const json& body, const Reader& rd, Checkpoint& c) {
   const json& scene = rd.at(body, "scene", "body");
   c.scene_path = rd.text(scene, "path", "scene");
   if (scene.is_object() && scene.contains("path_bytes")) {  // a path that is not UTF-8, byte by byte
@@ -304,7 +310,10 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
     if (c.model_digest.size() != 16 || c.model_digest.find_first_not_of("0123456789abcdef") != std::string::npos)
       rd.fail(fmt::format("key model.digest = \"{}\" is not 16 hex digits", c.model_digest));
   }
+}
 
+/** body.state's counters, residuals, method state and iterate into `c.state` (dim: c.dim). */
+const json& read_state(const json& body, const Reader& rd, Checkpoint& c) {
   const json& st = rd.at(body, "state", "body");
   SolverState& s = c.state;
   const long state_version = rd.integer(st, "version", "state", 0, std::numeric_limits<int>::max());
@@ -348,6 +357,12 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
   if (s.trajectory.q.size() != n1 * static_cast<std::size_t>(c.dim))
     rd.fail(fmt::format("key state.q has {} values; N = {} and dim = {} need {}", s.trajectory.q.size(), s.N, c.dim,
                         n1 * static_cast<std::size_t>(c.dim)));
+  return st;
+}
+
+/** state.history: the records [iteration, N, residual, action, seconds]. */
+void read_history(const json& st, const Reader& rd, SolverState& s) {
+  constexpr long kMaxLong = std::numeric_limits<long>::max();
   const json& history = rd.at(st, "history", "state");
   if (!history.is_array()) rd.fail("key state.history must be an array");
   for (std::size_t i = 0; i < history.size(); ++i) {
@@ -363,22 +378,38 @@ Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
     r.seconds = rd.real(h[4], where + "[4]");
     s.history.push_back(r);
   }
-  // Newton's nested iteration: the previous level's solution (N = 0: none).
+}
+
+/** state.previous_level: Newton's nested iteration, the previous level's solution (N = 0: none). */
+void read_previous_level(const json& st, const Reader& rd, int dim, SolverState& s) {
   const json& previous = rd.at(st, "previous_level", "state");
   s.previous_level.N = static_cast<int>(rd.integer(previous, "N", "state.previous_level", 0, s.N));
   s.previous_level.t = rd.reals(previous, "t", "state.previous_level");
   s.previous_level.q = rd.reals(previous, "q", "state.previous_level");
   if (s.previous_level.N > 0) {
-    s.previous_level.dim = c.dim;
+    s.previous_level.dim = dim;
     const std::size_t p1 = static_cast<std::size_t>(s.previous_level.N) + 1;
     if (s.previous_level.N < 2 || s.previous_level.t.size() != p1 ||
-        s.previous_level.q.size() != p1 * static_cast<std::size_t>(c.dim))
+        s.previous_level.q.size() != p1 * static_cast<std::size_t>(dim))
       rd.fail(fmt::format("key state.previous_level: N = {} does not fit {} node times and {} values",
                           s.previous_level.N, s.previous_level.t.size(), s.previous_level.q.size()));
   } else if (!s.previous_level.t.empty() || !s.previous_level.q.empty()) {
     rd.fail("key state.previous_level: values given for N = 0");
   }
-  s.valid = true;
+}
+
+}  // namespace
+
+Checkpoint parse_checkpoint(const std::string& text, const std::string& path) {
+  const Reader rd(path);
+  const json file = parse_checked(text, rd);
+  const json& body = checked_body(file, rd);
+  Checkpoint c;
+  read_scene_and_model(body, rd, c);
+  const json& st = read_state(body, rd, c);
+  read_history(st, rd, c.state);
+  read_previous_level(st, rd, c.dim, c.state);
+  c.state.valid = true;
   return c;
 }
 

@@ -296,6 +296,89 @@ std::vector<int> fixed_nodes(const Problem& problem) {
   return nodes;
 }
 
+/** The outcome of an adaptive solve whose last grid, N intervals, missed the request: at the
+ *  largest N allowed (`at_max_N`) or after kMaxGrids grids. */
+std::string not_reached(const Summary& summary, int N, const Options& requested, bool at_max_N) {
+  return "accuracy " + number(requested.accuracy) + " not reached: estimate " + number(summary.error_estimate) +
+         (summary.error_reliable ? "" : " (not confirmed by a third grid level)") + " on N = " + std::to_string(N) +
+         ", " +
+         (at_max_N ? "the largest N allowed (accuracy_max_N = " + std::to_string(requested.accuracy_max_N) + ")"
+                   : "after " + std::to_string(kMaxGrids) + " grids");
+}
+
+/** Why an adaptive solve of `problem` with `requested` cannot be made ("" when it can). */
+std::string adaptive_refusal(const Problem& problem, const Options& requested) {
+  std::string error;
+  if (!requested.is_valid(&error)) return error;
+  if (!requested.error_estimate)
+    return "an adaptive grid (accuracy = " + number(requested.accuracy) +
+           ") needs the error estimate (error_estimate = true)";
+  if (problem.clock != ClockMode::none)
+    return "an adaptive grid cannot be combined with a clock (the clock sets the node times)";
+  if (requested.resume_from != nullptr)
+    return "an adaptive solve cannot be resumed from a state: solve again with the same accuracy";
+  return {};
+}
+
+/** The next grid's monitor and size from a solved one (N = 0: no prediction). */
+struct Prediction {
+  std::vector<double> rho;
+  long N = 0;
+};
+
+/**
+ * The local-error density g of the grid of `sol` (local error g h^(p+1) of a step h), the monitor
+ * rho = g^(1/(p+1)), and the N at which the next grid's error is predicted to be kTargetShare *
+ * accuracy: the estimate scaled by the largest error density g h^p, from this grid's to the next
+ * one's, whose steps are h = I / (N rho), I the monitor's integral. The exponent 1/(p+1) (rather
+ * than the 1/p that equalizes g h^p) grades the grid less steeply; it needed fewer nodes on both
+ * problems of tools/benchmarks/adaptive_layer.py.
+ */
+Prediction predict_grid(const Problem& current, const Trajectory& sol, double p, double estimate, double accuracy) {
+  const std::vector<double> density = local_error_density(current, sol, p);
+  Prediction out;
+  if (density.empty() || !std::isfinite(estimate)) return out;
+  std::vector<double>& rho = out.rho;
+  rho.resize(density.size());
+  double largest = 0;
+  for (std::size_t j = 0; j < density.size(); ++j) {
+    largest = std::max(largest, density[j] * std::pow(sol.t[j + 1] - sol.t[j], p));
+    rho[j] = std::pow(density[j], 1 / (p + 1));
+  }
+  interpolate_pairs(sol.t, rho);
+  floor_and_smooth(sol.t, rho, kFloorShare);
+  double integral = 0, worst = 0;
+  for (std::size_t j = 0; j < rho.size(); ++j) {
+    integral += rho[j] * (sol.t[j + 1] - sol.t[j]);
+    worst = std::max(worst, density[j] / std::pow(rho[j], p));
+  }
+  const double n = integral * std::pow(estimate * worst / (largest * kTargetShare * accuracy), 1 / p);
+  if (largest > 0 && std::isfinite(n) && n > 0) out.N = static_cast<long>(std::min(n, 1e9));
+  return out;
+}
+
+/** The node times of the next grid of about N_new intervals (a multiple of kMultiple, at most
+ *  max_N, at least kMultiple per span between fixed nodes), equidistributing `rho` (the predicted
+ *  monitor; null: the solution's own monitor) over the solution `sol` of `current`, with the ends
+ *  and knots on nodes. */
+std::vector<double> place_grid(const Problem& problem, const Problem& current, const Trajectory& sol, double p,
+                               const std::vector<double>* rho, int N_new, int max_N) {
+  N_new = std::min(max_N, std::max(2 * kMultiple, N_new + (kMultiple - N_new % kMultiple) % kMultiple));
+  const std::vector<int> fixed = fixed_nodes(current);
+  N_new = std::max(N_new, kMultiple * static_cast<int>(fixed.size() - 1));
+  std::vector<double> own;
+  if (!rho) {
+    own = monitor(sol, problem.model->ncoords, p);
+    floor_and_smooth(sol.t, own, 1.0);
+    rho = &own;
+  }
+  std::vector<double> times = equidistribute(sol.t, *rho, fixed, N_new);
+  PARDEL_INVARIANT(times.size() >= 3 && times.front() == problem.t0 && times.back() == sol.t.back(),
+                   "the new grid spans the problem's interval");
+  times.back() = problem.t0 + problem.T;
+  return times;
+}
+
 }  // namespace
 
 Summary solve_adaptive(const Problem& problem, const Options& requested, Trajectory& trajectory) {
@@ -308,14 +391,8 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
     summary.grid_note = "not adapted: " + message;
     return summary;
   };
-  std::string error;
-  if (!requested.is_valid(&error)) return refuse(error);
-  if (!requested.error_estimate)
-    return refuse("an adaptive grid (accuracy = " + number(accuracy) + ") needs the error estimate (error_estimate = true)");
-  if (problem.clock != ClockMode::none)
-    return refuse("an adaptive grid cannot be combined with a clock (the clock sets the node times)");
-  if (requested.resume_from != nullptr)
-    return refuse("an adaptive solve cannot be resumed from a state: solve again with the same accuracy");
+  const std::string refusal = adaptive_refusal(problem, requested);
+  if (!refusal.empty()) return refuse(refusal);
   Options options = requested;
   options.accuracy = 0;
   Problem current = problem;
@@ -356,32 +433,8 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       guess = met_solution;
       continue;
     }
-    // The local-error density g of this grid (local error g h^(p+1) of a step h), the monitor
-    // rho = g^(1/(p+1)), and the N at which the next grid's error is predicted to be
-    // kTargetShare * accuracy: the estimate scaled by the largest error density g h^p, from this
-    // grid's to the next one's, whose steps are h = I / (N rho), I the monitor's integral. The
-    // exponent 1/(p+1) (rather than the 1/p that equalizes g h^p) grades the grid less steeply;
-    // it needed fewer nodes on both problems of tools/benchmarks/adaptive_layer.py.
-    const std::vector<double> density = local_error_density(current, guess, p);
-    std::vector<double> rho;
-    long N_predicted = 0;
-    if (!density.empty() && std::isfinite(estimate)) {
-      rho.resize(density.size());
-      double largest = 0;
-      for (std::size_t j = 0; j < density.size(); ++j) {
-        largest = std::max(largest, density[j] * std::pow(guess.t[j + 1] - guess.t[j], p));
-        rho[j] = std::pow(density[j], 1 / (p + 1));
-      }
-      interpolate_pairs(guess.t, rho);
-      floor_and_smooth(guess.t, rho, kFloorShare);
-      double integral = 0, worst = 0;
-      for (std::size_t j = 0; j < rho.size(); ++j) {
-        integral += rho[j] * (guess.t[j + 1] - guess.t[j]);
-        worst = std::max(worst, density[j] / std::pow(rho[j], p));
-      }
-      const double n = integral * std::pow(estimate * worst / (largest * kTargetShare * accuracy), 1 / p);
-      if (largest > 0 && std::isfinite(n) && n > 0) N_predicted = static_cast<long>(std::min(n, 1e9));
-    }
+    const Prediction next = predict_grid(current, guess, p, estimate, accuracy);
+    const long N_predicted = next.N;
     const int max_N = requested.accuracy_max_N - requested.accuracy_max_N % kMultiple;
     int N_new = 0;
     if (met) {
@@ -401,11 +454,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       N_new = static_cast<int>(smaller);
     } else {
       if (current.N >= max_N || round + 1 >= kMaxGrids) {
-        outcome = "accuracy " + number(accuracy) + " not reached: estimate " + number(estimate) +
-                  (summary.error_reliable ? "" : " (not confirmed by a third grid level)") + " on N = " +
-                  std::to_string(current.N) + ", " +
-                  (current.N >= max_N ? "the largest N allowed (accuracy_max_N = " + std::to_string(requested.accuracy_max_N) + ")"
-                                      : "after " + std::to_string(kMaxGrids) + " grids");
+        outcome = not_reached(summary, current.N, requested, current.N >= max_N);
         break;
       }
       shrinking = false;
@@ -417,17 +466,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       growth = std::min(kMaxGrowth, std::max(kMinGrowth, growth));
       N_new = static_cast<int>(std::ceil(current.N * growth));
     }
-    N_new = std::min(max_N, std::max(2 * kMultiple, N_new + (kMultiple - N_new % kMultiple) % kMultiple));
-    const std::vector<int> fixed = fixed_nodes(current);
-    N_new = std::max(N_new, kMultiple * static_cast<int>(fixed.size() - 1));
-    if (N_predicted == 0) {
-      rho = monitor(guess, problem.model->ncoords, p);
-      floor_and_smooth(guess.t, rho, 1.0);
-    }
-    std::vector<double> times = equidistribute(guess.t, rho, fixed, N_new);
-    PARDEL_INVARIANT(times.size() >= 3 && times.front() == problem.t0 && times.back() == guess.t.back(),
-                     "the new grid spans the problem's interval");
-    times.back() = problem.t0 + problem.T;
+    std::vector<double> times = place_grid(problem, current, guess, p, N_predicted > 0 ? &next.rho : nullptr, N_new, max_N);
     guess = interpolate(guess, times);
     current.N = static_cast<int>(times.size()) - 1;
     current.times = std::move(times);

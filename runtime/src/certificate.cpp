@@ -81,113 +81,138 @@ void equilibrate(detail::BlockTridiagonal<D>& H, int d) {
   }
 }
 
+/**
+ * The inertia of the equilibrated Hessian and the spectral radius rho of the Jacobi iteration
+ * matrix J = -D^{-1} C. With every D_k p.d., J is similar to the symmetric M = L^{-1} C L^{-T},
+ * whose spectrum is symmetric about 0 (H is block tridiagonal), so rho = lambda_max(M) and
+ * 1 - rho = lambda_min(I + M) = lambda_min(L^{-1} H L^{-T}): by inverse iteration where H + sigma D
+ * factors for a small shift sigma, by Lanczos on M where it does not, and by the power method on
+ * J^2 where a D_k is not p.d.
+ */
 template <int D>
-void inertia_and_radius(Context& ctx, Certificate& c) {
+class JacobiRadius {
+ public:
   using Mat = Eigen::Matrix<double, D, D>;
   using Vec = Eigen::Matrix<double, D, 1>;
-  detail::BlockTridiagonal<D> H;
-  H.resize(ctx.N, ctx.dim);
-  H.assemble(ctx, 0.0);
-  const int n = H.blocks(), d = ctx.dim;
-  equilibrate(H, d);
-  // The inertia by the block elimination and zero rule of every count (inertia.hpp); the
-  // equilibration by powers of two changes neither H's inertia nor its Jacobi-scaled form.
-  const detail::Inertia in = H.inertia();
-  const long pos = in.positive, neg = in.negative, zero = in.zero;
-  const long fixed = static_cast<long>(n) * d - ctx.free_total;  // identity rows of fixed components
-  c.inertia_positive = pos - fixed;
-  c.inertia_negative = neg;
-  c.inertia_zero = zero;
-  c.free_components = ctx.free_total;
-  c.hessian_positive_definite = neg == 0 && zero == 0;
 
-  // Spectral radius of J = -D^{-1} C. With every D_k p.d., J is similar to the symmetric
-  // M = L^{-1} C L^{-T}, whose spectrum is symmetric about 0 (H is block tridiagonal), so
-  // rho = lambda_max(M) and 1 - rho = lambda_min(I + M) = lambda_min(L^{-1} H L^{-T}).
-  // Constructed in place: a copy of an Eigen::LLT built with a size reads its uninitialized status.
-  std::vector<Eigen::LLT<Mat>> chol;
-  chol.reserve(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) chol.emplace_back(d);
-  bool all_pd = true;
-  for (int i = 0; i < n; ++i) {
-    chol[static_cast<std::size_t>(i)].compute(H.diag(i));
-    if (chol[static_cast<std::size_t>(i)].info() != Eigen::Success) all_pd = false;
+  explicit JacobiRadius(Context& ctx) : ctx_(ctx), d_(ctx.dim) {
+    H_.resize(ctx.N, ctx.dim);
+    H_.assemble(ctx, 0.0);
+    n_ = H_.blocks();
+    len_ = static_cast<std::size_t>(n_) * d_;
+    equilibrate(H_, d_);
   }
-  const std::size_t len = static_cast<std::size_t>(n) * d;
-  if (len == 0) {  // no unknowns: J is empty
-    c.jacobi_one_minus_rho = 1;
-    c.spectral_radius_resolved = true;
-    return;
+
+  void run(Certificate& c) {
+    // The inertia by the block elimination and zero rule of every count (inertia.hpp); the
+    // equilibration by powers of two changes neither H's inertia nor its Jacobi-scaled form.
+    const detail::Inertia in = H_.inertia();
+    const long fixed = static_cast<long>(len_) - ctx_.free_total;  // identity rows of fixed components
+    c.inertia_positive = in.positive - fixed;
+    c.inertia_negative = in.negative;
+    c.inertia_zero = in.zero;
+    c.free_components = ctx_.free_total;
+    c.hessian_positive_definite = in.negative == 0 && in.zero == 0;
+    // Constructed in place: a copy of an Eigen::LLT built with a size reads its uninitialized status.
+    chol_.reserve(static_cast<std::size_t>(n_));
+    for (int i = 0; i < n_; ++i) chol_.emplace_back(d_);
+    bool all_pd = true;
+    for (int i = 0; i < n_; ++i) {
+      chol_[static_cast<std::size_t>(i)].compute(H_.diag(i));
+      if (chol_[static_cast<std::size_t>(i)].info() != Eigen::Success) all_pd = false;
+    }
+    if (len_ == 0) {  // no unknowns: J is empty
+      c.jacobi_one_minus_rho = 1;
+      c.spectral_radius_resolved = true;
+      return;
+    }
+    v_.resize(len_);
+    w_.resize(len_);
+    vprev_.assign(len_, 0.0);
+    z_.resize(len_);
+    unsigned long long seed = 0x9E3779B97F4A7C15ull;
+    for (std::size_t i = 0; i < len_; ++i) {
+      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+      v_[i] = static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5;
+    }
+    double sigma = 0;
+    if (all_pd && shifted_factorization(&sigma))
+      inverse_iteration(sigma, c);
+    else if (all_pd)
+      lanczos_on_m(c);
+    else
+      power_method(c);
   }
-  std::vector<double> v(len), w(len), vprev(len, 0.0), z(len);
-  unsigned long long seed = 0x9E3779B97F4A7C15ull;
-  for (std::size_t i = 0; i < len; ++i) {
-    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-    v[i] = static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5;
+
+ private:
+  Eigen::Map<Vec> blk(std::vector<double>& a, int i) const {
+    return Eigen::Map<Vec>(a.data() + static_cast<std::size_t>(i) * d_, d_);
   }
-  auto blk = [&](std::vector<double>& a, int i) { return Eigen::Map<Vec>(a.data() + static_cast<std::size_t>(i) * d, d); };
-  auto norm = [&](const std::vector<double>& a) {
+  double norm(const std::vector<double>& a) const {
     double s = 0;
     for (double x : a) s += x * x;
     return std::sqrt(s);
-  };
-  auto dot = [&](const std::vector<double>& a, const std::vector<double>& b) {
+  }
+  double dot(const std::vector<double>& a, const std::vector<double>& b) const {
     double s = 0;
-    for (std::size_t i = 0; i < len; ++i) s += a[i] * b[i];
+    for (std::size_t i = 0; i < len_; ++i) s += a[i] * b[i];
     return s;
-  };
-  // The smallest shift sigma (0, then 2^-50 doubling up to 2^-12) for which H + sigma D, i.e. the
-  // diagonal blocks times 1 + sigma, has a block Cholesky factorization. A shift above round-off
-  // is needed only where H has an eigenvalue lambda_min(L^{-1} H L^{-T}) = 1 - rho < 0.
-  double sigma = 0;
-  bool factored = false;
-  if (all_pd) {
+  }
+
+  /** The smallest shift sigma (0, then 2^-50 doubling up to 2^-12) for which H + sigma D, i.e. the
+   *  diagonal blocks times 1 + sigma, has a block Cholesky factorization; false (H restored,
+   *  unshifted) where none does. A shift above round-off is needed only where H has an eigenvalue
+   *  lambda_min(L^{-1} H L^{-T}) = 1 - rho < 0. */
+  bool shifted_factorization(double* sigma) {
+    bool factored = false;
     for (int k = 0; k <= 39 && !factored; ++k) {
       if (k > 0) {
         const double scale = 1 + std::ldexp(1.0, k - 51);
-        sigma = scale - 1;  // exact
+        *sigma = scale - 1;  // exact
         if (k > 1) {  // the unshifted H again: one rounding of each entry
-          H.assemble(ctx, 0.0);
-          equilibrate(H, d);
+          H_.assemble(ctx_, 0.0);
+          equilibrate(H_, d_);
         }
-        for (int i = 0; i < n; ++i) H.diag(i) *= scale;
+        for (int i = 0; i < n_; ++i) H_.diag(i) *= scale;
       }
-      factored = H.factor_ldlt();
+      factored = H_.factor_ldlt();
     }
     if (!factored) {  // restore H for Lanczos
-      H.assemble(ctx, 0.0);
-      equilibrate(H, d);
-      sigma = 0;
+      H_.assemble(ctx_, 0.0);
+      equilibrate(H_, d_);
+      *sigma = 0;
     }
+    return factored;
   }
-  if (factored) {
-    // H + sigma D p.d.: inverse iteration on K = (L^{-1} (H + sigma D) L^{-T})^{-1}, whose largest
-    // eigenvalue is 1 / (1 - rho + sigma) and well separated (the next is 1 / (lambda_2 + sigma)).
-    // theta, the Rayleigh quotient of K, rises to it: 1 / theta - sigma bounds 1 - rho from above.
-    // Round-off level of 1 - rho: entries of H off by a unit in their last place move it by up
-    // to eps |y|^T |H| |y| / y^T D y (y = L^{-T} v the generalized eigenvector, y^T D y = 1);
-    // block elimination over 3d terms a row: the factor 3d.
+
+  /** H + sigma D p.d.: inverse iteration on K = (L^{-1} (H + sigma D) L^{-T})^{-1}, whose largest
+   *  eigenvalue is 1 / (1 - rho + sigma) and well separated (the next is 1 / (lambda_2 + sigma)).
+   *  theta, the Rayleigh quotient of K, rises to it: 1 / theta - sigma bounds 1 - rho from above.
+   *  Round-off level of 1 - rho: entries of H off by a unit in their last place move it by up to
+   *  eps |y|^T |H| |y| / y^T D y (y = L^{-T} v the generalized eigenvector, y^T D y = 1); block
+   *  elimination over 3d terms a row: the factor 3d. */
+  void inverse_iteration(double sigma, Certificate& c) {
     const double eps = std::numeric_limits<double>::epsilon();
-    double nv = norm(v);
-    for (double& x : v) x /= nv;
+    double nv = norm(v_);
+    for (double& x : v_) x /= nv;
     double theta = 0, previous = 0, roundoff = 0;
     for (int j = 0; j < 1000; ++j) {
-      for (int i = 0; i < n; ++i) blk(z, i) = chol[static_cast<std::size_t>(i)].matrixL() * blk(v, i);
-      H.solve_ldlt(z.data(), w.data());
-      for (int i = 0; i < n; ++i) blk(w, i) = chol[static_cast<std::size_t>(i)].matrixU() * blk(w, i).eval();
-      theta = dot(v, w);
-      const double nw = norm(w);
+      for (int i = 0; i < n_; ++i) blk(z_, i) = chol_[static_cast<std::size_t>(i)].matrixL() * blk(v_, i);
+      H_.solve_ldlt(z_.data(), w_.data());
+      for (int i = 0; i < n_; ++i) blk(w_, i) = chol_[static_cast<std::size_t>(i)].matrixU() * blk(w_, i).eval();
+      theta = dot(v_, w_);
+      const double nw = norm(w_);
       if (!(theta > 0) || !std::isfinite(nw)) break;
       // |y|^T |H| |y| at the current vector
-      for (int i = 0; i < n; ++i) blk(z, i) = chol[static_cast<std::size_t>(i)].matrixU().solve(blk(v, i));
+      for (int i = 0; i < n_; ++i) blk(z_, i) = chol_[static_cast<std::size_t>(i)].matrixU().solve(blk(v_, i));
       double abs_form = 0;
-      for (int i = 0; i < n; ++i) {
-        const Vec yi = blk(z, i).cwiseAbs();
-        abs_form += yi.dot(H.diag(i).cwiseAbs() * yi);
-        if (i + 1 < n) abs_form += 2 * yi.dot(H.off(i).cwiseAbs() * blk(z, i + 1).cwiseAbs());
+      for (int i = 0; i < n_; ++i) {
+        const Vec yi = blk(z_, i).cwiseAbs();
+        abs_form += yi.dot(H_.diag(i).cwiseAbs() * yi);
+        if (i + 1 < n_) abs_form += 2 * yi.dot(H_.off(i).cwiseAbs() * blk(z_, i + 1).cwiseAbs());
       }
-      roundoff = 3.0 * d * eps * abs_form / (1 + sigma);
-      for (std::size_t i = 0; i < len; ++i) v[i] = w[i] / nw;
+      roundoff = 3.0 * d_ * eps * abs_form / (1 + sigma);
+      for (std::size_t i = 0; i < len_; ++i) v_[i] = w_[i] / nw;
       // Settled: to 1e-12, or to the round-off level of 1 - rho.
       if (j > 0 && std::fabs(theta - previous) <= std::max(1e-12, roundoff * theta) * theta) {
         c.spectral_radius_converged = true;
@@ -200,28 +225,30 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
     c.jacobi_spectral_radius = 1 - gap;
     c.jacobi_one_minus_rho_roundoff = roundoff;
     c.spectral_radius_resolved = theta > 0 && std::fabs(gap) > roundoff;
-  } else if (all_pd) {
-    // H + 2^-12 D not p.d. (rho > 1 + 2^-12): Lanczos on M.
-    // y = M x: z_j = L_j^{-T} x_j, y_k = L_k^{-1} (C_{k-1}^T z_{k-1} + C_k z_{k+1}).
+  }
+
+  /** H + 2^-12 D not p.d. (rho > 1 + 2^-12): Lanczos on M, y = M x: z_j = L_j^{-T} x_j,
+   *  y_k = L_k^{-1} (C_{k-1}^T z_{k-1} + C_k z_{k+1}). */
+  void lanczos_on_m(Certificate& c) {
     auto apply = [&](std::vector<double>& x, std::vector<double>& y) {
-      for (int i = 0; i < n; ++i) blk(z, i) = chol[static_cast<std::size_t>(i)].matrixU().solve(blk(x, i));
-      for (int i = 0; i < n; ++i) {
-        Vec acc = Vec::Zero(d);
-        if (i > 0) acc.noalias() += H.off(i - 1).transpose() * blk(z, i - 1);
-        if (i + 1 < n) acc.noalias() += H.off(i) * blk(z, i + 1);
-        blk(y, i) = chol[static_cast<std::size_t>(i)].matrixL().solve(acc);
+      for (int i = 0; i < n_; ++i) blk(z_, i) = chol_[static_cast<std::size_t>(i)].matrixU().solve(blk(x, i));
+      for (int i = 0; i < n_; ++i) {
+        Vec acc = Vec::Zero(d_);
+        if (i > 0) acc.noalias() += H_.off(i - 1).transpose() * blk(z_, i - 1);
+        if (i + 1 < n_) acc.noalias() += H_.off(i) * blk(z_, i + 1);
+        blk(y, i) = chol_[static_cast<std::size_t>(i)].matrixL().solve(acc);
       }
     };
-    double nv = norm(v);
-    for (double& x : v) x /= nv;
+    double nv = norm(v_);
+    for (double& x : v_) x /= nv;
     std::vector<double> alpha, beta;
-    const int max_steps = static_cast<int>(std::min<std::size_t>(len, 1000));
+    const int max_steps = static_cast<int>(std::min<std::size_t>(len_, 1000));
     double estimate = 0, previous = -1;
     double b_prev = 0;
     for (int j = 0; j < max_steps; ++j) {
-      apply(v, w);
-      const detail::LanczosStep step = detail::lanczos_recurrence(len, nullptr, vprev.data(), b_prev, v.data(), w.data(),
-                                                                  [](double*, int) {});
+      apply(v_, w_);
+      const detail::LanczosStep step = detail::lanczos_recurrence(len_, nullptr, vprev_.data(), b_prev, v_.data(),
+                                                                  w_.data(), [](double*, int) {});
       const double a = step.alpha, b = std::sqrt(step.norm2);
       alpha.push_back(a);
       const bool breakdown = !(b > 1e-14 * (std::fabs(a) + b_prev + 1e-300));
@@ -234,41 +261,45 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
         es.computeFromTridiagonal(diag, sub.head(std::max(m - 1, 0)), Eigen::EigenvaluesOnly);
         estimate = es.eigenvalues().cwiseAbs().maxCoeff();
         // Converged: settled, an invariant subspace found, or the whole space spanned.
-        if (breakdown || m == static_cast<int>(len) || std::fabs(estimate - previous) <= 1e-12 * estimate) {
+        if (breakdown || m == static_cast<int>(len_) || std::fabs(estimate - previous) <= 1e-12 * estimate) {
           c.spectral_radius_converged = true;
           break;
         }
         previous = estimate;
       }
       beta.push_back(b);
-      for (std::size_t i = 0; i < len; ++i) {
-        vprev[i] = v[i];
-        v[i] = w[i] / b;
+      for (std::size_t i = 0; i < len_; ++i) {
+        vprev_[i] = v_[i];
+        v_[i] = w_[i] / b;
       }
       b_prev = b;
     }
     c.jacobi_spectral_radius = estimate;
     c.jacobi_one_minus_rho = 1 - estimate;
     c.spectral_radius_resolved = true;
-  } else {
+  }
+
+  /** A D_k not p.d.: rho ~ (|J^2 x| / |x|)^(1/2) over normalized iterates (two steps: J's spectrum
+   *  is symmetric), J x through each D_k's LU. */
+  void power_method(Certificate& c) {
     std::vector<Eigen::PartialPivLU<Mat>> lu;
-    for (int i = 0; i < n; ++i) lu.emplace_back(H.diag(i));
+    for (int i = 0; i < n_; ++i) lu.emplace_back(H_.diag(i));
     auto apply = [&](std::vector<double>& x, std::vector<double>& y) {
-      for (int i = 0; i < n; ++i) {
-        Vec acc = Vec::Zero(d);
-        if (i > 0) acc.noalias() += H.off(i - 1).transpose() * blk(x, i - 1);
-        if (i + 1 < n) acc.noalias() += H.off(i) * blk(x, i + 1);
+      for (int i = 0; i < n_; ++i) {
+        Vec acc = Vec::Zero(d_);
+        if (i > 0) acc.noalias() += H_.off(i - 1).transpose() * blk(x, i - 1);
+        if (i + 1 < n_) acc.noalias() += H_.off(i) * blk(x, i + 1);
         blk(y, i) = -lu[static_cast<std::size_t>(i)].solve(acc);
       }
     };
     // rho ~ (|J^2 x| / |x|)^(1/2) over normalized iterates (two steps: J's spectrum is symmetric).
     double estimate = 0, previous = -1;
     for (int j = 0; j < 2000; ++j) {
-      const double nv = norm(v);
-      for (double& x : v) x /= nv;
-      apply(v, w);
-      apply(w, v);
-      estimate = std::sqrt(norm(v));
+      const double nv = norm(v_);
+      for (double& x : v_) x /= nv;
+      apply(v_, w_);
+      apply(w_, v_);
+      estimate = std::sqrt(norm(v_));
       if (!std::isfinite(estimate)) break;
       if (std::fabs(estimate - previous) <= 1e-10 * estimate) {
         c.spectral_radius_converged = true;
@@ -280,7 +311,15 @@ void inertia_and_radius(Context& ctx, Certificate& c) {
     c.jacobi_one_minus_rho = 1 - estimate;
     c.spectral_radius_resolved = true;
   }
-}
+
+  Context& ctx_;
+  const int d_;
+  int n_ = 0;
+  std::size_t len_ = 0;
+  detail::BlockTridiagonal<D> H_;
+  std::vector<Eigen::LLT<Mat>> chol_;
+  std::vector<double> v_, w_, vprev_, z_;
+};
 
 }  // namespace
 
@@ -352,7 +391,7 @@ Certificate certify(const Problem& problem, const Trajectory& trajectory, int th
   c.theorem_holds = c.all_intervals_psd && (c.all_A_pd || c.all_B_pd);
 
   // Not a hot path: one dynamic-size instantiation keeps the build light.
-  inertia_and_radius<Eigen::Dynamic>(ctx, c);
+  JacobiRadius<Eigen::Dynamic>(ctx).run(c);
   // log(rho) as log1p(-(1 - rho)): rho near 1 would cancel the digits of 1 - rho. Where 1 - rho is
   // below its round-off level, it is at most |1 - rho| + that level: a lower bound on the sweeps.
   const double rho = c.jacobi_spectral_radius, gap = c.jacobi_one_minus_rho;
