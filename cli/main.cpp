@@ -127,9 +127,9 @@ struct SolveArgs {
   std::string certificate = "inertia";  ///< "full": also the seed's certificate (pardel check's)
 };
 
-int run_solve_unguarded(const SolveArgs& args) {
-  const bool resume = !args.resume.empty();
-  if (resume) {
+/** Refuses a scene with --resume, a --set that changes a resumed problem, and neither. */
+void check_scene_or_resume(const SolveArgs& args) {
+  if (!args.resume.empty()) {
     if (!args.scene.empty())
       throw UsageError("--resume: give no scene; the solve continues with the scene and overrides recorded in " +
                        (fs::path(args.resume) / checkpoint_file_name()).string());
@@ -142,6 +142,11 @@ int run_solve_unguarded(const SolveArgs& args) {
   } else if (args.scene.empty()) {
     throw UsageError("solve: a scene file is required (or --resume OUTPUT_DIR)");
   }
+}
+
+int run_solve_unguarded(const SolveArgs& args) {
+  check_scene_or_resume(args);
+  const bool resume = !args.resume.empty();
   std::optional<Resumed> resumed;
   if (resume) {
     resumed = resume_scene(args.resume, args.sets, resolve_model_spec, bundled_model_names());
@@ -346,6 +351,36 @@ void prefer_passive_openmp_wait(char** argv) {
   execv("/proc/self/exe", argv);
 }
 
+namespace {
+
+/** The `solve` subcommand with its arguments into `s`. */
+CLI::App* add_solve_command(CLI::App& app, SolveArgs& s) {
+  CLI::App* solve_cmd = app.add_subcommand("solve", "Solve a scene and write trajectory, convergence, summary and plots");
+  solve_cmd->footer(kExitCodesHelp);
+  solve_cmd->add_option("scene", s.scene, "Scene file (TOML); not with --resume");
+  solve_cmd->add_option("--out", s.out, "Output folder (default: [output].dir, else out/<scene-stem>)");
+  solve_cmd->add_option("--set", s.sets, "KEY=VALUE: override a scene key, e.g. solver.method=newton (repeatable)")
+      ->allow_extra_args(false);
+  // Checked as solver.threads is: checked_threads_text, attached in main() with sweep's --threads.
+  solve_cmd->add_option("--threads", s.threads, "Threads (0: all cores); overrides solver.threads");
+  solve_cmd->add_option("--device", s.device, "cpu or cuda: where to solve; overrides solver.device (docs/gpu.md)")
+      ->check(CLI::IsMember(pardel::device_names()));
+  solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
+  solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
+  solve_cmd->add_option("--certificate", s.certificate,
+                        "inertia (default: the point assessment from the solve's factorization) or full (also the "
+                        "interval-by-interval test and the Jacobi spectral radius of pardel check)")
+      ->check(CLI::IsMember({"inertia", "full"}));
+  solve_cmd->add_option("--resume", s.resume,
+                        "Continue the interrupted solve whose outputs (and checkpoint.json) are in this folder; "
+                        "with --set solver.KEY=VALUE, a warm start from its iterate with those solver options");
+  solve_cmd->add_flag("--no-memory-check", s.no_memory_check,
+                      "Solve even when the memory estimate exceeds what the machine has");
+  return solve_cmd;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   prefer_passive_openmp_wait(argv);
 #ifdef PARDEL_HAVE_CUDA
@@ -375,27 +410,7 @@ int main(int argc, char** argv) {
       ->allow_extra_args(false);
 
   SolveArgs s;
-  auto* solve_cmd = app.add_subcommand("solve", "Solve a scene and write trajectory, convergence, summary and plots");
-  solve_cmd->footer(kExitCodesHelp);
-  solve_cmd->add_option("scene", s.scene, "Scene file (TOML); not with --resume");
-  solve_cmd->add_option("--out", s.out, "Output folder (default: [output].dir, else out/<scene-stem>)");
-  solve_cmd->add_option("--set", s.sets, "KEY=VALUE: override a scene key, e.g. solver.method=newton (repeatable)")
-      ->allow_extra_args(false);
-  // Checked as solver.threads is: checked_threads_text, attached below with sweep's --threads.
-  solve_cmd->add_option("--threads", s.threads, "Threads (0: all cores); overrides solver.threads");
-  solve_cmd->add_option("--device", s.device, "cpu or cuda: where to solve; overrides solver.device (docs/gpu.md)")
-      ->check(CLI::IsMember(pardel::device_names()));
-  solve_cmd->add_flag("--quiet", s.quiet, "No progress line and no report on stdout");
-  solve_cmd->add_flag("--no-plot", s.no_plot, "Do not draw trajectory.png and convergence.png");
-  solve_cmd->add_option("--certificate", s.certificate,
-                        "inertia (default: the point assessment from the solve's factorization) or full (also the "
-                        "interval-by-interval test and the Jacobi spectral radius of pardel check)")
-      ->check(CLI::IsMember({"inertia", "full"}));
-  solve_cmd->add_option("--resume", s.resume,
-                        "Continue the interrupted solve whose outputs (and checkpoint.json) are in this folder; "
-                        "with --set solver.KEY=VALUE, a warm start from its iterate with those solver options");
-  solve_cmd->add_flag("--no-memory-check", s.no_memory_check,
-                      "Solve even when the memory estimate exceeds what the machine has");
+  CLI::App* solve_cmd = add_solve_command(app, s);
 
   CheckArgs c;
   auto* check = app.add_subcommand("check", "Print the convergence certificate at the initial guess or a trajectory");
