@@ -152,38 +152,30 @@ bool cuda_supports(const pardel_model& model, const pardel_discretization& discr
   return false;
 }
 
-BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const std::vector<BatchProblem>& problems,
-                              const CudaSettings& settings, CudaBatchTimes* times) {
-  const auto start = std::chrono::steady_clock::now();
-  BatchSummary batch;
-  batch.threads = 1;
-  batch.refusal = options_refusal(base, options);
-  if (batch.refusal.empty() && settings.check_every < 1) batch.refusal = "CudaSettings::check_every must be >= 1";
-  if (batch.refusal.empty() && settings.blocks_per_problem < 0)
-    batch.refusal = "CudaSettings::blocks_per_problem must be >= 0 (0: chosen to fill the device)";
-  const DeviceEntry* entry = nullptr;
-  if (batch.refusal.empty() && !(entry = find_entry(*base.model, *base.discretization)))
-    cuda_supports(*base.model, *base.discretization, &batch.refusal);
-  std::string why;
-  if (batch.refusal.empty() && !cuda_device_available(&why)) batch.refusal = why;
-  if (!batch.refusal.empty()) return batch;
+namespace {
 
+/** Why the device cannot solve this batch ("" when it can), and its entry of the device registry. */
+std::string batch_refusal(const Problem& base, const Options& options, const CudaSettings& settings,
+                          const DeviceEntry** entry) {
+  std::string refusal = options_refusal(base, options);
+  if (refusal.empty() && settings.check_every < 1) refusal = "CudaSettings::check_every must be >= 1";
+  if (refusal.empty() && settings.blocks_per_problem < 0)
+    refusal = "CudaSettings::blocks_per_problem must be >= 0 (0: chosen to fill the device)";
+  if (refusal.empty() && !(*entry = find_entry(*base.model, *base.discretization)))
+    cuda_supports(*base.model, *base.discretization, &refusal);
+  std::string why;
+  if (refusal.empty() && !cuda_device_available(&why)) refusal = why;
+  return refusal;
+}
+
+/** Each problem's guess (with its end points) into q and its params into p, B problems of
+ *  (N + 1) * dim values and nparams values each; a problem that fails validate() gets its
+ *  invalid_input summary in `batch` and invalid[b] = 1 instead. */
+void pack_problems(const Problem& base, const std::vector<BatchProblem>& problems, BatchSummary& batch,
+                   std::vector<double>& q, std::vector<double>& p, std::vector<int>& invalid) {
   const pardel_model& model = *base.model;
   const int B = static_cast<int>(problems.size()), N = base.N, dim = model.dim, np = model.nparams;
-  const std::size_t nodes = static_cast<std::size_t>(N) + 1, per = nodes * static_cast<std::size_t>(dim);
-  // Memory: the two iterate buffers and the per-problem records on the device, against what it
-  // has free, before anything is allocated there or on the host.
-  const double device_bytes = 2.0 * B * per * 8 + B * (np * 8.0 + 1024) + nodes * 16.0;
-  std::size_t free_bytes = 0, total_bytes = 0;
-  if (cudaMemGetInfo(&free_bytes, &total_bytes) != cudaSuccess || device_bytes > 0.9 * free_bytes) {
-    batch.refusal = format("a batch of %.0f problems needs about %.3g GB on the device, which has %.3g GB free", B,
-                           device_bytes / 1e9, free_bytes / 1e9);
-    return batch;
-  }
-
-  batch.entries.resize(problems.size());
-  std::vector<double> q(static_cast<std::size_t>(B) * per), p(static_cast<std::size_t>(B) * np);
-  std::vector<int> invalid(static_cast<std::size_t>(B), 0);
+  const std::size_t per = (static_cast<std::size_t>(N) + 1) * static_cast<std::size_t>(dim);
   for (int b = 0; b < B; ++b) {
     const BatchProblem& bp = problems[static_cast<std::size_t>(b)];
     BatchEntry& e = batch.entries[static_cast<std::size_t>(b)];
@@ -207,14 +199,51 @@ BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const
         std::copy(problem.params.begin(), problem.params.end(), p.begin() + static_cast<long>(b) * np);
     }
   }
-  // The grid, as the CPU solver makes it (runtime/src/engine.cpp).
-  std::vector<double> t(nodes), h(static_cast<std::size_t>(N), base.T / N);
+}
+
+/** The node times t (N + 1) and steps h (N) of the batch's grid, as the CPU solver makes them
+ *  (runtime/src/engine.cpp). */
+void batch_grid(const Problem& base, std::vector<double>& t, std::vector<double>& h) {
+  const int N = base.N;
+  std::fill(h.begin(), h.end(), base.T / N);
   for (int k = 0; k <= N; ++k) t[static_cast<std::size_t>(k)] = base.t0 + base.T * k / N;
   t[static_cast<std::size_t>(N)] = base.t0 + base.T;
   if (!base.times.empty()) {
     t = base.times;
     for (int k = 0; k < N; ++k) h[static_cast<std::size_t>(k)] = t[static_cast<std::size_t>(k) + 1] - t[static_cast<std::size_t>(k)];
   }
+}
+
+}  // namespace
+
+BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const std::vector<BatchProblem>& problems,
+                              const CudaSettings& settings, CudaBatchTimes* times) {
+  const auto start = std::chrono::steady_clock::now();
+  BatchSummary batch;
+  batch.threads = 1;
+  const DeviceEntry* entry = nullptr;
+  batch.refusal = batch_refusal(base, options, settings, &entry);
+  if (!batch.refusal.empty()) return batch;
+
+  const pardel_model& model = *base.model;
+  const int B = static_cast<int>(problems.size()), N = base.N, dim = model.dim, np = model.nparams;
+  const std::size_t nodes = static_cast<std::size_t>(N) + 1, per = nodes * static_cast<std::size_t>(dim);
+  // Memory: the two iterate buffers and the per-problem records on the device, against what it
+  // has free, before anything is allocated there or on the host.
+  const double device_bytes = 2.0 * B * per * 8 + B * (np * 8.0 + 1024) + nodes * 16.0;
+  std::size_t free_bytes = 0, total_bytes = 0;
+  if (cudaMemGetInfo(&free_bytes, &total_bytes) != cudaSuccess || device_bytes > 0.9 * free_bytes) {
+    batch.refusal = format("a batch of %.0f problems needs about %.3g GB on the device, which has %.3g GB free", B,
+                           device_bytes / 1e9, free_bytes / 1e9);
+    return batch;
+  }
+
+  batch.entries.resize(problems.size());
+  std::vector<double> q(static_cast<std::size_t>(B) * per), p(static_cast<std::size_t>(B) * np);
+  std::vector<int> invalid(static_cast<std::size_t>(B), 0);
+  pack_problems(base, problems, batch, q, p, invalid);
+  std::vector<double> t(nodes), h(static_cast<std::size_t>(N));
+  batch_grid(base, t, h);
 
   cuda_detail::DeviceBatch in;
   in.B = B;
