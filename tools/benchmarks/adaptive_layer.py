@@ -2,8 +2,10 @@
 """Adaptive grids against uniform ones on steep solutions: nodes and time for the same error.
 
 Two problems, each with an exact solution:
-- the boundary layer of tests/runtime/models/thin_layer.lag, eps x'' = x with eps = 1e-4 on [0, 1],
-  x(0) = 1, x(1) = -0.5 (layers of width 0.01 at both ends; exact motion in sinh);
+- the boundary layer of tests/runtime/models/thin_layer.lag, eps x'' = x on [0, 1], x(0) = 1,
+  x(1) = -0.5, with eps = 1e-4 and 1e-6 (layers of width 0.01 and 0.001 at both ends; exact motion
+  in sinh): a uniform grid needs nodes in proportion to 1 / sqrt(eps), an adaptive one about as many
+  for either;
 - Troesch's problem of tests/runtime/models/troesch.lag, u'' = lambda sinh(lambda u) on [0, 1],
   u(0) = 0, u(1) = 1, with lambda = 8 (a front near t = 1); exact: with c = u'(0),
   t(u) = F(arctan(2 sinh(lambda u / 2) / c) | 1 - c^2 / 4) / lambda (F the incomplete elliptic
@@ -32,15 +34,19 @@ import pardel  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 MODELS = os.path.join(ROOT, "tests", "runtime", "models")
 LAG = os.path.join(MODELS, "thin_layer.lag")
-EPS = 1e-4
-R = 1 / math.sqrt(EPS)
+EPSILONS = (1e-4, 1e-6)
 LAMBDA = 8.0
 
 
-def exact(t):
-    a = np.exp(-R * t) - np.exp(-R * (2 - t))
-    b = np.exp(-R * (1 - t)) - np.exp(-R * (1 + t))
-    return (a - 0.5 * b) / (1 - math.exp(-2 * R))
+def layer(eps):
+    """The exact motion of eps x'' = x through x(0) = 1, x(1) = -0.5."""
+    r = 1 / math.sqrt(eps)
+
+    def exact(t):
+        a = np.exp(-r * t) - np.exp(-r * (2 - t))
+        b = np.exp(-r * (1 - t)) - np.exp(-r * (1 + t))
+        return (a - 0.5 * b) / (1 - math.exp(-2 * r))
+    return exact
 
 
 class Troesch:
@@ -111,10 +117,11 @@ def table(title, model, truth, common, cases):
 
 
 def main():
-    table("Boundary layer, eps = 1e-4", pardel.model(LAG), exact,
-          dict(q0=[1.0], qN=[-0.5], T=1, params={"eps": EPS}, method="newton", rtol=1e-13),
-          (("trapezoid", [1e-6, 1e-8]), ("galerkin_gauss(s=2)", [1e-6, 1e-8]),
-           ("galerkin_lobatto(s=3)", [1e-6, 1e-8])))
+    for eps in EPSILONS:
+        table("Boundary layer, eps = %g" % eps, pardel.model(LAG), layer(eps),
+              dict(q0=[1.0], qN=[-0.5], T=1, params={"eps": eps}, method="newton", rtol=1e-13),
+              (("trapezoid", [1e-6, 1e-8]), ("galerkin_gauss(s=2)", [1e-6, 1e-8]),
+               ("galerkin_lobatto(s=3)", [1e-6, 1e-8])))
     table("Troesch's problem, lambda = %g" % LAMBDA, pardel.model(os.path.join(MODELS, "troesch.lag")), Troesch(LAMBDA),
           dict(q0=[0.0], qN=[1.0], T=1, params={"lambda": LAMBDA}, method="newton", rtol=1e-13),
           (("trapezoid", [1e-6]), ("galerkin_gauss(s=2)", [1e-6, 1e-8]), ("galerkin_gauss(s=4)", [1e-6, 1e-8])))
