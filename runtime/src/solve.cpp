@@ -276,11 +276,13 @@ bool saddles_answer(const Problem& problem, const Options& requested) {
   return requested.method == Method::automatic && !requested.resume_from && problem.model && !problem.model->cost_name;
 }
 
-/** The minimizing Newton failed numerically (neither converged, interrupted nor refused). */
+/** The minimizing Newton failed numerically (neither converged, interrupted nor refused), and not
+ *  by stalling with its residual at the round-off level: such an iterate solves the DEL equations
+ *  as well as double precision can, and a second attempt would reach no smaller tolerance. */
 bool failed_numerically(const Summary& first) {
   switch (first.termination) {
+    case Termination::stalled: return !(first.residual <= 10 * first.residual_floor);
     case Termination::diverged:
-    case Termination::stalled:
     case Termination::non_finite:
     case Termination::max_iterations: return true;
     default: return false;

@@ -82,12 +82,20 @@ class StationaryNewton : public Method_ {
       for (double& v : p_) v *= 0.5;
     }
     char buf[640];
-    std::snprintf(buf, sizeof buf,
-                  "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of it, "
-                  "reduces the DEL residual %.3g (round-off level %.3g): the residual has a local minimum here, where "
-                  "the Hessian of the action is nearly singular (a fold of the boundary-value problem), so no DEL "
-                  "solution is near this iterate; a guess closer to the wanted motion may reach one",
-                  iteration, 2 * alpha, r0, ctx.residual_floor);
+    if (r0 <= 10 * ctx.residual_floor) {  // as the trust region's stall (newton_stalled)
+      std::snprintf(buf, sizeof buf,
+                    "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of "
+                    "it, reduces the DEL residual %.3g, which is at the round-off level of this problem (estimate "
+                    "%.3g): the tolerance cannot be reached in double precision",
+                    iteration, 2 * alpha, r0, ctx.residual_floor);
+    } else {
+      std::snprintf(buf, sizeof buf,
+                    "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of "
+                    "it, reduces the DEL residual %.3g (round-off level %.3g): the residual has a local minimum here, "
+                    "where the Hessian of the action is nearly singular (a fold of the boundary-value problem), so no "
+                    "DEL solution is near this iterate; a guess closer to the wanted motion may reach one",
+                    iteration, 2 * alpha, r0, ctx.residual_floor);
+    }
     return failure(Termination::stalled, buf);
   }
 

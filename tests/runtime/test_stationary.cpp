@@ -5,7 +5,8 @@
  * (the harmonic oscillator and two springs past their conjugate points) and exact continuous ones
  * at second order in h (the oscillator, a circular orbit in a quartic potential), their Morse index against the count of conjugate points, no
  * second attempt for a model with a declared cost, and an honest stall at a fold where no
- * solution is near (the refusal over MPI ranks: tests/mpi/test_distributed.cpp).
+ * solution is near, and a stall at round-off said as such, with no second attempt (the refusal
+ * over MPI ranks: tests/mpi/test_distributed.cpp).
  */
 #include <gtest/gtest.h>
 
@@ -116,6 +117,37 @@ TEST(Stationary, TheAutomaticMethodFindsTheSaddleWhereNoMinimumExists) {
   ASSERT_GE(s.history.size(), 2u);
   for (std::size_t i = 1; i < s.history.size(); ++i) EXPECT_GE(s.history[i].iteration, s.history[i - 1].iteration);
   EXPECT_EQ(s.history.back().iteration, s.iterations);
+}
+
+TEST(Stationary, AToleranceBelowRoundOffStallsOnceAndSaysSo) {
+  // An absolute tolerance far below the residual's round-off level: the minimizing Newton stalls
+  // at a solution as exact as double precision allows. The automatic method says so and makes no
+  // second attempt, which could reach no smaller tolerance.
+  const auto p = harmonic_problem(2.0, 200);
+  pardel::Options o = automatic_options();
+  o.tol = 1e-30;
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, o, tr);
+  EXPECT_EQ(s.termination, pardel::Termination::stalled) << s.brief_report();
+  EXPECT_EQ(s.method, pardel::Method::newton);
+  EXPECT_LE(s.residual, 10 * s.residual_floor) << s.brief_report();
+  EXPECT_NE(s.message.find("cannot be reached in double precision"), std::string::npos) << s.message;
+  EXPECT_EQ(s.message.find("Newton on the DEL residual"), std::string::npos) << "no second attempt: " << s.message;
+  EXPECT_LT(harmonic_discrete_error(p, tr), 1e-12);
+}
+
+TEST(Stationary, AStallAtRoundOffIsNoFold) {
+  // The saddle past the conjugate point with the same tolerance: stationary-newton stalls at the
+  // discrete motion and says that the residual is at round-off, not that no solution is near.
+  const auto p = harmonic_problem(4.0, 200);
+  pardel::Options o = stationary_options();
+  o.tol = 1e-30;
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, o, tr);
+  EXPECT_EQ(s.termination, pardel::Termination::stalled) << s.brief_report();
+  EXPECT_NE(s.message.find("at the round-off level of this problem"), std::string::npos) << s.message;
+  EXPECT_EQ(s.message.find("fold"), std::string::npos) << s.message;
+  EXPECT_LT(harmonic_discrete_error(p, tr), 1e-12);
 }
 
 TEST(Stationary, AMinimumIsFoundAsBeforeConjugatePoints) {
