@@ -133,7 +133,8 @@ void read_params(const SceneReader& r, const toml::table& root, Scene& scene) {
 constexpr int kAdaptiveStartN = 16;
 
 /** [grid]: t0, T and N, with node times that a double can tell apart; or an adaptive grid:
- *  accuracy (and accuracy_max_N), N then being the first grid's (default kAdaptiveStartN). */
+ *  accuracy (and accuracy_max_N), N then being the first grid's (default kAdaptiveStartN, or
+ *  accuracy_max_N where that is smaller; at most accuracy_max_N). */
 void read_grid(const SceneReader& r, const toml::table& root, Scene& scene) {
   Problem& problem = scene.problem;
   const toml::table* grid = r.table(root, "grid", "grid");
@@ -155,11 +156,16 @@ void read_grid(const SceneReader& r, const toml::table& root, Scene& scene) {
   if (!(*T > 0)) r.fail(*grid->get("T"), "grid.T", fmt::format("grid.T must be > 0, got {}", *T));
   problem.T = *T;
   auto N = r.integer(grid, "N", "grid.N");
-  if (!N && scene.options.accuracy > 0) N = kAdaptiveStartN;
+  if (!N && scene.options.accuracy > 0) N = std::min(kAdaptiveStartN, scene.options.accuracy_max_N);
   if (!N) r.fail(grid->source(), "grid", "missing key 'grid.N' (the number of intervals; or grid.accuracy for an adaptive grid)");
   constexpr long long kMaxN = 100000000;
   if (*N < 2 || *N > kMaxN) {
     r.fail(*grid->get("N"), "grid.N", fmt::format("grid.N must be between 2 and {}, got {}", kMaxN, *N));
+  }
+  if (scene.options.accuracy > 0 && *N > scene.options.accuracy_max_N) {
+    r.fail(*grid->get("N"), "grid.N",
+           fmt::format("grid.N = {}, the first grid of the adaptive solve, is above grid.accuracy_max_N = {}", *N,
+                       scene.options.accuracy_max_N));
   }
   problem.N = static_cast<int>(*N);
   if (!std::isfinite(problem.t0 + problem.T)) {

@@ -218,6 +218,8 @@ def _checked_options(where, options):
             value = _check_bool(where, name, value)
         elif name in _INT_OPTIONS or name in _NUMBER_OPTIONS:
             value = _check_option(where, name, value)
+            if name == "accuracy" and value == 0:
+                continue  # pardel::Options::accuracy's 0: a fixed grid, the scene without grid.accuracy
         elif name == "t0":
             value = _check_number(where, name, value)
         elif name == "params":

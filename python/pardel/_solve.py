@@ -108,9 +108,10 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
 
     model: a bundled name, a .lag path, .lag text or a Model. q0, qN: boundary points (dim values:
     coords, then derivatives up to order - 1). T: final time minus t0. N: intervals (with accuracy:
-    the first grid's, optional, default 16).
-    accuracy (a positive number): an adaptive grid, refined until the estimated error of the
-    coordinates at the nodes is at most accuracy (accuracy_max_N: the largest N it may use);
+    the first grid's, optional, default 16 or accuracy_max_N if smaller, at most accuracy_max_N).
+    accuracy (a positive number; 0 or None: a fixed grid of N): an adaptive grid, refined until
+    the estimated error of the coordinates at the nodes is at most accuracy (accuracy_max_N: the
+    largest N it may use);
     Result.grid_sizes and grid_note say which grids it solved and whether it got there.
     Keyword options (the scene keys of `pardel solve`, docs/examples.md): discretization, params
     (dict by name, or a list in declaration order), t0, knots ([(t, q), ...]), polyline (guess
@@ -281,7 +282,9 @@ def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options, where="p
     left to the core, which suggests the nearest valid name."""
     _check_model(where, "model", model)
     given = {"q0": q0, "qN": qN, "T": T, "N": N}
-    adaptive = options.get("accuracy") is not None  # N is then the first grid's, and optional
+    accuracy = options.get("accuracy")
+    # N is then the first grid's, and optional; accuracy 0 is a fixed grid (pardel::Options)
+    adaptive = accuracy is not None and not (isinstance(accuracy, (int, float)) and accuracy == 0)
     missing = [(name, what) for name, what in _REQUIRED if given[name] is None and not (name == "N" and adaptive)]
     if missing:
         raise TypeError("%s: missing argument%s %s" % (where, "s" if len(missing) > 1 else "",

@@ -317,6 +317,9 @@ std::string adaptive_refusal(const Problem& problem, const Options& requested) {
     return "an adaptive grid cannot be combined with a clock (the clock sets the node times)";
   if (requested.resume_from != nullptr)
     return "an adaptive solve cannot be resumed from a state: solve again with the same accuracy";
+  if (problem.N > requested.accuracy_max_N)
+    return "the first grid's N = " + std::to_string(problem.N) + " is above accuracy_max_N = " +
+           std::to_string(requested.accuracy_max_N) + ", the largest N an adaptive solve may use";
   return {};
 }
 

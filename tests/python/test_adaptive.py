@@ -64,3 +64,22 @@ def test_bad_options_name_the_argument(name, value, error):
     options[name] = value
     with pytest.raises(error, match=name):
         pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, **options)
+
+
+def test_accuracy_zero_is_a_fixed_grid():
+    # pardel::Options::accuracy's 0: the solve of N, as without accuracy (not refused, not adaptive).
+    fixed = pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, N=40, method="newton")
+    zero = pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, N=40, method="newton", accuracy=0)
+    assert zero.status == "converged" and zero.grid_sizes == [] and zero.N == 40
+    assert np.array_equal(zero.q, fixed.q)
+    with pytest.raises(TypeError, match="N"):
+        pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, accuracy=0)
+
+
+def test_a_first_grid_above_the_largest_N_is_refused_at_its_key():
+    with pytest.raises(pardel.SceneError, match=r"grid\.N = 64, the first grid of the adaptive solve, is above "
+                                                r"grid\.accuracy_max_N = 32"):
+        pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, N=64, accuracy=1e-6, accuracy_max_N=32)
+    # Without N the first grid is the default 16, or accuracy_max_N where that is smaller.
+    r = pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, accuracy=1e-12, accuracy_max_N=8, method="newton")
+    assert r.grid_sizes[0] == 8 and r.N <= 8 and "not reached" in r.grid_note

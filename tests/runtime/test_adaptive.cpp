@@ -298,6 +298,14 @@ TEST(Adaptive, RequestsThatCannotWorkAreRefused) {
   s = pardel::solve(p, o, tr);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
   EXPECT_NE(s.message.find("accuracy"), std::string::npos) << s.message;
+  // A first grid above the largest N allowed: refused, not solved and called "not reached".
+  o.accuracy = 1e-6;
+  o.accuracy_max_N = 8;
+  const pardel::Trajectory guess = tr;
+  s = pardel::solve(p, o, tr);
+  EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
+  EXPECT_NE(s.message.find("N = 16 is above accuracy_max_N = 8"), std::string::npos) << s.message;
+  EXPECT_EQ(tr.q, guess.q);
 }
 
 // ---- Given non-uniform grids (Problem::times).
