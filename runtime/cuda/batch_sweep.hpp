@@ -80,10 +80,17 @@ PARDEL_HD inline void merge(Stats<D>& a, const Stats<D>& b) {
   a.bad_value = first_node(a.bad_value, b.bad_value);
 }
 
-/** x <- x - M^{-1} r; false when M is singular (reciprocal condition number in the 1-norm at most
- *  1e-14) or not finite. Closed forms for 1x1 and 2x2 (those of the CPU solver, operation for
- *  operation); larger blocks by Gaussian elimination with partial pivoting and the exact 1-norm
- *  condition number from the inverse. */
+/** The Jacobi scaling of a diagonal entry m: |m|^-1/2, 1 where m is zero or not finite. */
+PARDEL_HD inline double jacobi_scale(double m) {
+  const double a = fabs(m);
+  return a > 0 && isfinite(a) ? 1 / sqrt(a) : 1.0;
+}
+
+/** x <- x - M^{-1} r; false when M is singular or not finite: the reciprocal condition number in
+ *  the 1-norm of S M S, S = diag(|M_aa|^-1/2), at most 1e-14 (a change of a coordinate's units is
+ *  no singularity). Closed forms for 1x1 and 2x2 (those of the CPU solver, operation for
+ *  operation, whose solve is M's own); larger blocks as S (S M S)^-1 S r, by Gaussian elimination
+ *  with partial pivoting and the exact 1-norm condition number from the inverse. */
 template <int D>
 PARDEL_HD inline bool newton_step(double* M, double* r, double* x) {
   if constexpr (D == 1) {
@@ -94,16 +101,25 @@ PARDEL_HD inline bool newton_step(double* M, double* r, double* x) {
   } else if constexpr (D == 2) {
     const double a = M[0], b = M[1], c = M[2], e = M[3];
     const double det = a * e - b * c;
-    const double na = fabs(a) + fabs(c), nb = fabs(b) + fabs(e);
+    const double sa = jacobi_scale(a), se = jacobi_scale(e);
+    const double as = a * sa * sa, bs = b * sa * se, cs = c * sa * se, es = e * se * se;
+    const double det_s = as * es - bs * cs;
+    const double na = fabs(as) + fabs(cs), nb = fabs(bs) + fabs(es);
     const double norm = na < nb ? nb : na;
-    const double ma = fabs(e) + fabs(c), mb = fabs(b) + fabs(a);
+    const double ma = fabs(es) + fabs(cs), mb = fabs(bs) + fabs(as);
     const double norm_adj = ma < mb ? mb : ma;
-    if (!(fabs(det) > 1e-14 * (norm * norm_adj)) || !isfinite(det)) return false;
+    if (!(fabs(det_s) > 1e-14 * (norm * norm_adj)) || !isfinite(det)) return false;
     const double inv = 1 / det;
     x[0] -= (e * r[0] - b * r[1]) * inv;
     x[1] -= (a * r[1] - c * r[0]) * inv;
     return true;
   } else {
+    double sc[D], rs[D];
+    for (int i = 0; i < D; ++i) sc[i] = jacobi_scale(M[i * D + i]);
+    for (int i = 0; i < D; ++i) {
+      for (int j = 0; j < D; ++j) M[i * D + j] *= sc[i] * sc[j];
+      rs[i] = sc[i] * r[i];
+    }
     double norm = 0;
     for (int j = 0; j < D; ++j) {
       double col = 0;
@@ -156,8 +172,8 @@ PARDEL_HD inline bool newton_step(double* M, double* r, double* x) {
     }
     if (!(1 / (norm * inv_norm) > 1e-14)) return false;
     double dx[D];
-    solve(r, dx);
-    for (int i = 0; i < D; ++i) x[i] -= dx[i];
+    solve(rs, dx);
+    for (int i = 0; i < D; ++i) x[i] -= sc[i] * dx[i];
     return true;
   }
 }

@@ -38,9 +38,9 @@ constexpr int kAutoRatio = 4;
 
 // --- Jacobi and Jacobi–Newton (jacobi.cpp) ----------------------------------------------------------
 
-/** A node's block M = D22 + D11 counts as singular (the sweep reports it) when its reciprocal
- *  condition number in the 1-norm is at most this: about 100 unit roundoffs, below which the
- *  node's update carries no correct digit. */
+/** A node's block M = D22 + D11 counts as singular (the sweep reports it) when the reciprocal
+ *  condition number in the 1-norm of its Jacobi-scaled form S M S (S = diag |M_aa|^-1/2) is at
+ *  most this: about 100 unit roundoffs, below which the node's update carries no correct digit. */
 constexpr double kJacobiMinRcond = 1e-14;
 
 // --- Trust-region Newton (trust_region.hpp) -------------------------------------------------------

@@ -22,6 +22,7 @@
 
 #include "constants.hpp"
 #include "engine.hpp"
+#include "inertia.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -43,7 +44,7 @@ struct NodeScratch {
   using Mat = Eigen::Matrix<double, D, D>;
   using Vec = Eigen::Matrix<double, D, 1>;
   Mat M;
-  Vec r, x, dx;
+  Vec r, x, dx, jscale, rs;  // jscale, rs: the Jacobi scaling of M and the scaled r (blocks over 2x2)
   Eigen::PartialPivLU<Mat> lu;
   IntervalDerivatives left, right, ahead, a, b;  // rolling buffer; a, b: the node's own re-evaluations
   // What the thread found in its range.
@@ -51,12 +52,15 @@ struct NodeScratch {
   std::vector<double> comp_residual, comp_scale;  ///< per component: max |r_i| and max |D2_i| + |D1_i|
   int bad_residual = -1, singular = -1, bad_value = -1;
   explicit NodeScratch(int d)
-      : M(Mat::Zero(d, d)), r(Vec::Zero(d)), x(Vec::Zero(d)), dx(Vec::Zero(d)), lu(d), left(d), right(d), ahead(d),
+      : M(Mat::Zero(d, d)), r(Vec::Zero(d)), x(Vec::Zero(d)), dx(Vec::Zero(d)), jscale(Vec::Ones(d)), rs(Vec::Zero(d)), lu(d), left(d), right(d), ahead(d),
         a(d), b(d), comp_residual(static_cast<std::size_t>(d)), comp_scale(static_cast<std::size_t>(d)) {}
 };
 
-/** Solves M dx = r for a node block and subtracts dx from x; false when M is singular (reciprocal
- *  condition number in the 1-norm at most 1e-14) or not finite. Closed forms for 1x1 and 2x2. */
+/** Solves M dx = r for a node block and subtracts dx from x; false when M is singular or not
+ *  finite: the reciprocal condition number in the 1-norm of S M S, S = diag(|M_aa|^-1/2) (1 where
+ *  M_aa is zero or not finite), at most 1e-14, so that a change of a coordinate's units (a block
+ *  diag(1e14, 1e-10)) is no singularity. Closed forms for 1x1 and 2x2, whose solve is M's own;
+ *  larger blocks are solved as S (S M S)^-1 S r. */
 template <int D>
 bool node_newton_step(NodeScratch<D>& s, int d) {
   if constexpr (D == 1) {
@@ -67,21 +71,30 @@ bool node_newton_step(NodeScratch<D>& s, int d) {
   } else if constexpr (D == 2) {
     const double a = s.M(0, 0), b = s.M(0, 1), c = s.M(1, 0), e = s.M(1, 1);
     const double det = a * e - b * c;
-    const double norm = std::max(std::fabs(a) + std::fabs(c), std::fabs(b) + std::fabs(e));
-    const double norm_adj = std::max(std::fabs(e) + std::fabs(c), std::fabs(b) + std::fabs(a));
-    // rcond = |det| / (|M|_1 |adj M|_1) > 1e-14, without a division on the way.
-    if (!(std::fabs(det) > kJacobiMinRcond * (norm * norm_adj)) || !std::isfinite(det)) return false;
+    const double sa = jacobi_scale(a), se = jacobi_scale(e);
+    const double as = a * sa * sa, bs = b * sa * se, cs = c * sa * se, es = e * se * se;
+    const double det_s = as * es - bs * cs;
+    const double norm = std::max(std::fabs(as) + std::fabs(cs), std::fabs(bs) + std::fabs(es));
+    const double norm_adj = std::max(std::fabs(es) + std::fabs(cs), std::fabs(bs) + std::fabs(as));
+    // rcond(S M S) = |det_s| / (|S M S|_1 |adj S M S|_1) > 1e-14, without a division on the way.
+    if (!(std::fabs(det_s) > kJacobiMinRcond * (norm * norm_adj)) || !std::isfinite(det)) return false;
     const double inv = 1 / det;
     s.x[0] -= (e * s.r[0] - b * s.r[1]) * inv;
     s.x[1] -= (a * s.r[1] - c * s.r[0]) * inv;
     return true;
   } else {
     (void)d;
+    const Eigen::Index n = s.M.rows();
+    for (Eigen::Index i = 0; i < n; ++i) s.jscale[i] = jacobi_scale(s.M(i, i));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      for (Eigen::Index j = 0; j < n; ++j) s.M(i, j) *= s.jscale[i] * s.jscale[j];
+      s.rs[i] = s.jscale[i] * s.r[i];
+    }
     s.lu.compute(s.M);
     const double rc = s.lu.rcond();
     if (!(rc > kJacobiMinRcond)) return false;
-    s.dx.noalias() = s.lu.solve(s.r);
-    s.x -= s.dx;
+    s.dx.noalias() = s.lu.solve(s.rs);
+    for (Eigen::Index i = 0; i < n; ++i) s.x[i] -= s.jscale[i] * s.dx[i];
     return true;
   }
 }

@@ -127,12 +127,14 @@ TEST(ComponentScale, EveryComponentIsSolvedWhateverItsScaleAutomatic) {
   for (double A : {1e8, 1e-8}) expect_both_solved(A, pardel::Method::automatic, 2000);
 }
 
+// At 1e16 and 1e-16 a node block diag(A m, m) has a reciprocal condition number of 1e-16, below
+// the singularity test's 1e-14, but its Jacobi-scaled form is the identity: no singular block.
 TEST(ComponentScale, EveryComponentIsSolvedWhateverItsScaleJacobiNewton) {
-  for (double A : {1e8, 1e-8}) expect_both_solved(A, pardel::Method::jacobi_newton, 24);
+  for (double A : {1e8, 1e-8, 1e16, 1e-16}) expect_both_solved(A, pardel::Method::jacobi_newton, 24);
 }
 
 TEST(ComponentScale, EveryComponentIsSolvedWhateverItsScaleNonlinearJacobi) {
-  for (double A : {1e8, 1e-8}) expect_both_solved(A, pardel::Method::jacobi, 24);
+  for (double A : {1e8, 1e-8, 1e16, 1e-16}) expect_both_solved(A, pardel::Method::jacobi, 24);
 }
 
 TEST(ComponentScale, AnUnresolvedComponentIsNamedAndNotConverged) {
