@@ -1,4 +1,4 @@
-# pardel_add_model(<target> <file.lag> [KERNELS_ONLY] [ALLOW_SINGULAR])
+# pardel_add_model(<target> <file.lag> [KERNELS_ONLY] [ALLOW_SINGULAR] [DEVICE])
 #
 # Generates the kernels of a .lag model at build time (pardel-gen, then the Jinja2 render step)
 # and compiles them into <target>, which is linked to pardel::runtime (pardel::solve and the rest of
@@ -8,6 +8,11 @@
 # pardel-gen refuses a model that is not regular (W = d2L/dq^(order)dq^(order) singular everywhere,
 # or a discretization such as trapezoid(alpha=0)); ALLOW_SINGULAR generates it with a warning
 # (pardel-gen --allow-singular), for a model that is degenerate on purpose.
+# DEVICE also compiles the model for the CUDA device solvers (pardel::cuda, docs/gpu.md) and links
+# <target> to them: its discretizations with device kernels are then solved by
+# solve_batch_cuda and Options::device = cuda like the bundled models of PARDEL_DEVICE_MODELS. That
+# needs pardel's build tree (or add_subdirectory) with PARDEL_WITH_CUDA; where pardel has no CUDA
+# the keyword is ignored with a note, and the model is on the host only.
 # Editing the .lag, the generator or its templates regenerates exactly that model.
 #
 # Without GiNaC (PARDEL_REGENERATE=OFF) the committed copy under generated/ is compiled instead;
@@ -28,6 +33,8 @@ check_include_file_cxx(quadmath.h PARDEL_HAVE_QUADMATH_H)
 if(TARGET pardel-gen AND NOT TARGET pardel::pardel-gen)
   add_executable(pardel::pardel-gen ALIAS pardel-gen)
 endif()
+set(PARDEL_DEVICE_MODEL_SCRIPT "${CMAKE_CURRENT_LIST_DIR}/PardelDeviceModel.cmake" CACHE INTERNAL
+    "Writes a model's device source (pardel_add_model(... DEVICE))")
 if(NOT DEFINED PARDEL_GENERATED_DIR)
   set(PARDEL_GENERATED_DIR "${PROJECT_SOURCE_DIR}/generated" CACHE INTERNAL
       "Committed generated kernels of the bundled models")
@@ -56,7 +63,7 @@ function(pardel_source_name file out_var)
 endfunction()
 
 function(pardel_add_model target lag)
-  cmake_parse_arguments(PARSE_ARGV 2 _arg "KERNELS_ONLY;ALLOW_SINGULAR" "" "")
+  cmake_parse_arguments(PARSE_ARGV 2 _arg "KERNELS_ONLY;ALLOW_SINGULAR;DEVICE" "" "")
   get_filename_component(lag "${lag}" ABSOLUTE)
   if(NOT EXISTS "${lag}")
     message(FATAL_ERROR "pardel_add_model: no such file: ${lag}")
@@ -104,7 +111,32 @@ function(pardel_add_model target lag)
   if(NOT _arg_KERNELS_ONLY)
     target_link_libraries(${target} PUBLIC pardel::runtime)
   endif()
+  if(_arg_DEVICE)
+    pardel_add_device_model(${target} ${model} "${out_dir}" "${source_name}")
+  endif()
   set_property(TARGET ${target} APPEND PROPERTY PARDEL_MODELS "${model}")
   set_property(TARGET ${target} APPEND PROPERTY PARDEL_GENERATED_FILES
                "${out_dir}/${model}.hpp" "${out_dir}/${model}.cpp")
+endfunction()
+
+# The device copy of a model that pardel_add_model generated into out_dir (its DEVICE keyword).
+function(pardel_add_device_model target model out_dir source_name)
+  if(NOT TARGET pardel::cuda OR NOT PARDEL_CUDA_SOURCE_DIR)
+    message(STATUS "pardel_add_model(${target} ${source_name} DEVICE): pardel has no CUDA device solvers "
+                   "(PARDEL_WITH_CUDA off, or an installed pardel); the model is on the host only")
+    return()
+  endif()
+  set(device_source "${CMAKE_CURRENT_BINARY_DIR}/pardel_generated/${model}_device.cu")
+  add_custom_command(
+    OUTPUT "${device_source}"
+    COMMAND ${CMAKE_COMMAND} -DMODEL=${model} -DCPP=${out_dir}/${model}.cpp -DHPP=${out_dir}/${model}.hpp
+            -DOUT=${device_source} -DREGISTRATION=static -P "${PARDEL_DEVICE_MODEL_SCRIPT}"
+    DEPENDS "${out_dir}/${model}.cpp" "${out_dir}/${model}.hpp" "${PARDEL_DEVICE_MODEL_SCRIPT}"
+    COMMENT "pardel: ${model} for the device"
+    VERBATIM)
+  target_sources(${target} PRIVATE "${device_source}")
+  set_source_files_properties("${device_source}" PROPERTIES
+    INCLUDE_DIRECTORIES "${PARDEL_CUDA_SOURCE_DIR};${out_dir}"
+    COMPILE_DEFINITIONS "PARDEL_CUDA_MIN_BLOCKS=${PARDEL_CUDA_MIN_BLOCKS}")
+  target_link_libraries(${target} PUBLIC pardel::cuda)
 endfunction()

@@ -40,12 +40,48 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
   return buf;
 }
 
+bool same_text(const char* a, const char* b) { return (a == nullptr) == (b == nullptr) && (!a || std::strcmp(a, b) == 0); }
+
+/** Whether two sweep kernels of a model give the same values (to 1e-12 relative, NaN as NaN) at a
+ *  few points of no pattern: the device's copy and the program's host build of one generated
+ *  source do, up to rounding; another model of the same name does not. */
+bool same_sweep(pardel_sweep_kernel f, pardel_sweep_kernel g, const pardel_model& m) {
+  const std::size_t d = static_cast<std::size_t>(m.dim);
+  std::vector<double> q0(d), q1(d), p(m.param_defaults, m.param_defaults + m.nparams), a(2 * d + 2 * d * d),
+      b(a.size());
+  for (int point = 0; point < 3; ++point) {
+    for (std::size_t i = 0; i < d; ++i) {
+      q0[i] = 0.13 + 0.37 * static_cast<double>(i) - 0.29 * point;
+      q1[i] = q0[i] + 0.07 + 0.05 * std::sin(1.7 * static_cast<double>(i) + point);
+    }
+    const double h = 0.11 + 0.03 * point, t0 = 0.2 * point;
+    f(h, t0, t0 + h, q0.data(), q1.data(), p.data(), a.data(), a.data() + d, a.data() + 2 * d, a.data() + 2 * d + d * d);
+    g(h, t0, t0 + h, q0.data(), q1.data(), p.data(), b.data(), b.data() + d, b.data() + 2 * d, b.data() + 2 * d + d * d);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (std::isnan(a[i]) && std::isnan(b[i])) continue;
+      if (!(std::fabs(a[i] - b[i]) <= 1e-12 * std::max(1.0, std::fabs(a[i])))) return false;
+    }
+  }
+  return true;
+}
+
+/** The device's entry for this model and discretization: the device copy of the same generated
+ *  model (the same name, source file, sizes, coordinate and param names, discretization name and
+ *  sweep kernel values), so that a model loaded at run time whose name is a bundled model's is
+ *  not solved with the bundled kernels. */
 const DeviceEntry* find_entry(const pardel_model& model, const pardel_discretization& disc) {
-  for (const DeviceEntry& e : cuda_detail::device_entries())
-    if (e.discretization == &disc ||
-        (std::strcmp(e.model->name, model.name) == 0 && std::strcmp(e.discretization->name, disc.name) == 0 &&
-         e.model->dim == model.dim))
-      return &e;
+  for (const DeviceEntry& e : cuda_detail::device_entries()) {
+    if (e.discretization == &disc) return &e;
+    const pardel_model& m = *e.model;
+    bool same = std::strcmp(m.name, model.name) == 0 && same_text(m.source, model.source) && m.order == model.order &&
+                m.ncoords == model.ncoords && m.dim == model.dim && m.nparams == model.nparams &&
+                m.time_dependent == model.time_dependent && std::strcmp(e.discretization->name, disc.name) == 0 &&
+                disc.sweep != nullptr && e.discretization->sweep != nullptr;
+    for (int i = 0; same && i < model.ncoords; ++i) same = same_text(m.coords[i], model.coords[i]);
+    for (int i = 0; same && i < model.nparams; ++i)
+      same = same_text(m.param_names[i], model.param_names[i]) && m.param_defaults[i] == model.param_defaults[i];
+    if (same && same_sweep(e.discretization->sweep, disc.sweep, model)) return &e;
+  }
   return nullptr;
 }
 

@@ -55,8 +55,15 @@ struct DeviceEntry {
   DeviceRunner run;
 };
 
-/** Every (model, discretization) of the device build (filled by the generated registration). */
+/** Every (model, discretization) of the device build (filled by the generated registration): the
+ *  bundled models of PARDEL_DEVICE_MODELS, then those registered with DeviceRegistration. */
 const std::vector<DeviceEntry>& device_entries();
+
+/** A static object of this type in a model's device source (pardel_add_model(... DEVICE),
+ *  cmake/PardelDeviceModel.cmake) adds the model's entries with `add` when the program starts. */
+struct DeviceRegistration {
+  explicit DeviceRegistration(void (*add)(std::vector<DeviceEntry>&));
+};
 
 /** Adds the discretization of `model` whose sweep kernel is `sweep` (a host address). */
 void add_entry(std::vector<DeviceEntry>& entries, const pardel_model& model, pardel_sweep_kernel sweep,

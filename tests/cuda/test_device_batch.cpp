@@ -6,8 +6,10 @@
 // same point found and iteration counts within 1% (the device contracts multiply-adds and has its
 // own sin, cos, exp and sqrt, so the last bits differ and a test at the tolerance can pass a sweep
 // earlier or later; a problem that fails after many sweeps fails the same way, not
-// necessarily at the same sweep). What the device refuses is checked without a device; the comparisons skip,
-// saying why, where there is none.
+// necessarily at the same sweep). A model added with pardel_add_model(... DEVICE) (a double swing of
+// the runtime tests) is registered beside the bundled ones and solved the same way. What the device
+// refuses, and that registration, are checked without a device; the comparisons skip, saying why,
+// where there is none.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -22,6 +24,9 @@
 #include "pardel/pardel.hpp"
 
 extern "C" const pardel_model fuel_nav_model, zermelo_model, pendulum_model, harmonic_model, bratu_model;
+#ifdef PARDEL_HAVE_DEVICE_TEST_MODEL
+#include "double_swing.hpp"
+#endif
 
 namespace {
 
@@ -149,6 +154,23 @@ TEST(DeviceBatchRefusals, MethodsKnotsAndModelsTheDeviceLacks) {
   std::string why;
   EXPECT_FALSE(pardel::cuda_supports(other, disc, &why));
   EXPECT_NE(why.find("zermelo (trapezoid)"), std::string::npos) << why;
+  // Models named like a bundled one that are other models (a .lag of the same name loaded at run
+  // time): another source file, or the same in all but the Lagrangian (another sweep kernel).
+  pardel_model elsewhere = fuel_nav_model;
+  elsewhere.source = "/home/someone/fuel_nav.lag";
+  EXPECT_FALSE(pardel::cuda_supports(elsewhere, disc));
+  pardel_model other_wind = fuel_nav_model;
+  pardel_discretization other_sweep = fuel_nav_model.discretizations[0];
+  other_sweep.sweep = fuel_nav_model.discretizations[1].sweep;  // midpoint's kernel under trapezoid's name
+  other_wind.discretizations = &other_sweep;
+  other_wind.ndiscretizations = 1;
+  EXPECT_FALSE(pardel::cuda_supports(other_wind, other_sweep));
+  // A copy of the descriptors of the bundled model itself is that model.
+  pardel_model same = fuel_nav_model;
+  pardel_discretization same_disc = fuel_nav_model.discretizations[0];
+  same.discretizations = &same_disc;
+  same.ndiscretizations = 1;
+  EXPECT_TRUE(pardel::cuda_supports(same, same_disc, &why)) << why;
   pardel::CudaSettings negative;
   negative.blocks_per_problem = -1;
   s = pardel::solve_batch_cuda(base, options_of(pardel::Method::jacobi_newton, 10), one, negative);
@@ -256,5 +278,23 @@ TEST(DeviceSolve, OptionsDeviceCudaRunsSolveOnTheDevice) {
   for (std::size_t i = 0; i < tr.q.size(); ++i) diff = std::max(diff, std::fabs(tr.q[i] - reference.q[i]));
   EXPECT_LE(diff, 1e-8);
 }
+
+#ifdef PARDEL_HAVE_DEVICE_TEST_MODEL
+TEST(DeviceModel, AModelAddedWithPardelAddModelIsOnTheDevice) {
+  // Registered when the program starts by the static object of its device source.
+  const pardel_discretization* midpoint = pardel::find_discretization(double_swing_model, "midpoint");
+  ASSERT_NE(midpoint, nullptr);
+  std::string why;
+  EXPECT_TRUE(pardel::cuda_supports(double_swing_model, *midpoint, &why)) << why;
+  EXPECT_TRUE(pardel::cuda_supports(fuel_nav_model, fuel_nav_model.discretizations[0], &why)) << why;
+}
+
+TEST(DeviceModel, ADoubleSwingBatchAsOnTheCpu) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(double_swing_model, 1.2, 40, {0.2, -0.3}, {0.5, 0.4});
+  EXPECT_GT(compare(base, options_of(pardel::Method::jacobi_newton, 20000), random_batch(base, 24, 0.3, 0.3, 0.3, 7)),
+            12);
+}
+#endif
 
 }  // namespace
