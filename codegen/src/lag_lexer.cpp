@@ -4,12 +4,45 @@
  * identifiers (with their primes), numbers and operators, stopping at a '#' comment.
  */
 #include <cctype>
+#include <cstdio>
 #include <cstring>
 #include <sstream>
 
 #include "lag_reader.hpp"
 
 namespace pardel_codegen::lag {
+
+namespace {
+
+/** The code point of the well-formed UTF-8 sequence at s[i] (its length in *len), or -1. */
+long utf8_at(const std::string& s, std::size_t i, std::size_t* len) {
+  const unsigned char c = static_cast<unsigned char>(s[i]);
+  const std::size_t n = c >= 0xf0 && c < 0xf5 ? 4 : c >= 0xe0 ? 3 : c >= 0xc2 && c < 0xe0 ? 2 : 0;
+  if (n == 0 || i + n > s.size()) return -1;
+  long cp = c & (n == 2 ? 0x1f : n == 3 ? 0x0f : 0x07);
+  for (std::size_t k = 1; k < n; ++k) {
+    const unsigned char b = static_cast<unsigned char>(s[i + k]);
+    if ((b & 0xc0) != 0x80) return -1;
+    cp = (cp << 6) | (b & 0x3f);
+  }
+  if ((n == 3 && cp < 0x800) || (n == 4 && (cp < 0x10000 || cp > 0x10ffff)) || (cp >= 0xd800 && cp < 0xe000))
+    return -1;
+  *len = n;
+  return cp;
+}
+
+/** What to write instead of a non-ASCII character that people type in formulas. */
+const char* ascii_instead(long cp) {
+  if (cp == 0xb2 || cp == 0xb3 || cp == 0xb9 || (cp >= 0x2070 && cp <= 0x2079)) return "write ^ for a power (x^2)";
+  if (cp == 0xd7 || cp == 0xb7 || cp == 0x22c5 || cp == 0x2219) return "write * for a product";
+  if (cp == 0x2032 || cp == 0x2019 || cp == 0x2033) return "write ' for a time derivative (x', x'')";
+  if (cp == 0x2212 || cp == 0x2013) return "write - for a minus";
+  if (cp == 0xf7 || cp == 0x2215) return "write / for a quotient";
+  if (cp == 0xa0 || (cp >= 0x2000 && cp <= 0x200b) || cp == 0x202f || cp == 0x3000) return "a space that is not ASCII";
+  return "names, numbers and operators are ASCII (write lambda, not the Greek letter)";
+}
+
+}  // namespace
 
 void Reader::split_lines(const std::string& text) {
   std::size_t start = 0;
@@ -97,6 +130,14 @@ Line Reader::tokenize(int number) const {
         msg << "carriage return without a line feed (lines must end with LF or CR LF)";
       } else if (c >= 0x20 && c < 0x7f) {
         msg << "unexpected character '" << static_cast<char>(c) << "'";
+      } else if (std::size_t len = 0; c >= 0x80 && utf8_at(s, i, &len) >= 0) {
+        const long cp = utf8_at(s, i, &len);
+        char code[16];
+        std::snprintf(code, sizeof code, "U+%04lX", cp);
+        const bool visible = cp > 0xa0 && !(cp >= 0x2000 && cp <= 0x200f) && !(cp >= 0x2028 && cp <= 0x202f) &&
+                             !(cp >= 0x205f && cp <= 0x206f) && cp != 0x3000;
+        msg << "unexpected character " << (visible ? "'" + s.substr(i, len) + "' (" + code + ")" : std::string(code))
+            << ": " << ascii_instead(cp);
       } else {
         msg << "unexpected byte 0x" << std::hex << static_cast<int>(c);
       }

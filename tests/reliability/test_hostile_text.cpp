@@ -145,7 +145,22 @@ TEST_F(HostileText, Latin1Identifier) {
 }
 
 TEST_F(HostileText, Utf8LetName) {
-  expect_refused("utf8_let.lag", "model m\ncoords x\nlet \xce\xbb = x\nL = x^2\n", "3:5", "unexpected byte 0xce");
+  expect_refused("utf8_let.lag", "model m\ncoords x\nlet \xce\xbb = x\nL = x^2\n", "3:5",
+                 "unexpected character '\xce\xbb' (U+03BB): names, numbers and operators are ASCII");
+}
+
+TEST_F(HostileText, Utf8CharactersOfFormulasAreNamedWithTheirAsciiSpelling) {
+  expect_refused("utf8_square.lag", "model m\ncoords x\nL = x'\xc2\xb2\n", "3:7",
+                 "unexpected character '\xc2\xb2' (U+00B2): write ^ for a power");
+  expect_refused("utf8_times.lag", "model m\ncoords x\nL = 2\xc3\x97x'^2\n", "3:6",
+                 "unexpected character '\xc3\x97' (U+00D7): write * for a product");
+  expect_refused("utf8_prime.lag", "model m\ncoords x\nL = x\xe2\x80\xb2^2\n", "3:6",
+                 "unexpected character '\xe2\x80\xb2' (U+2032): write ' for a time derivative");
+  expect_refused("utf8_nbsp.lag", "model m\ncoords x\nL =\xc2\xa0x'^2\n", "3:4",
+                 "unexpected character U+00A0: a space that is not ASCII");
+  // Not UTF-8 (a lone continuation byte, a truncated sequence): the byte itself.
+  expect_refused("utf8_broken.lag", "model m\ncoords x\nL = x'^2 \x80\n", "3:10", "unexpected byte 0x80");
+  expect_refused("utf8_cut.lag", "model m\ncoords x\nL = x'^2 \xe2\x80\n", "3:10", "unexpected byte 0xe2");
 }
 
 TEST_F(HostileText, FormFeedInAnExpression) {
