@@ -39,7 +39,7 @@ const char* ascii_instead(long cp) {
   if (cp == 0x2212 || cp == 0x2013) return "write - for a minus";
   if (cp == 0xf7 || cp == 0x2215) return "write / for a quotient";
   if (cp == 0xa0 || (cp >= 0x2000 && cp <= 0x200b) || cp == 0x202f || cp == 0x3000) return "a space that is not ASCII";
-  return "names, numbers and operators are ASCII (write lambda, not the Greek letter)";
+  return "names, numbers and operators are ASCII (spell Greek letters out: theta, lambda)";
 }
 
 }  // namespace
