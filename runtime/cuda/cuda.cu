@@ -181,10 +181,17 @@ bool cuda_device_available(std::string* why) {
 
 bool cuda_supports(const pardel_model& model, const pardel_discretization& discretization, std::string* why) {
   if (find_entry(model, discretization)) return true;
-  if (why)
+  if (why) {
+    bool namesake = false;
+    for (const DeviceEntry& e : cuda_detail::device_entries()) namesake = namesake || std::strcmp(e.model->name, model.name) == 0;
     *why = std::string("model ") + model.name + " with discretization " + discretization.name +
-           " is not compiled for the device; the device build has: " + device_list() +
-           " (PARDEL_DEVICE_MODELS at configure time)";
+           " is not compiled for the device" +
+           (namesake ? std::string(" (this one is generated from ") + (model.source ? model.source : "an unnamed source") +
+                           "; the device's model of that name is another)"
+                     : std::string()) +
+           "; the device build has: " + device_list() +
+           " (PARDEL_DEVICE_MODELS at configure time, and models added with pardel_add_model(... DEVICE))";
+  }
   return false;
 }
 

@@ -158,7 +158,11 @@ TEST(DeviceBatchRefusals, MethodsKnotsAndModelsTheDeviceLacks) {
   // time): another source file, or the same in all but the Lagrangian (another sweep kernel).
   pardel_model elsewhere = fuel_nav_model;
   elsewhere.source = "/home/someone/fuel_nav.lag";
-  EXPECT_FALSE(pardel::cuda_supports(elsewhere, disc));
+  EXPECT_FALSE(pardel::cuda_supports(elsewhere, disc, &why));
+  EXPECT_NE(why.find("this one is generated from /home/someone/fuel_nav.lag; the device's model of that name is "
+                     "another"),
+            std::string::npos)
+      << why;
   pardel_model other_wind = fuel_nav_model;
   pardel_discretization other_sweep = fuel_nav_model.discretizations[0];
   other_sweep.sweep = fuel_nav_model.discretizations[1].sweep;  // midpoint's kernel under trapezoid's name
