@@ -151,8 +151,20 @@ struct Sampler {
   }
 };
 
-/** Reduced row echelon form with partial pivoting; entries below tol * max |entry| count as 0. */
+/** Reduced row echelon form with partial pivoting of S W S, S = diag(|W_ii|^-1/2) (1 where W_ii
+ *  is 0), so that the rank does not change with the units of a coordinate; entries below
+ *  tol * max |entry| count as 0. The null vectors are W's (S times those of S W S, the free
+ *  component 1). */
 void reduce(int n, std::vector<numeric> a, int* rank, std::vector<std::vector<double>>* null) {
+  std::vector<numeric> sc(static_cast<std::size_t>(n), numeric(1));
+  for (int i = 0; i < n; ++i) {
+    const numeric d = GiNaC::abs(a[static_cast<std::size_t>(i * n + i)]);
+    if (!d.is_zero()) sc[static_cast<std::size_t>(i)] = numeric(1) / GiNaC::sqrt(d);
+  }
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      a[static_cast<std::size_t>(i * n + j)] =
+          a[static_cast<std::size_t>(i * n + j)] * sc[static_cast<std::size_t>(i)] * sc[static_cast<std::size_t>(j)];
   numeric scale = 0;
   for (const numeric& x : a) scale = std::max(scale, GiNaC::abs(x));
   const numeric tol = scale * numeric(1, 10).power(30);
@@ -182,8 +194,11 @@ void reduce(int n, std::vector<numeric> a, int* rank, std::vector<std::vector<do
     if (std::find(pivot_col.begin(), pivot_col.end(), f) != pivot_col.end()) continue;
     std::vector<double> v(static_cast<std::size_t>(n), 0.0);
     v[static_cast<std::size_t>(f)] = 1.0;
-    for (std::size_t r = 0; r < pivot_col.size(); ++r)
-      v[static_cast<std::size_t>(pivot_col[r])] = -a[r * static_cast<std::size_t>(n) + static_cast<std::size_t>(f)].to_double();
+    for (std::size_t r = 0; r < pivot_col.size(); ++r) {
+      const std::size_t c = static_cast<std::size_t>(pivot_col[r]);
+      v[c] = (-a[r * static_cast<std::size_t>(n) + static_cast<std::size_t>(f)] * sc[c] / sc[static_cast<std::size_t>(f)])
+                 .to_double();
+    }
     null->push_back(v);
   }
 }

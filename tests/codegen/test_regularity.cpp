@@ -111,10 +111,10 @@ TEST(Regularity, WarnsWhereDetWChangesSignThroughAZero) {
   EXPECT_EQ(f.zero_point, "s = 1");
 }
 
-// No false alarms: a det W bounded away from zero, one that depends on the params only, and one
-// that changes sign through a pole.
+// No false alarms: a det W bounded away from zero, one that depends on the params only, one
+// that changes sign through a pole, and one whose coordinates are in units 1e40 apart.
 TEST(Regularity, SilentWithoutAZero) {
-  for (const char* name : {"never_singular", "param_det", "pole_det"}) {
+  for (const char* name : {"never_singular", "param_det", "pole_det", "far_units"}) {
     const LagModel model = load(name);
     EXPECT_TRUE(pardel_codegen::check_regularity(model, false).empty()) << name;
     const pardel_codegen::RegularityFindings f = pardel_codegen::analyze_regularity(model);
