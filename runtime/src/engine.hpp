@@ -287,11 +287,18 @@ std::unique_ptr<Method_> make_hybrid(const Options& options, int dim, Partition&
                                      std::unique_ptr<Method_> newton);
 std::unique_ptr<Method_> make_stationary_newton(const Options& options, int dim);
 
+/** A DEL residual at most this many times its round-off level (Context::residual_floor,
+ *  Summary::residual_floor) is at round-off: no iteration in double precision makes it smaller. */
+constexpr double kRoundOffResidual = 10;
+inline bool at_round_off(double residual, double residual_floor) {
+  return residual <= kRoundOffResidual * residual_floor;
+}
+
 /** The residual that counts as converged at the context's iterate: Options::tol when set, else
  *  max(rtol x residual_scale, 10 x residual_floor). */
 inline double target_residual(const Options& options, const Context& ctx) {
   if (options.tol > 0) return options.tol;
-  return std::max(options.rtol * ctx.residual_scale, 10 * ctx.residual_floor);
+  return std::max(options.rtol * ctx.residual_scale, kRoundOffResidual * ctx.residual_floor);
 }
 
 /** Component i's name for messages: its coordinate, with a prime per derivative (order > 1). */

@@ -207,7 +207,7 @@ bool Iteration::answer_at_tolerance(bool last, double r, double target, bool* se
 
 /** At the round-off level of the residual and no 1% improvement in 200 iterations. */
 bool Iteration::stalled_at_round_off(double r, double target) {
-  if (!(r <= 10 * ctx_.residual_floor && iteration_ - best_iteration_ >= 200)) return false;
+  if (!(at_round_off(r, ctx_.residual_floor) && iteration_ - best_iteration_ >= 200)) return false;
   if (unresolved_component() >= 0) {
     finish(Termination::stalled,
            format("stalled: the DEL residual %.3g is at the round-off level %.3g of the largest terms and no "
@@ -234,7 +234,7 @@ bool Iteration::refined_at_round_off(double r, double target) {
   // Only once Newton has stopped gaining there (10 iterations without coming 1% closer to the
   // test): where its next step resolves the component (min_jerk at N = 2e4), the extended
   // Hessian's refinement would only add its cost.
-  if (refined_ || !whole_system_newton(options_.method) || !(r <= target) || !(r <= 10 * ctx_.residual_floor) ||
+  if (refined_ || !whole_system_newton(options_.method) || !(r <= target) || !at_round_off(r, ctx_.residual_floor) ||
       iteration_ - best_iteration_ < 10 || unresolved_component() < 0)
     return false;
   refined_ = true;

@@ -281,7 +281,7 @@ bool saddles_answer(const Problem& problem, const Options& requested) {
  *  as well as double precision can, and a second attempt would reach no smaller tolerance. */
 bool failed_numerically(const Summary& first) {
   switch (first.termination) {
-    case Termination::stalled: return !(first.residual <= 10 * first.residual_floor);
+    case Termination::stalled: return !detail::at_round_off(first.residual, first.residual_floor);
     case Termination::diverged:
     case Termination::non_finite:
     case Termination::max_iterations: return true;

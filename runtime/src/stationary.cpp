@@ -82,7 +82,7 @@ class StationaryNewton : public Method_ {
       for (double& v : p_) v *= 0.5;
     }
     char buf[640];
-    if (r0 <= 10 * ctx.residual_floor) {  // as the trust region's stall (newton_stalled)
+    if (at_round_off(r0, ctx.residual_floor)) {  // as the trust region's stall (newton_stalled)
       std::snprintf(buf, sizeof buf,
                     "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of "
                     "it, reduces the DEL residual %.3g, which is at the round-off level of this problem (estimate "

@@ -63,7 +63,7 @@ inline StepOutcome newton_stalled(long iteration, double residual, double residu
   StepOutcome out;
   char buf[400];
   out.failure = Termination::stalled;
-  if (residual <= 10 * residual_floor) {
+  if (at_round_off(residual, residual_floor)) {
     std::snprintf(buf, sizeof buf,
                   "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
                   "the DEL residual %.3g is at the round-off level of this problem (estimate %.3g) and the "
@@ -304,7 +304,7 @@ class TrustRegionNewton : public Method_ {
       delta_ = 0.25 * std::min(delta_, step.norm);
       if (!(delta_ > 1e-15 * std::max(1.0, metric_norm_of_iterate(ctx)))) break;
     }
-    if (nonfinite_trials > 0 && (all_nonfinite || r0 > 10 * ctx.residual_floor)) {
+    if (nonfinite_trials > 0 && (all_nonfinite || r0 > kRoundOffResidual * ctx.residual_floor)) {
       // The steps, down to a vanishing one, reach points where the model is not finite (or, the
       // shortest of them, no lower action): the model's domain ends next to this iterate.
       StepOutcome out;
