@@ -124,14 +124,14 @@ Line Reader::tokenize(int number) const {
       fail(number, t.col, "a prime (') must follow a coordinate name");
     } else {
       std::ostringstream msg;
+      long cp = -1;  // the code point of a UTF-8 character here
       if (s.compare(i, 3, "\xef\xbb\xbf") == 0) {
         msg << "unexpected byte-order mark (U+FEFF; only allowed as the first bytes of the file)";
       } else if (c == '\r') {
         msg << "carriage return without a line feed (lines must end with LF or CR LF)";
       } else if (c >= 0x20 && c < 0x7f) {
         msg << "unexpected character '" << static_cast<char>(c) << "'";
-      } else if (std::size_t len = 0; c >= 0x80 && utf8_at(s, i, &len) >= 0) {
-        const long cp = utf8_at(s, i, &len);
+      } else if (std::size_t len = 0; c >= 0x80 && (cp = utf8_at(s, i, &len)) >= 0) {
         char code[16];
         std::snprintf(code, sizeof code, "U+%04lX", cp);
         const bool visible = cp > 0xa0 && !(cp >= 0x2000 && cp <= 0x200f) && !(cp >= 0x2028 && cp <= 0x202f) &&
