@@ -5,8 +5,9 @@
  * smallest eigenvalues by Lanczos on the inverse (the second one with the first deflated) against
  * Gershgorin's bound on the largest, which tells a well-posed minimum from a nearly degenerate one.
  * O(N) work: one factorization (or Newton's last one, at the same point) and at most 2 x 24 solves
- * where lambda_1's run takes at most 4 steps, 3 x 24 otherwise. Also the check that refuses a
- * degenerate Lagrangian before solving.
+ * where lambda_1's run takes at most 4 steps, 3 x 24 otherwise; from a coarser level's eigenvectors
+ * (LevelEigenvectors, Newton's nested levels) one solve per run on smooth problems. Also the check
+ * that refuses a degenerate Lagrangian before solving.
  */
 #include <Eigen/Dense>
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "assessment.hpp"
@@ -99,7 +101,10 @@ struct Basis {
  * beta_{k-1} v_{k-1} of the last step, not normalized, so that A V = V T + W e_k^T (V the basis,
  * T the tridiagonal of alpha and beta) and A x = mu x + s_k W for the Ritz vector x = V s.
  * With `replay` (an earlier run from the same start) it recomputes the same vectors and that W,
- * and accumulates x = sum_j s_j v_j into x.
+ * and accumulates x = sum_j s_j v_j into x. With `warm` (a start vector that is nearly an
+ * eigenvector: a coarser level's, LevelEigenvectors) it also settles at any step where the
+ * residual alone puts mu within `settle` (Weinstein's bound: an eigenvalue lies within r of the
+ * Ritz value), which the first step of such a start does.
  */
 struct Lanczos {
   std::vector<double> alpha, beta;
@@ -110,19 +115,31 @@ struct Lanczos {
   double start_norm = 0;  ///< the norm of the start vector (after the projection off y)
   int steps() const { return static_cast<int>(alpha.size()); }
 };
-Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* y, double settle,
+Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* y, double settle, bool warm,
                 const Lanczos* replay = nullptr, double* x = nullptr) {
   const std::size_t n = op.n;
   const unsigned char* free = op.free;
   Lanczos run;
   double* v0 = basis.at(0);
-  if (y) {
-    const double c = dot(op, y, v0);
-    for (std::size_t i = 0; i < n; ++i) v0[i] -= c * y[i];
+  // v_0 = P s / |P s| (s the start, P the projection off the unit vector y): s.y and s.s in one
+  // pass, then the projection and the scaling in one, |P s|^2 = s.s - (s.y)^2; where that
+  // difference cancels (below 1e-4 of s.s), P s is formed first and its norm taken.
+  double sums[2] = {0, 0};  // s.y, s.s
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!free[i]) continue;
+    if (y) sums[0] += v0[i] * y[i];
+    sums[1] += v0[i] * v0[i];
   }
-  const double norm = std::sqrt(dot(op, v0, v0));
+  op.reduce(sums, 2);
+  double c = sums[0], norm2 = sums[1] - c * c;
+  if (y && !(norm2 > 1e-4 * sums[1])) {
+    for (std::size_t i = 0; i < n; ++i) v0[i] -= c * y[i];
+    norm2 = dot(op, v0, v0);
+    c = 0;
+  }
+  const double norm = std::sqrt(norm2);
   if (!(norm > 0) || !std::isfinite(norm)) return run;
-  for (std::size_t i = 0; i < n; ++i) v0[i] = free[i] ? v0[i] / norm : 0.0;
+  for (std::size_t i = 0; i < n; ++i) v0[i] = free[i] ? (y ? v0[i] - c * y[i] : v0[i]) / norm : 0.0;
   run.start_norm = norm;
   if (x) std::fill(x, x + n, 0.0);
   const int steps = replay ? replay->steps() : kLanczosSteps;
@@ -178,9 +195,9 @@ Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* y, 
     // The Ritz pair's residual |A x - mu x| is b |s_j|; with the gap to the next Ritz value it
     // bounds the distance of mu to an eigenvalue by r^2 / gap (Kato-Temple, the gap estimated
     // from T). Settled when that is below `settle` of mu, or when the Krylov space is one that
-    // A maps into itself (W vanishes against A's scale).
+    // A maps into itself (W vanishes against A's scale); from a warm start also when r itself is.
     const double r = b * std::fabs(run.s(run.s.size() - 1)), gap = mu - second;
-    if ((run.alpha.size() >= 3 && r * r <= settle * mu * gap) || !(b > 1e-12 * mu)) {
+    if ((run.alpha.size() >= 3 && r * r <= settle * mu * gap) || (warm && r <= settle * mu) || !(b > 1e-12 * mu)) {
       run.settled = true;
       run.complete = true;
       break;
@@ -227,6 +244,40 @@ void start_vector(const LanczosOperator& op, int shape, double* v) {
   for (std::size_t i = 0; i < op.n; ++i) v[i] = start(i);
 }
 
+/** The start of run `which` (0: lambda_1's, 1: lambda_2's) into v: op.start's where it gives one
+ *  (true: a warm start), else start_vector's shape `which`. */
+bool fill_start(const LanczosOperator& op, int which, double* v) {
+  if (op.start && op.start(which, v)) return true;
+  start_vector(op, which, v);
+  return false;
+}
+
+/** Into z: mu x + s_k W over the free components (the refined Ritz vector, H^-1 applied to x by
+ *  the Lanczos relation), x = sum_j s_j v_j given (x) or summed from the run's k vectors v_j (v_0
+ *  recomputed from the built-in start where v0 is given); returns |z|^2 and z.x, reduced over the
+ *  ranks. z may be x, W or one of the v_j (element by element). */
+std::pair<double, double> refine_ritz(const LanczosOperator& op, const Lanczos& run, const double* x,
+                                      double* const* v, const StartVector* v0, const double* W, double* z) {
+  const int k = run.steps();
+  const double mu = 1 / run.lambda, s_k = run.s(k - 1);
+  double sums[2] = {0, 0};
+  for (std::size_t i = 0; i < op.n; ++i) {
+    double xi;
+    if (x) {
+      xi = x[i];
+    } else {
+      xi = run.s(0) * (v0 ? (op.free[i] ? (*v0)(i) / run.start_norm : 0.0) : v[0][i]);
+      for (int j = 1; j < k; ++j) xi += run.s(j) * v[j][i];
+    }
+    const double zi = op.free[i] ? mu * xi + s_k * W[i] : 0.0;
+    sums[0] += zi * zi;
+    sums[1] += zi * xi;
+    z[i] = zi;
+  }
+  op.reduce(sums, 2);
+  return {sums[0], sums[1]};
+}
+
 }  // namespace
 
 long fixed_components(const Grid& grid) {
@@ -248,7 +299,8 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   // The first run's vectors cycle through the four work vectors, so that a run of up to 4 steps
   // leaves v_1 .. v_{k-1} and W in them (v_0, the normalized start vector, is recomputed where W
   // took its place): y needs no replay and no vector beyond the four. A longer run is replayed
-  // from its start (k solves: its vectors and W again) with y accumulated in the fourth vector.
+  // from its start (k solves: its vectors and W again) with y accumulated in the fourth vector;
+  // so is a warm run of 4 steps, whose start (op.start's) is not recomputed element by element.
   const std::size_t n = op.n;
   std::unique_ptr<double[]> store;
   double* w[4] = {op.work[0], op.work[1], op.work[2], op.work[3]};
@@ -258,8 +310,8 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   }
   SmallestEigenvalues out;
   const Basis cycle4{w, 4};
-  start_vector(op, 0, cycle4.at(0));
-  const Lanczos first = lanczos(op, cycle4, nullptr, kSettleSmallest);
+  const bool warm0 = fill_start(op, 0, cycle4.at(0));
+  const Lanczos first = lanczos(op, cycle4, nullptr, kSettleSmallest, warm0);
   out.lambda[0] = first.lambda;
   if (positive < 2 || first.alpha.empty()) {
     out.settled = first.settled;
@@ -268,39 +320,22 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   out.lambda[1] = first.lambda;  // where the refinement below fails: not settled
   if (!first.complete) return out;
   const int k = first.steps();
-  const Eigen::VectorXd& s = first.s;
-  const double mu = 1 / first.lambda, s_k = s(k - 1);
   // z = mu y + s_k W, element by element, written over v_0 (or W, where W took v_0's place): y
-  // and z are then in w[0]. With a replay, y in w[3] and W in the replay's cycle of three.
-  const bool replayed = k > 4;
-  const Basis cycle3{w, 3};
+  // and z are then in w[0]. With a replay, y and z in w[3] and W in the replay's cycle of three.
+  const bool replayed = k > 4 || (warm0 && k == 4);
   double* z_out = w[0];
-  const double* W = cycle4.at(k);
+  std::pair<double, double> sums;
   if (replayed) {
-    start_vector(op, 0, cycle3.at(0));
-    lanczos(op, cycle3, nullptr, 0, &first, w[3]);
-    W = cycle3.at(k);
+    const Basis cycle3{w, 3};
+    fill_start(op, 0, cycle3.at(0));
+    lanczos(op, cycle3, nullptr, 0, warm0, &first, w[3]);
     z_out = w[3];
+    sums = refine_ritz(op, first, w[3], nullptr, nullptr, cycle3.at(k), z_out);
+  } else {
+    const StartVector start(op, 0);
+    sums = refine_ritz(op, first, nullptr, w, k == 4 ? &start : nullptr, cycle4.at(k), z_out);
   }
-  const StartVector start(op, 0);
-  double zz = 0, zy = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    double yi;
-    if (replayed) {
-      yi = w[3][i];
-    } else {
-      yi = s(0) * (k == 4 ? (op.free[i] ? start(i) / first.start_norm : 0.0) : w[0][i]);
-      for (int j = 1; j < k; ++j) yi += s(j) * w[j][i];
-    }
-    const double z = op.free[i] ? mu * yi + s_k * W[i] : 0.0;
-    zz += z * z;
-    zy += z * yi;
-    z_out[i] = z;
-  }
-  double sums[2] = {zz, zy};
-  op.reduce(sums, 2);
-  zz = sums[0];
-  zy = sums[1];
+  const double zz = sums.first, zy = sums.second;
   // The Rayleigh quotient of H at z, z.H z / z.z = z.y / z.z (H z = y), is an upper bound on
   // lambda_1 whose error is the square of z's angle to the eigenvector (a factor lambda_1 /
   // lambda_2 below y's), and z/|z| is the vector deflated below.
@@ -309,14 +344,40 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   const double nz = std::sqrt(zz);
   double* y = z_out;
   for (std::size_t i = 0; i < n; ++i) y[i] /= nz;
+  if (op.keep[0]) {
+    std::copy(y, y + n, op.keep[0]);
+    out.kept[0] = true;
+  }
   double* rest[3];
   for (int j = 0, r = 0; j < 4; ++j)
     if (w[j] != y) rest[r++] = w[j];
   const Basis second_basis{rest, 3};
-  start_vector(op, 1, second_basis.at(0));
-  const Lanczos second = lanczos(op, second_basis, y, kSettleNext);
-  out.lambda[1] = std::max(second.lambda, first.lambda);
+  const bool warm1 = fill_start(op, 1, second_basis.at(0));
+  const Lanczos second = lanczos(op, second_basis, y, kSettleNext, warm1);
+  // A second value below the first: the first run's start lay along a higher mode (a warm start
+  // from a coarse level where two modes were in the other order), and the two swap.
+  const bool swapped = second.lambda > 0 && second.lambda < out.lambda[0];
+  if (swapped) {
+    out.lambda[1] = out.lambda[0];
+    out.lambda[0] = second.lambda;
+  } else {
+    out.lambda[1] = std::max(second.lambda, first.lambda);
+  }
   out.settled = first.settled && second.settled;
+  if (op.keep[1] && second.complete && second.lambda > 0) {
+    // The second Ritz vector, refined alike: from the vectors at hand after up to 2 steps (W took
+    // v_0's place after 3), else by a replay that sums it in op.keep[1].
+    const int k2 = second.steps();
+    if (k2 <= 2) {
+      refine_ritz(op, second, nullptr, rest, nullptr, second_basis.at(k2), op.keep[1]);
+    } else {
+      fill_start(op, 1, second_basis.at(0));
+      lanczos(op, second_basis, y, 0, warm1, &second, op.keep[1]);
+      refine_ritz(op, second, op.keep[1], nullptr, nullptr, second_basis.at(k2), op.keep[1]);
+    }
+    out.kept[1] = true;
+    if (swapped && out.kept[0]) std::swap_ranges(op.keep[0], op.keep[0] + n, op.keep[1]);
+  }
   return out;
 }
 
@@ -356,39 +417,102 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
   }
 }
 
+namespace {
+
+/** The Lanczos operator of ctx's free unknowns in one process, through `solve`. */
+LanczosOperator local_operator(const Context& ctx, const std::function<void(const double* b, double* x)>& solve,
+                               double* const* work) {
+  LanczosOperator op;
+  op.n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * static_cast<std::size_t>(ctx.dim);
+  op.dim = ctx.dim;
+  op.first_node = 1;
+  op.N = ctx.N;
+  op.free = ctx.is_free.data() + ctx.dim;
+  op.solve = solve;
+  op.reduce = [](double*, int) {};
+  if (work)
+    for (int k = 0; k < 4; ++k) op.work[k] = work[k];
+  return op;
+}
+
+}  // namespace
+
 void assess_minimum(Context& ctx, double lambda_max, const std::function<void(const double* b, double* x)>& solve,
-                    PointAssessment& out, double* const* work) {
+                    PointAssessment& out, double* const* work, const LevelEigenvectors* from) {
   out = PointAssessment{};
   out.lambda_max = lambda_max;
-  const std::size_t n = static_cast<std::size_t>(std::max(ctx.N - 1, 0)) * ctx.dim;
-  const std::size_t dz = static_cast<std::size_t>(ctx.dim);
-  out.positive = static_cast<long>(n) - fixed_components(ctx);
+  out.positive = static_cast<long>(std::max(ctx.N - 1, 0)) * ctx.dim - fixed_components(ctx);
   out.kind = PointKind::minimum;
   if (out.positive <= 0) {
     out.note = "no unknowns";
     return;
   }
-  LanczosOperator op;
-  op.n = n;
-  op.dim = ctx.dim;
-  op.first_node = 1;
-  op.N = ctx.N;
-  op.free = ctx.is_free.data() + dz;
   // An interruption after convergence stops the assessment at its next block solve.
   struct Interrupted {};
-  op.solve = [&solve, &ctx](const double* b, double* x) {
-    if (ctx.keep_going && !ctx.keep_going()) throw Interrupted{};
-    solve(b, x);
-  };
-  op.reduce = [](double*, int) {};
-  if (work)
-    for (int k = 0; k < 4; ++k) op.work[k] = work[k];
+  LanczosOperator op = local_operator(
+      ctx,
+      [&solve, &ctx](const double* b, double* x) {
+        if (ctx.keep_going && !ctx.keep_going()) throw Interrupted{};
+        solve(b, x);
+      },
+      work);
+  if (from && from->held()) op.start = [from, &ctx](int which, double* v) { return from->start(ctx, which, v); };
   try {
     describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out);
   } catch (const Interrupted&) {
     out = PointAssessment{};
     out.note = "not assessed: interrupted during the assessment of the converged point";
   }
+}
+
+void LevelEigenvectors::settle_level(const Context& ctx, const std::function<void(const double* b, double* x)>& solve,
+                                     double* const* work) {
+  LanczosOperator op = local_operator(ctx, solve, work);
+  const long positive = static_cast<long>(op.n) - fixed_components(ctx);
+  if (positive <= 0) {
+    valid_[0] = valid_[1] = false;
+    return;
+  }
+  for (int i = 0; i < 2; ++i) {
+    next_[i].resize(op.n);
+    op.keep[i] = next_[i].data();
+  }
+  if (held()) op.start = [this, &ctx](int which, double* v) { return start(ctx, which, v); };
+  const SmallestEigenvalues e = smallest_eigenvalues(op, positive);
+  for (int i = 0; i < 2; ++i) {
+    std::swap(v_[i], next_[i]);
+    valid_[i] = e.kept[i];
+  }
+  N_ = ctx.N;
+  dim_ = ctx.dim;
+  t_.assign(ctx.t.begin(), ctx.t.begin() + ctx.N + 1);
+}
+
+bool LevelEigenvectors::start(const Context& ctx, int which, double* v) const {
+  if (!valid_[which] || dim_ != ctx.dim || N_ < 2 || ctx.N < 2) return false;
+  const std::vector<double>& c = v_[which];
+  const std::size_t d = static_cast<std::size_t>(dim_);
+  const unsigned char* free = ctx.is_free.data() + d;
+  // Coarse interior node m (1 .. N_ - 1) holds c[(m - 1) d + a]; the fine node j's value comes
+  // from the coarse interval [m, m + 1] that holds its time, m kept within 1 .. N_ - 2 (linear
+  // extrapolation past the ends; one interior node: its value).
+  int m = 1;
+  for (int j = 1; j < ctx.N; ++j) {
+    const double t = ctx.t[static_cast<std::size_t>(j)];
+    while (m + 1 < N_ - 1 && t > t_[static_cast<std::size_t>(m + 1)]) ++m;
+    const std::size_t lo = static_cast<std::size_t>(m - 1) * d;
+    double* out = v + static_cast<std::size_t>(j - 1) * d;
+    if (N_ == 2) {
+      for (std::size_t a = 0; a < d; ++a) out[a] = c[a];
+    } else {
+      const double t0 = t_[static_cast<std::size_t>(m)], t1 = t_[static_cast<std::size_t>(m + 1)];
+      const double f = (t - t0) / (t1 - t0);
+      for (std::size_t a = 0; a < d; ++a) out[a] = c[lo + a] + f * (c[lo + d + a] - c[lo + a]);
+    }
+    for (std::size_t a = 0; a < d; ++a)
+      if (!free[static_cast<std::size_t>(j - 1) * d + a]) out[a] = 0;
+  }
+  return true;
 }
 
 bool classify_indefinite(PointAssessment& out) {

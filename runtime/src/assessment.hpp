@@ -15,6 +15,8 @@
 
 namespace pardel::detail {
 
+class LevelEigenvectors;
+
 /** Assesses ctx.q (evaluating the full kernel there if needed) into `out`. */
 void assess(Context& ctx, PointAssessment& out);
 
@@ -33,9 +35,10 @@ inline PointAssessment not_assessed(Termination termination) {
 
 /** Assesses ctx.q given the unshifted Hessian there, positive definite, through lambda_max (its
  *  Gershgorin bound) and solve (x = H^-1 b): a minimum, with its smallest eigenvalues. `work` as
- *  LanczosOperator::work (optional). */
+ *  LanczosOperator::work (optional); `from`: the previous level's eigenvectors (optional), which
+ *  start the Lanczos runs. */
 void assess_minimum(Context& ctx, double lambda_max, const std::function<void(const double* b, double* x)>& solve,
-                    PointAssessment& out, double* const* work = nullptr);
+                    PointAssessment& out, double* const* work = nullptr, const LevelEigenvectors* from = nullptr);
 
 /** Fixed components are identity rows of the assembled Hessian: +1 eigenvalues that are not the
  *  action's, taken out of the counts. */
@@ -56,10 +59,11 @@ bool classify_indefinite(PointAssessment& out);
  */
 template <int D>
 void assess_hessian(Context& ctx, BlockTridiagonal<D>& H, bool factored, PointAssessment& out,
-                    double* const* work = nullptr) {
+                    double* const* work = nullptr, const LevelEigenvectors* from = nullptr) {
   const auto solve = [&H](const double* b, double* x) { H.solve_ldlt(b, x); };
-  if ((factored || H.factor_ldlt()) && H.ldlt_definite_by_rule()) {
-    assess_minimum(ctx, H.gershgorin_bound(), solve, out, work);
+  double lambda_max = 0;  // Gershgorin's bound, from the rule's pass
+  if ((factored || H.factor_ldlt()) && H.ldlt_definite_by_rule(&lambda_max)) {
+    assess_minimum(ctx, lambda_max, solve, out, work, from);
     return;
   }
   const Inertia in = H.inertia();
@@ -71,7 +75,7 @@ void assess_hessian(Context& ctx, BlockTridiagonal<D>& H, bool factored, PointAs
   if (classify_indefinite(out)) return;
   // Positive definite under the rule, though a pivot's Cholesky factor did not show it at once.
   if (H.factor_ldlt()) {
-    assess_minimum(ctx, out.lambda_max, solve, out, work);
+    assess_minimum(ctx, out.lambda_max, solve, out, work, from);
     return;
   }
   out.kind = PointKind::degenerate;
@@ -81,8 +85,8 @@ void assess_hessian(Context& ctx, BlockTridiagonal<D>& H, bool factored, PointAs
 /** assess_hessian given H already factored by block LDL^T at ctx.q (Newton's factorization). */
 template <int D>
 void assess_positive_definite(Context& ctx, BlockTridiagonal<D>& H, PointAssessment& out,
-                              double* const* work = nullptr) {
-  assess_hessian(ctx, H, true, out, work);
+                              double* const* work = nullptr, const LevelEigenvectors* from = nullptr) {
+  assess_hessian(ctx, H, true, out, work, from);
 }
 
 /** A positive definite Hessian's inverse, as the Lanczos iteration of smallest_eigenvalues sees it:
@@ -99,6 +103,14 @@ struct LanczosOperator {
   /** Scratch of four vectors of n that smallest_eigenvalues may overwrite (a method's vectors, free
    *  once it has stopped); where any is null, it allocates its own. */
   double* work[4] = {nullptr, nullptr, nullptr, nullptr};
+  /** Where set: writes the start of run `which` (0: lambda_1's, 1: lambda_2's) into v (n values,
+   *  zero on fixed components) and returns true, a vector close to that eigenvector (a coarser
+   *  level's, LevelEigenvectors), from which a run settles as soon as its residual alone bounds
+   *  the error; false: the built-in start. */
+  std::function<bool(int which, double* v)> start;
+  /** Where not null (n values each): smallest_eigenvalues writes its estimates of the two
+   *  eigenvectors there (SmallestEigenvalues::kept), for a finer level's start. */
+  double* keep[2] = {nullptr, nullptr};
 };
 
 /** The two smallest eigenvalues of H (Ritz values: upper bounds, the second up to the error of
@@ -106,6 +118,35 @@ struct LanczosOperator {
 struct SmallestEigenvalues {
   double lambda[2] = {0, 0};
   bool settled = false;
+  bool kept[2] = {false, false};  ///< LanczosOperator::keep[i] written
+};
+
+/**
+ * The eigenvectors of the two smallest eigenvalues of the Hessian at a settled coarse level of
+ * nested iteration (node layout over its interior nodes, zero on fixed components), which start
+ * the next level's Lanczos runs: the lowest modes are smooth in time, so that the coarse ones
+ * resampled to the finer grid are its eigenvectors to O(h^2), and a run from them settles in one
+ * step (one block solve) where a run from the built-in start takes 3 to 6.
+ */
+class LevelEigenvectors {
+ public:
+  /** This level's estimates at ctx.q by smallest_eigenvalues through `solve` (x = H^-1 b for the
+   *  Hessian at ctx.q or at an iterate next to it), started from the held ones; they replace them
+   *  (nothing is held where a run fails). `work`: four vectors of the level's n. */
+  void settle_level(const Context& ctx, const std::function<void(const double* b, double* x)>& solve,
+                    double* const* work);
+  /** Vector `which` resampled onto ctx's grid into v (its n values): per component, linear in the
+   *  node times between the held level's nodes and extrapolated linearly past its first and last
+   *  interior nodes; zero on fixed components. False where none is held. */
+  bool start(const Context& ctx, int which, double* v) const;
+  /** Whether vector 0 is held. */
+  bool held() const { return valid_[0]; }
+
+ private:
+  int N_ = 0, dim_ = 0;
+  std::vector<double> t_;                  ///< the held level's N + 1 node times
+  std::vector<double> v_[2], next_[2];     ///< the held vectors, and those being computed
+  bool valid_[2] = {false, false};
 };
 
 /** The smallest eigenvalue by Lanczos on H^-1 over the free components (refined, where `positive`

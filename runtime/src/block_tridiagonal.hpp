@@ -324,6 +324,22 @@ class BlockTridiagonal {
     }
     return bound;
   }
+  /** The same rows of J H J: J, Jn, Jp the scalings of the block, the next and the previous one. */
+  static double gershgorin_rows(const Mat& diag, const Mat* next, const Mat* previous, const double* J,
+                                const double* Jn, const double* Jp) {
+    double bound = 0;
+    const Eigen::Index d = diag.rows();
+    for (Eigen::Index a = 0; a < d; ++a) {
+      double row = 0;
+      for (Eigen::Index b = 0; b < d; ++b) {
+        row += std::fabs(diag(a, b)) * J[b];
+        if (next) row += std::fabs((*next)(a, b)) * Jn[b];
+        if (previous) row += std::fabs((*previous)(b, a)) * Jp[b];
+      }
+      bound = std::max(bound, row * J[a]);
+    }
+    return bound;
+  }
 
   using Inertia = detail::Inertia;
 
@@ -355,22 +371,32 @@ class BlockTridiagonal {
    * After a successful factor_ldlt(): whether its pivots are positive definite under the zero rule
    * as the elimination of inertia() judges them (every pivot's Cholesky factor shows its scaled
    * eigenvalues above the threshold), so that inertia() would count no zero and no negative
-   * eigenvalue. False leaves the decision to inertia(). Reads the factorization; changes nothing
-   * but the scaling's scratch.
+   * eigenvalue. False leaves the decision to inertia(). Reads the factorization; changes nothing.
+   * Where `gershgorin` is given and the answer is true: gershgorin_bound() into it (the same pass).
    */
-  bool ldlt_definite_by_rule() {
-    const double tiny = zero_threshold(jacobi_scaling());
-    for (int i = 0; i < n_; ++i) {
-      const std::size_t ii = static_cast<std::size_t>(i);
-      const double* J = scaling_.data() + ii * static_cast<std::size_t>(d_);
-      bool ok;
-      if constexpr (D == Eigen::Dynamic)
-        ok = clearly_positive(Mat(llt_[ii].matrixL()), J, tiny);
-      else
-        ok = clearly_positive(true_factor(factor_[ii]), J, tiny);
-      if (!ok) return false;
+  bool ldlt_definite_by_rule(double* gershgorin = nullptr) const {
+    // One pass: each pivot's bound 1 / ||(J L)^-1||_F^2 from below on its scaled eigenvalues (the
+    // least of them kept), Gershgorin's bound of J H J that sets the rule's threshold, and that
+    // of H (J block by block from the diagonal: no array of n d, which costs its page faults).
+    const std::size_t n = static_cast<std::size_t>(std::max(n_, 0));
+    Vec Jp = Vec::Ones(d_), J = Jp, Jn = Jp;  // blocks i - 1, i, i + 1
+    if (n > 0) block_scaling(0, J.data());
+    double scaled = 0, unscaled = 0, worst = 0;  // worst: the largest ||(J L)^-1||_F^2
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i + 1 < n) block_scaling(i + 1, Jn.data());
+      scaled = std::max(scaled, gershgorin_rows(diag_[i], i + 1 < n ? &off_[i] : nullptr, i > 0 ? &off_[i - 1] : nullptr,
+                                                J.data(), Jn.data(), Jp.data()));
+      if (gershgorin)
+        unscaled = std::max(unscaled, gershgorin_rows(diag_[i], i + 1 < n ? &off_[i] : nullptr,
+                                                      i > 0 ? &off_[i - 1] : nullptr));
+      const double f = pivot_scaled_inverse_norm2(i, J.data());
+      if (!std::isfinite(f)) return false;
+      worst = std::max(worst, f);
+      Jp.swap(J);
+      J.swap(Jn);
     }
-    return true;
+    if (gershgorin) *gershgorin = unscaled;
+    return worst * zero_threshold(scaled) < 1;
   }
 
   int failed_block() const { return failed_; }
@@ -426,7 +452,7 @@ class BlockTridiagonal {
       if constexpr (D != Eigen::Dynamic) {
         Mat& L = factor_[ii];
         L = S;
-        if (cholesky_in_place(L) && clearly_positive(true_factor(L), J, tiny)) {
+        if (cholesky_in_place(L) && pivot_scaled_inverse_norm2(ii, J) * tiny < 1) {
           in.positive += d_;
           W_[ii] = off_[ii];
           cholesky_solve_columns(L, W_[ii]);
@@ -439,7 +465,7 @@ class BlockTridiagonal {
       } else {
         Eigen::LLT<Mat>& llt = llt_[ii];
         llt.compute(S);
-        if (llt.info() == Eigen::Success && finite_positive_diag(llt) && clearly_positive(Mat(llt.matrixL()), J, tiny)) {
+        if (llt.info() == Eigen::Success && finite_positive_diag(llt) && pivot_scaled_inverse_norm2(ii, J) * tiny < 1) {
           in.positive += d_;
           W_[ii] = llt.solve(off_[ii]);
           if (keep) inverse_[ii] = llt.solve(Mat::Identity(d_, d_));
@@ -458,20 +484,50 @@ class BlockTridiagonal {
   double jacobi_scaling() {
     const std::size_t d = static_cast<std::size_t>(d_), n = static_cast<std::size_t>(std::max(n_, 0));
     assign_within(scaling_, n * d, diag_.capacity() * d, 1.0);
-    for (std::size_t i = 0; i < n; ++i)
-      for (int a = 0; a < d_; ++a) scaling_[i * d + static_cast<std::size_t>(a)] = jacobi_scale(diag_[i](a, a));
+    for (std::size_t i = 0; i < n; ++i) block_scaling(i, scaling_.data() + i * d);
+    return scaled_gershgorin_bound();
+  }
+  /** ||(J L)^-1||_F^2 of pivot i's Cholesky factor L (factor_ldlt's or eliminate's) and J its
+   *  block's scaling (inertia.hpp's scaled_inverse_norm2: the pivot's scaled eigenvalues are at
+   *  least its inverse; not finite where L is not). For the fixed sizes from the stored factor without a division: (J L)^-1 = L^-1 J^-1,
+   *  whose column a is L^-1's times 1 / J_a. */
+  double pivot_scaled_inverse_norm2(std::size_t i, const double* J) const {
+    if constexpr (D == Eigen::Dynamic) {
+      return scaled_inverse_norm2(Mat(llt_[i].matrixL()), J);
+    } else {
+      const Mat& F = factor_[i];  // strictly lower: L; diagonal: 1 / L_aa
+      double f = 0;
+      for (int c = 0; c < D; ++c) {
+        double x[D];
+        x[c] = F(c, c);
+        double column = x[c] * x[c];
+        for (int r = c + 1; r < D; ++r) {
+          double t = 0;
+          for (int k = c; k < r; ++k) t += F(r, k) * x[k];
+          x[r] = -t * F(r, r);
+          column += x[r] * x[r];
+        }
+        f += column / (J[c] * J[c]);
+      }
+      return f;
+    }
+  }
+  /** J of block i's rows: |H_aa|^{-1/2} (jacobi_scale). */
+  void block_scaling(std::size_t i, double* J) const {
+    for (int a = 0; a < d_; ++a) J[a] = jacobi_scale(diag_[i](a, a));
+  }
+  /** Gershgorin's bound of J H J (J block by block from the diagonal, in one pass). */
+  double scaled_gershgorin_bound() const {
+    const std::size_t n = static_cast<std::size_t>(std::max(n_, 0));
+    Vec Jp = Vec::Ones(d_), J = Jp, Jn = Jp;  // blocks i - 1, i, i + 1
+    if (n > 0) block_scaling(0, J.data());
     double bound = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      const double* J = scaling_.data() + i * d;
-      for (int a = 0; a < d_; ++a) {
-        double row = 0;
-        for (int b = 0; b < d_; ++b) {
-          row += std::fabs(diag_[i](a, b)) * J[a] * J[b];
-          if (i + 1 < n) row += std::fabs(off_[i](a, b)) * J[a] * J[d + static_cast<std::size_t>(b)];
-          if (i > 0) row += std::fabs(off_[i - 1](b, a)) * J[a] * (J - d)[b];
-        }
-        bound = std::max(bound, row);
-      }
+      if (i + 1 < n) block_scaling(i + 1, Jn.data());
+      bound = std::max(bound, gershgorin_rows(diag_[i], i + 1 < n ? &off_[i] : nullptr, i > 0 ? &off_[i - 1] : nullptr,
+                                              J.data(), Jn.data(), Jp.data()));
+      Jp.swap(J);
+      J.swap(Jn);
     }
     return bound;
   }
@@ -529,12 +585,6 @@ class BlockTridiagonal {
       }
     }
     return true;
-  }
-  /** The lower Cholesky factor L of a factor of cholesky_in_place (whose diagonal holds 1 / L(j, j)). */
-  static Mat true_factor(const Mat& F) {
-    Mat L = F.template triangularView<Eigen::Lower>();
-    for (int j = 0; j < D; ++j) L(j, j) = 1 / F(j, j);
-    return L;
   }
   /** x <- (L L^T)^{-1} x for the factor of cholesky_in_place (inverse diagonal). */
   static void cholesky_solve(const Mat& L, double* x) {

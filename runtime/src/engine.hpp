@@ -258,6 +258,9 @@ class Method_ {
     (void)out;
     return false;
   }
+  /** Seconds the method spent on its coarse levels preparing the point assessment (Newton's
+   *  eigenvector estimates, LevelEigenvectors); counted in Summary::assessment_seconds. */
+  virtual double level_assessment_seconds() const { return 0; }
   /** Whether the unshifted Hessian of the action at the full evaluation in ctx is positive
    *  definite, by the method's own factorization (the trust-region Newton of trust_region.hpp
    *  answers it, for the hybrid's switch); false for a method without one. */

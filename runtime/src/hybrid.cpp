@@ -41,6 +41,7 @@ class Hybrid final : public Method_ {
     return newton_mode_ ? newton_->accept_stop(ctx, final_level) : true;
   }
   void times_changed() override { newton_->times_changed(); }
+  double level_assessment_seconds() const override { return newton_->level_assessment_seconds(); }
 
   /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. Collective. */
   std::vector<double> save_state() const override {

@@ -51,19 +51,20 @@ inline double jacobi_scale(double h) {
 inline double zero_threshold(double scaled_bound) { return kZeroPivot * std::max(1.0, scaled_bound); }
 
 /**
- * Whether a pivot S = L L^T (L its lower Cholesky factor) certainly has every eigenvalue of J S J
- * above `tiny`: lambda_min(J S J) = 1 / ||(J L)^-1||_2^2 >= 1 / ||(J L)^-1||_F^2. Where this lower
- * bound does not decide (it is within a factor d of the value), split_pivot() does.
+ * ||(J L)^-1||_F^2 for a pivot S = L L^T (L its lower Cholesky factor): every eigenvalue of J S J
+ * is at least its inverse, lambda_min(J S J) = 1 / ||(J L)^-1||_2^2 >= 1 / ||(J L)^-1||_F^2, so
+ * that f tiny < 1 certainly puts them above `tiny`. Where this lower bound does not decide (it is
+ * within a factor d of the value), split_pivot() does.
  */
 template <class Mat>
-bool clearly_positive(const Mat& L, const double* J, double tiny) {
+double scaled_inverse_norm2(const Mat& L, const double* J) {
   Mat M = L.template triangularView<Eigen::Lower>();
   for (Eigen::Index a = 0; a < M.rows(); ++a) M.row(a) *= J[a];
   Mat inv = Mat::Identity(M.rows(), M.cols());
   M.template triangularView<Eigen::Lower>().solveInPlace(inv);
-  const double f = inv.squaredNorm();
-  return std::isfinite(f) && f * tiny < 1;
+  return inv.squaredNorm();  // ||(J L)^-1||_F^2
 }
+
 
 /**
  * The inertia of one symmetric pivot S under the zero rule, from the eigendecomposition of its

@@ -13,6 +13,7 @@
 
 #include "assessment.hpp"
 #include "block_tridiagonal.hpp"
+#include "constants.hpp"
 #include "engine.hpp"
 
 namespace pardel::detail {
@@ -110,13 +111,24 @@ class LocalSpace {
   double action(const Context& ctx) const { return sum_action(ctx); }
   bool assess_factored(Context& ctx, PointAssessment& out, double* const* work) {
     if (cyclic_) return false;  // cyclic reduction keeps no factorization to solve with again
-    assess_positive_definite(ctx, H_, out, work);
+    assess_positive_definite(ctx, H_, out, work, &eigenvectors_);
     return true;
+  }
+  /** A coarse level settled with H factored at lambda = 0 at its answer or the iterate before:
+   *  its eigenvector estimates start the next level's, and the final assessment's (LevelEigenvectors).
+   *  The level next to the final one (ctx.reserve_N at most kAutoRatio times its N) is skipped
+   *  where a coarser level's are held: from those the final level's runs still settle in a step
+   *  (their error O(h^2) 16 times the skipped level's, far below the runs' 1e-4), and the skipped
+   *  level's runs would cost a quarter of the final assessment's. */
+  void level_settled(Context& ctx, double* const* work) {
+    if (cyclic_ || (eigenvectors_.held() && static_cast<long>(ctx.N) * kAutoRatio >= ctx.reserve_N)) return;
+    eigenvectors_.settle_level(ctx, [this](const double* b, double* x) { H_.solve_ldlt(b, x); }, work);
   }
 
  private:
   bool cyclic_, difference_;
   BlockTridiagonal<D> H_;
+  LevelEigenvectors eigenvectors_;  ///< of the last settled coarse level
   std::size_t dz_ = 0, n_ = 0;
   int N_ = 0;
 };

@@ -122,6 +122,9 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
   if (problem.clock == ClockMode::fixed_total_time) e.solve += (N + 1) * d * 8;
   // Context::t_kept, hk_kept: the node times and steps before a convergence check's clock update.
   if (problem.clock != ClockMode::none) e.solve += (2 * N + 1) * 8;
+  // Newton on nested levels: the eigenvector estimates of the last two coarse levels (two vectors
+  // each, at N/4 and N/16 of the nodes), which start the assessment's Lanczos runs.
+  if (levels && method && method->whole_system_newton) e.solve += 2 * (N / 4 + N / 16) * d * 8;
   // The point assessment (assessment.cpp): the solve's context and trajectories, the Hessian and
   // the four vectors of its Lanczos iterations.
   const double n = std::max(N - 1, 0.0);

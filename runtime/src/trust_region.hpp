@@ -37,11 +37,14 @@
  *   double action(const Context&);
  *   bool assess_factored(Context&, PointAssessment&, work);  (after factor at lambda = 0 succeeded there, with
  *     four vectors of size() as scratch; false: cannot)
+ *   void level_settled(Context&, work);  (a coarse level stopped with H factored at lambda = 0 at or next to
+ *     ctx.q; the same scratch)
  */
 #ifndef PARDEL_RUNTIME_TRUST_REGION_HPP
 #define PARDEL_RUNTIME_TRUST_REGION_HPP
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -206,7 +209,10 @@ class TrustRegionNewton : public Method_ {
    *  coarse level reached by a full Newton step from a positive definite Hessian the check is
    *  spared: a saddle there would be one Newton left on the next level, where it checks again. */
   bool accept_stop(Context& ctx, bool final_level) override {
-    if (!final_level && last_step_newton_) return true;
+    if (!final_level && last_step_newton_) {
+      if (assembled_lambda_ == 0) coarse_level_settled(ctx);  // factored at the iterate before the step
+      return true;
+    }
     stop_factored_ = factor(ctx, 0, rhs_, p_);
     if (!stop_factored_) {
       assembled_lambda_ = -1;  // the inertia overwrites the factorization
@@ -216,8 +222,22 @@ class TrustRegionNewton : public Method_ {
         delta_ = std::max(delta_, 0.1 * std::max(1.0, metric_norm_of_iterate(ctx)));
         return false;
       }
+    } else if (!final_level) {
+      coarse_level_settled(ctx);
     }
     return true;
+  }
+
+  /** Seconds spent on the coarse levels' eigenvector estimates (part of the point assessment's cost). */
+  double level_assessment_seconds() const override { return level_seconds_; }
+
+  /** A coarse level stops with the unshifted Hessian factored: the eigenvector estimates that start
+   *  the next level's (and the final assessment's) Lanczos runs, timed. */
+  void coarse_level_settled(Context& ctx) {
+    const auto start = std::chrono::steady_clock::now();
+    double* const work[4] = {rhs_.data(), p_.data(), u_.data(), w_.data()};  // free once the level stopped
+    space_.level_settled(ctx, work);
+    level_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
   /** At a minimum where accept_stop() factored the Hessian, the assessment reuses that factorization. */
@@ -550,6 +570,7 @@ class TrustRegionNewton : public Method_ {
   int escapes_ = 0;
   bool escape_ = false;
   bool stop_factored_ = false;  ///< accept_stop() factored the unshifted Hessian at ctx.q
+  double level_seconds_ = 0;    ///< coarse_level_settled's time over the solve
   bool last_step_newton_ = false;  ///< ctx.q came from a full Newton step of a positive definite Hessian
   bool try_newton_ = true;  ///< the first attempt of an iteration tries the full Newton step
   struct Watchdog {

@@ -10,15 +10,20 @@
  * discretization's second order against coarser solves; a regular order-4 model accepted by the
  * solve-time regularity check on fine grids, and its converged message saying where round-off hides
  * whether the equations hold; a harmonic oscillator just before its conjugate point reported as a
- * nearly degenerate minimum, against the exact eigenvalues of its Hessian.
+ * nearly degenerate minimum, against the exact eigenvalues of its Hessian; the same exact
+ * eigenvalues (one spring, two springs whose two lowest modes lie on different coordinates) and a
+ * triple one after the automatic method's nested levels, whose eigenvector estimates start the
+ * next level's Lanczos runs.
  */
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "assessment.hpp"
 #include "hand_models.hpp"
 #include "pardel/pardel.hpp"
 
@@ -28,6 +33,7 @@
 #include "min_accel3.hpp"
 #include "no_velocity.hpp"
 #include "plate_pair.hpp"
+#include "twin_spring.hpp"
 #endif
 
 namespace {
@@ -66,6 +72,103 @@ TEST(Assessment, AMinimumJustBeforeAConjugatePointIsNearlyDegenerate) {
   EXPECT_NEAR(s.point.soft_motion, std::sqrt(2e-16 * std::fabs(s.action) / s.point.lambda_min),
               1e-9 * s.point.soft_motion);
 }
+
+/** lambda_k = (4/h) sin^2(k pi / 2N) - h w^2: the k-th eigenvalue of a spring's trapezoid Hessian
+ *  tridiag(-1/h, 2/h - h w^2, -1/h) on N - 1 interior nodes. */
+double spring_eigenvalue(int k, int N, double T, double w) {
+  const double h = T / N, s = std::sin(k * 3.14159265358979323846 / (2 * N));
+  return 4 / h * s * s - h * w * w;
+}
+
+TEST(Assessment, OnNestedLevelsTheEigenvaluesAreTheExactOnes) {
+  // The automatic method's levels 800, 3200, 12800: each coarse level's eigenvector estimates start
+  // the next level's Lanczos runs (LevelEigenvectors), and the final assessment's. The spring's
+  // Hessian has exact eigenvalues; the values reported are upper bounds within 1e-4 and 3e-3
+  // (the assembled Hessian carries lambda_1, 1e-8 of its diagonal, to about 1e-8).
+  const int N = 12800;
+  const double T = 3, w = 0.8;
+  pardel::Problem p;
+  p.model = &hand::harmonic;
+  p.discretization = &hand::harmonic.discretizations[0];
+  p.params = {w};
+  p.T = T;
+  p.N = N;
+  p.q0 = {0.4};
+  p.qN = {-1.1};
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  ASSERT_EQ(s.point.kind, pardel::PointKind::minimum) << s.point.note;
+  EXPECT_TRUE(s.point.lambda_settled) << s.point.note;
+  const double l1 = spring_eigenvalue(1, N, T, w), l2 = spring_eigenvalue(2, N, T, w);
+  EXPECT_GE(s.point.lambda_min, l1 * (1 - 1e-6));
+  EXPECT_LE(s.point.lambda_min, l1 * (1 + 1e-4));
+  EXPECT_GE(s.point.lambda_next, l2 * (1 - 1e-6));
+  EXPECT_LE(s.point.lambda_next, l2 * (1 + 3e-3));
+}
+
+TEST(Assessment, StartsAlongModesInTheOtherOrderGiveTheSmallestFirst) {
+  // smallest_eigenvalues on H = diag(1, 2, 3, ...) (solve: divide), its runs started as a coarse
+  // level whose two lowest modes were in the other order would start them: lambda_1's run from
+  // the eigenvector of 2, lambda_2's from that of 1. Each run settles at once on its own mode;
+  // the smallest must still come first.
+  const std::size_t n = 50;
+  std::vector<unsigned char> free(n, 1);
+  pardel::detail::LanczosOperator op;
+  op.n = n;
+  op.dim = 1;
+  op.first_node = 1;
+  op.N = static_cast<int>(n) + 1;
+  op.free = free.data();
+  op.solve = [n](const double* b, double* x) {
+    for (std::size_t i = 0; i < n; ++i) x[i] = b[i] / static_cast<double>(i + 1);
+  };
+  op.reduce = [](double*, int) {};
+  op.start = [n](int which, double* v) {
+    std::fill(v, v + n, 0.0);
+    v[which == 0 ? 1 : 0] = 1;
+    return true;
+  };
+  const pardel::detail::SmallestEigenvalues e = pardel::detail::smallest_eigenvalues(op, static_cast<long>(n));
+  EXPECT_TRUE(e.settled);
+  EXPECT_NEAR(e.lambda[0], 1, 1e-12);
+  EXPECT_NEAR(e.lambda[1], 2, 1e-12);
+  // From the built-in start the same values.
+  op.start = nullptr;
+  const pardel::detail::SmallestEigenvalues cold = pardel::detail::smallest_eigenvalues(op, static_cast<long>(n));
+  EXPECT_TRUE(cold.settled);
+  EXPECT_NEAR(cold.lambda[0], 1, 1e-4);
+  EXPECT_NEAR(cold.lambda[1], 2, 6e-3);
+}
+
+#ifdef PARDEL_HAVE_ASSESSMENT_MODELS
+TEST(Assessment, OnNestedLevelsTheNextEigenvalueMayBeAnotherCoordinates) {
+  // Two uncoupled springs (frequencies 1 and 2) on T = 1.2 at N = 12800 (levels 800, 3200,
+  // 12800): the smallest eigenvalue is the stiff spring's first mode, the next one the soft
+  // spring's first mode (below the stiff spring's second), so the two eigenvectors that a
+  // coarse level hands to the next one live on different coordinates.
+  const int N = 12800;
+  const double T = 1.2;
+  pardel::Problem p;
+  p.model = &twin_spring_model;
+  p.discretization = pardel::find_discretization(twin_spring_model, "trapezoid");
+  p.T = T;
+  p.N = N;
+  p.q0 = {0.2, -0.3};
+  p.qN = {1, 0.5};
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  ASSERT_EQ(s.point.kind, pardel::PointKind::minimum) << s.point.note;
+  EXPECT_TRUE(s.point.lambda_settled) << s.point.note;
+  const double l1 = spring_eigenvalue(1, N, T, 2), l2 = spring_eigenvalue(1, N, T, 1);
+  ASSERT_LT(l2, spring_eigenvalue(2, N, T, 2));
+  EXPECT_GE(s.point.lambda_min, l1 * (1 - 1e-6));
+  EXPECT_LE(s.point.lambda_min, l1 * (1 + 1e-4));
+  EXPECT_GE(s.point.lambda_next, l2 * (1 - 1e-6));
+  EXPECT_LE(s.point.lambda_next, l2 * (1 + 3e-3));
+}
+#endif
 
 TEST(Assessment, ItsTimeIsPartOfTheSolvesAndZeroWhereNothingWasAssessed) {
   const pardel::Problem p = hand::problem(hand::harmonic, 1.3, 2, 400, 0.3, -0.7);
@@ -226,6 +329,25 @@ TEST(Assessment, ARepeatedSmallestEigenvalueIsReportedTwice) {
   EXPECT_NEAR(s.point.lambda_min, e[0], 1e-4 * e[0]);
   EXPECT_NEAR(s.point.lambda_next, e[1], 3e-3 * e[1]);  // settled to 3e-3 (docs/solvers.md)
   EXPECT_FALSE(s.point.nearly_degenerate);
+}
+
+TEST(Assessment, ARepeatedSmallestEigenvalueIsReportedTwiceOnNestedLevels) {
+  // The same model at N = 3600 (levels 225, 900, 3600), too large for a dense Hessian: the
+  // eigenvalue is still triple (the coordinates move alike), so the two smallest are equal, and
+  // the smallest agrees with the assessment of the same point by itself (assess_point: one
+  // level, the built-in start vectors).
+  pardel::Problem p = min_accel_problem(3600);
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  ASSERT_EQ(s.point.kind, pardel::PointKind::minimum) << s.point.note;
+  EXPECT_TRUE(s.point.lambda_settled) << s.point.note;
+  const pardel::PointAssessment alone = pardel::assess_point(p, tr, 1);
+  ASSERT_EQ(alone.kind, pardel::PointKind::minimum) << alone.note;
+  ASSERT_TRUE(alone.lambda_settled) << alone.note;
+  EXPECT_NEAR(s.point.lambda_min, alone.lambda_min, 2e-4 * alone.lambda_min);
+  EXPECT_NEAR(s.point.lambda_next, s.point.lambda_min, 3e-3 * s.point.lambda_min);
+  EXPECT_NEAR(alone.lambda_next, alone.lambda_min, 3e-3 * alone.lambda_min);
 }
 
 TEST(Assessment, NewtonDoesNotStopAtTheSaddleOfAKeplerArc) {

@@ -400,8 +400,8 @@ struct Summary {
   double final_time = 0;  ///< t_N (the travel time under free_final_time)
   double wall_seconds = 0;
   /** Wall time of the point assessment at the end of the solve (the factorization it needed, where
-   *  the method held none, and its Lanczos runs), included in wall_seconds; 0 where nothing was
-   *  assessed. */
+   *  the method held none, and its Lanczos runs, with the eigenvector estimates on the nested
+   *  levels that start them), included in wall_seconds; 0 where nothing was assessed. */
   double assessment_seconds = 0;
   double residual_floor = 0;  ///< round-off level of the residual at the returned iterate
   double tolerance = 0;       ///< the residual that counted as converged (Options::rtol or tol)

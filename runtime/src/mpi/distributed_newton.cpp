@@ -157,6 +157,7 @@ class DistributedSpace {
   }
   double action(const Context&) const { return global_sum_Ld(local_); }
   bool assess_factored(Context&, PointAssessment&, double* const*) { return false; }  // assess_distributed does it over the ranks
+  void level_settled(Context&, double* const*) {}  // the assessment over ranks starts from its own vectors
 
  private:
   /** The blocks of the owned unknowns (and the coupling from the left separator), as
