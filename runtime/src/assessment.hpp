@@ -124,9 +124,9 @@ struct SmallestEigenvalues {
 /**
  * The eigenvectors of the two smallest eigenvalues of the Hessian at a settled coarse level of
  * nested iteration (node layout over its interior nodes, zero on fixed components), which start
- * the next level's Lanczos runs: the lowest modes are smooth in time, so that the coarse ones
- * resampled to the finer grid are its eigenvectors to O(h^2), and a run from them settles in one
- * step (one block solve) where a run from the built-in start takes 3 to 6.
+ * the next level's Lanczos runs: the lowest modes of a first-order model are smooth in time, so
+ * that the coarse ones resampled to the finer grid are its eigenvectors to O(h^2), and a run from
+ * them settles in one step (one block solve) where a run from the built-in start takes 3 to 6.
  */
 class LevelEigenvectors {
  public:

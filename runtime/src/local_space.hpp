@@ -116,12 +116,16 @@ class LocalSpace {
   }
   /** A coarse level settled with H factored at lambda = 0 at its answer or the iterate before:
    *  its eigenvector estimates start the next level's, and the final assessment's (LevelEigenvectors).
-   *  The level next to the final one (ctx.reserve_N at most kAutoRatio times its N) is skipped
-   *  where a coarser level's are held: from those the final level's runs still settle in a step
-   *  (their error O(h^2) 16 times the skipped level's, far below the runs' 1e-4), and the skipped
-   *  level's runs would cost a quarter of the final assessment's. */
+   *  First-order models only: the node blocks of higher orders hold derivatives, whose Hessian
+   *  entries scale with other powers of h, so that their lowest modes change order between levels
+   *  (a start along one of them settles on the wrong eigenvalue). The level next to the final one
+   *  (ctx.reserve_N at most kAutoRatio times its N) is skipped where a coarser level's are held:
+   *  from those the final level's runs still settle in a step (their error O(h^2) 16 times the
+   *  skipped level's, far below the runs' 1e-4), and the skipped level's runs would cost a quarter
+   *  of the final assessment's. */
   void level_settled(Context& ctx, double* const* work) {
-    if (cyclic_ || (eigenvectors_.held() && static_cast<long>(ctx.N) * kAutoRatio >= ctx.reserve_N)) return;
+    if (cyclic_ || ctx.model->order != 1) return;
+    if (eigenvectors_.held() && static_cast<long>(ctx.N) * kAutoRatio >= ctx.reserve_N) return;
     eigenvectors_.settle_level(ctx, [this](const double* b, double* x) { H_.solve_ldlt(b, x); }, work);
   }
 

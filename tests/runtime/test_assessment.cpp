@@ -13,7 +13,7 @@
  * nearly degenerate minimum, against the exact eigenvalues of its Hessian; the same exact
  * eigenvalues (one spring, two springs whose two lowest modes lie on different coordinates) and a
  * triple one after the automatic method's nested levels, whose eigenvector estimates start the
- * next level's Lanczos runs.
+ * next level's Lanczos runs, and an order-3 model's there equal to its point's own assessment.
  */
 #include <gtest/gtest.h>
 
@@ -140,6 +140,37 @@ TEST(Assessment, StartsAlongModesInTheOtherOrderGiveTheSmallestFirst) {
   EXPECT_NEAR(cold.lambda[0], 1, 1e-4);
   EXPECT_NEAR(cold.lambda[1], 2, 6e-3);
 }
+
+#ifdef PARDEL_HAVE_BUNDLED_MODELS
+TEST(Assessment, AnOrderThreeModelOnNestedLevelsHasTheEigenvaluesOfItsPointAlone) {
+  // The shipped minimum-jerk flight through two gates (scenes/min_jerk.toml) at N = 3000 (levels
+  // 188, 750, 3000): its node blocks hold positions, velocities and accelerations, whose Hessian
+  // entries scale with different powers of h, so its lowest modes change order between levels.
+  // The assessment after the nested solve must report the values that the point's own
+  // assessment (one level, the built-in start vectors) finds: within their 1e-4 and 3e-3.
+  const pardel_model* m = pardel::find_model("min_jerk");
+  if (!m) GTEST_SKIP() << "min_jerk is not bundled";
+  pardel::Problem p;
+  p.model = m;
+  p.discretization = pardel::find_discretization(*m, "hermite_gauss(s=3)");
+  ASSERT_NE(p.discretization, nullptr);
+  p.T = 4;
+  p.N = 3000;
+  p.q0 = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  p.qN = {4, 0, 1, 0, 0, 0, 0, 0, 0};
+  p.knots = {{1.0, {1, 2, 1}}, {3.0, {3, -1, 2}}};
+  auto tr = pardel::linear_guess(p);
+  const pardel::Summary s = pardel::solve(p, pardel::Options{}, tr);
+  ASSERT_TRUE(s.converged()) << s.brief_report();
+  ASSERT_EQ(s.point.kind, pardel::PointKind::minimum) << s.point.note;
+  const pardel::PointAssessment alone = pardel::assess_point(p, tr, 1);
+  ASSERT_EQ(alone.kind, pardel::PointKind::minimum) << alone.note;
+  ASSERT_TRUE(alone.lambda_settled) << alone.note;
+  ASSERT_TRUE(s.point.lambda_settled) << s.point.note;
+  EXPECT_NEAR(s.point.lambda_min, alone.lambda_min, 2e-4 * alone.lambda_min);
+  EXPECT_NEAR(s.point.lambda_next, alone.lambda_next, 6e-3 * alone.lambda_next);
+}
+#endif
 
 #ifdef PARDEL_HAVE_ASSESSMENT_MODELS
 TEST(Assessment, OnNestedLevelsTheNextEigenvalueMayBeAnotherCoordinates) {
