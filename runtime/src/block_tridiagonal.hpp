@@ -378,23 +378,17 @@ class BlockTridiagonal {
     // One pass: each pivot's bound 1 / ||(J L)^-1||_F^2 from below on its scaled eigenvalues (the
     // least of them kept), Gershgorin's bound of J H J that sets the rule's threshold, and that
     // of H (J block by block from the diagonal: no array of n d, which costs its page faults).
-    const std::size_t n = static_cast<std::size_t>(std::max(n_, 0));
-    Vec Jp = Vec::Ones(d_), J = Jp, Jn = Jp;  // blocks i - 1, i, i + 1
-    if (n > 0) block_scaling(0, J.data());
     double scaled = 0, unscaled = 0, worst = 0;  // worst: the largest ||(J L)^-1||_F^2
-    for (std::size_t i = 0; i < n; ++i) {
-      if (i + 1 < n) block_scaling(i + 1, Jn.data());
-      scaled = std::max(scaled, gershgorin_rows(diag_[i], i + 1 < n ? &off_[i] : nullptr, i > 0 ? &off_[i - 1] : nullptr,
-                                                J.data(), Jn.data(), Jp.data()));
-      if (gershgorin)
-        unscaled = std::max(unscaled, gershgorin_rows(diag_[i], i + 1 < n ? &off_[i] : nullptr,
-                                                      i > 0 ? &off_[i - 1] : nullptr));
-      const double f = pivot_scaled_inverse_norm2(i, J.data());
-      if (!std::isfinite(f)) return false;
+    const bool finite = scaled_blocks([&](std::size_t i, const double* J, const double* Jn, const double* Jp) {
+      const Mat* next = i + 1 < static_cast<std::size_t>(n_) ? &off_[i] : nullptr;
+      const Mat* previous = i > 0 ? &off_[i - 1] : nullptr;
+      scaled = std::max(scaled, gershgorin_rows(diag_[i], next, previous, J, Jn, Jp));
+      if (gershgorin) unscaled = std::max(unscaled, gershgorin_rows(diag_[i], next, previous));
+      const double f = pivot_scaled_inverse_norm2(i, J);
       worst = std::max(worst, f);
-      Jp.swap(J);
-      J.swap(Jn);
-    }
+      return std::isfinite(f);
+    });
+    if (!finite) return false;
     if (gershgorin) *gershgorin = unscaled;
     return worst * zero_threshold(scaled) < 1;
   }
@@ -489,8 +483,9 @@ class BlockTridiagonal {
   }
   /** ||(J L)^-1||_F^2 of pivot i's Cholesky factor L (factor_ldlt's or eliminate's) and J its
    *  block's scaling (inertia.hpp's scaled_inverse_norm2: the pivot's scaled eigenvalues are at
-   *  least its inverse; not finite where L is not). For the fixed sizes from the stored factor without a division: (J L)^-1 = L^-1 J^-1,
-   *  whose column a is L^-1's times 1 / J_a. */
+   *  least its inverse; not finite where L is not). For the fixed sizes from the stored factor,
+   *  whose diagonal holds 1 / L_aa, by products only: (J L)^-1 = L^-1 J^-1, whose column a is
+   *  L^-1's over J_a. */
   double pivot_scaled_inverse_norm2(std::size_t i, const double* J) const {
     if constexpr (D == Eigen::Dynamic) {
       return scaled_inverse_norm2(Mat(llt_[i].matrixL()), J);
@@ -516,19 +511,30 @@ class BlockTridiagonal {
   void block_scaling(std::size_t i, double* J) const {
     for (int a = 0; a < d_; ++a) J[a] = jacobi_scale(diag_[i](a, a));
   }
-  /** Gershgorin's bound of J H J (J block by block from the diagonal, in one pass). */
-  double scaled_gershgorin_bound() const {
+  /** visit(i, J, Jn, Jp) for each block i in order, with the scalings of block i, i + 1 and i - 1
+   *  (J block by block from the diagonal, no array: Jn and Jp are unused at the ends), until a
+   *  visit returns false; whether none did. */
+  template <class Visit>
+  bool scaled_blocks(Visit&& visit) const {
     const std::size_t n = static_cast<std::size_t>(std::max(n_, 0));
     Vec Jp = Vec::Ones(d_), J = Jp, Jn = Jp;  // blocks i - 1, i, i + 1
     if (n > 0) block_scaling(0, J.data());
-    double bound = 0;
     for (std::size_t i = 0; i < n; ++i) {
       if (i + 1 < n) block_scaling(i + 1, Jn.data());
-      bound = std::max(bound, gershgorin_rows(diag_[i], i + 1 < n ? &off_[i] : nullptr, i > 0 ? &off_[i - 1] : nullptr,
-                                              J.data(), Jn.data(), Jp.data()));
+      if (!visit(i, J.data(), Jn.data(), Jp.data())) return false;
       Jp.swap(J);
       J.swap(Jn);
     }
+    return true;
+  }
+  /** Gershgorin's bound of J H J (J block by block from the diagonal, in one pass). */
+  double scaled_gershgorin_bound() const {
+    double bound = 0;
+    scaled_blocks([&](std::size_t i, const double* J, const double* Jn, const double* Jp) {
+      bound = std::max(bound, gershgorin_rows(diag_[i], i + 1 < static_cast<std::size_t>(n_) ? &off_[i] : nullptr,
+                                              i > 0 ? &off_[i - 1] : nullptr, J, Jn, Jp));
+      return true;
+    });
     return bound;
   }
 

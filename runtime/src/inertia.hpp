@@ -65,7 +65,6 @@ double scaled_inverse_norm2(const Mat& L, const double* J) {
   return inv.squaredNorm();  // ||(J L)^-1||_F^2
 }
 
-
 /**
  * The inertia of one symmetric pivot S under the zero rule, from the eigendecomposition of its
  * scaled form J S J, added to `in`; `pinv` becomes S's inverse, or its pseudo-inverse
