@@ -69,9 +69,7 @@ void setup_workspace(const Grid& grid, Workspace& work) {
       std::vector<double>().swap(*v);
   }
   fit(work.res, n1 * d, 0.0);
-  fit(work.node_max, n1, 0.0);
-  fit(work.node_scale, n1, 0.0);
-  fit(work.node_hq, n1, 0.0);
+  fit(work.node_scratch, n1, 0.0);
   work.comp_residual.assign(d, 0.0);
   work.comp_scale.assign(d, 0.0);
   work.comp_hq.assign(d, 0.0);
@@ -236,25 +234,27 @@ void eval_grad(Context& ctx, const std::vector<double>& q) {
   ctx.evaluated = Evaluated::grad;
 }
 
-int compute_residual(Context& ctx) {
+int compute_residual(Context& ctx, const std::vector<double>& q) {
   const int d = ctx.dim, N = ctx.N;
   const std::size_t dz = static_cast<std::size_t>(d);
-  // The Hessian term of the round-off level needs the full kernel's arrays at ctx.q.
+  // The Hessian term of the round-off level needs the full kernel's arrays at q.
   const bool hessian = ctx.evaluated == Evaluated::full && ctx.D12.size() >= static_cast<std::size_t>(N) * dz * dz;
   ctx.comp_residual.assign(dz, 0.0);
   ctx.comp_scale.assign(dz, 0.0);
   ctx.comp_hq.assign(dz, 0.0);
-  // Per-component maxima by an array reduction (max is exact in any order: the same for any team).
+  // Maxima and the first non-finite node by reductions (max and min are exact in any order: the
+  // same for any team), in the one pass that writes res.
   double* c_res = ctx.comp_residual.data();
   double* c_scale = ctx.comp_scale.data();
   double* c_hq = ctx.comp_hq.data();
+  double mx = 0, scale = 0, hq = 0;
+  int bad = N + 1;
 #pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static) \
-    reduction(max : c_res[:d], c_scale[:d], c_hq[:d])
+    reduction(max : c_res[:d], c_scale[:d], c_hq[:d], mx, scale, hq) reduction(min : bad)
   for (int k = 0; k <= N; ++k) {
     const std::size_t kk = static_cast<std::size_t>(k);
     double* r = ctx.res.data() + kk * dz;
     const unsigned char* f = ctx.is_free.data() + kk * dz;
-    double mx = 0, scale = 0;
     bool finite = true;
     for (int i = 0; i < d; ++i) {
       double v = 0;
@@ -269,9 +269,7 @@ int compute_residual(Context& ctx) {
       r[i] = v;
       mx = std::max(mx, std::fabs(v));
     }
-    ctx.node_max[kk] = finite ? mx : std::numeric_limits<double>::infinity();
-    ctx.node_scale[kk] = scale;
-    ctx.node_hq[kk] = 0;
+    if (!finite) bad = std::min(bad, k);
     if (hessian && k > 0 && k < N) {
       // |H_k| |q| over the node's row of the Hessian: D22(k-1), D11(k), D12(k-1)^T, D12(k).
       const std::size_t dd = dz * dz;
@@ -279,10 +277,9 @@ int compute_residual(Context& ctx) {
       const double* B = ctx.D11.data() + kk * dd;
       const double* Cm = ctx.D12.data() + (kk - 1) * dd;
       const double* Cp = ctx.D12.data() + kk * dd;
-      const double* qm = ctx.q.data() + (kk - 1) * dz;
-      const double* q0 = ctx.q.data() + kk * dz;
-      const double* qp = ctx.q.data() + (kk + 1) * dz;
-      double hq = 0;
+      const double* qm = q.data() + (kk - 1) * dz;
+      const double* q0 = q.data() + kk * dz;
+      const double* qp = q.data() + (kk + 1) * dz;
       for (int i = 0; i < d; ++i) {
         if (!f[i]) continue;
         double row = 0;
@@ -292,23 +289,17 @@ int compute_residual(Context& ctx) {
         hq = std::max(hq, row);
         c_hq[i] = std::max(c_hq[i], row);
       }
-      ctx.node_hq[kk] = hq;
     }
-  }
-  double mx = 0, scale = 0, hq = 0;
-  int bad = -1;
-  for (int k = 0; k <= N; ++k) {
-    const double v = ctx.node_max[static_cast<std::size_t>(k)];
-    if (!std::isfinite(v) && bad < 0) bad = k;
-    mx = std::max(mx, v);
-    scale = std::max(scale, ctx.node_scale[static_cast<std::size_t>(k)]);
-    if (hessian) hq = std::max(hq, ctx.node_hq[static_cast<std::size_t>(k)]);
   }
   const double eps = std::numeric_limits<double>::epsilon();
   ctx.residual_scale = scale;
   ctx.residual_floor = 16 * eps * scale + 2 * eps * hq;
-  ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : mx;
-  return bad;
+  if (bad <= N) {
+    ctx.residual = std::numeric_limits<double>::quiet_NaN();
+    return bad;
+  }
+  ctx.residual = mx;
+  return -1;
 }
 
 double sum_action(const Context& ctx) {
@@ -321,7 +312,7 @@ double action_at(Context& ctx, const std::vector<double>& q) {
   const int d = ctx.dim, N = ctx.N;
   const pardel_action_kernel kern = ctx.disc->action;
   const double* p = ctx.p();
-  std::vector<double>& out = ctx.node_max;  // N+1 scratch, only the first N used here
+  std::vector<double>& out = ctx.node_scratch;  // N+1 scratch, only the first N used here
 #pragma omp parallel for if (ctx.parallel(N)) num_threads(ctx.threads) schedule(static)
   for (int k = 0; k < N; ++k) {
     const std::size_t kk = static_cast<std::size_t>(k);
@@ -393,7 +384,7 @@ void update_times(Context& ctx, Positions positions) {
       c[kk] = ctx.model->clock(hs, ctx.t[kk], q.data() + kk * d, q.data() + (kk + 1) * d, p);
       total += c[kk];
     }
-    std::vector<double>& t_old = ctx.node_max;  // N+1 scratch
+    std::vector<double>& t_old = ctx.node_scratch;  // N+1 scratch
     if (positions == Positions::follow_times) {
       t_old = ctx.t;
       ctx.q_old = ctx.q;

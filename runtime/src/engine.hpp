@@ -93,9 +93,7 @@ struct Workspace {
 
   // Node residual r_k = D2(k-1) + D1(k) on free components (0 elsewhere), (N+1)*dim.
   std::vector<double> res;
-  std::vector<double> node_max;    ///< N+1 scratch: max |r_k| per node
-  std::vector<double> node_scale;  ///< N+1 scratch: max |D2(k-1)| + |D1(k)| per node
-  std::vector<double> node_hq;     ///< N+1 scratch: |H_k| |q| per node (full evaluations only)
+  std::vector<double> node_scratch;  ///< N+1 scratch (the action's terms in a fixed-order sum, old node times)
   double residual = 0;             ///< infinity-norm of res
   /** Round-off level of the residual: 16 eps max_k (|D2(k-1)| + |D1(k)|), plus, when the Hessian
    *  blocks are at hand, 2 eps max_k |H_k| |q| (the rounding of the nodes seen through the Hessian,
@@ -173,9 +171,11 @@ void eval_sweep(Context& ctx, const std::vector<double>& q);
 void eval_full(Context& ctx, const std::vector<double>& q);
 void eval_grad(Context& ctx, const std::vector<double>& q);
 
-/** Residual from the D1, D2 arrays: fills res and node_max, returns the first node whose residual is
- *  not finite (or -1) and sets ctx.residual. */
-int compute_residual(Context& ctx);
+/** Residual from the D1, D2 arrays evaluated at the iterate q (ctx.q or ctx.q_next): fills res, sets
+ *  ctx.residual, its round-off level (with the Hessian term |H| |q| after a full evaluation) and
+ *  the per-component maxima, and returns the first node whose residual is not finite (or -1). */
+int compute_residual(Context& ctx, const std::vector<double>& q);
+inline int compute_residual(Context& ctx) { return compute_residual(ctx, ctx.q); }
 /** Fixed-order sum of the Ld array (filled by full or grad). */
 double sum_action(const Context& ctx);
 /** Discrete action at q through the action kernel (parallel evaluation, fixed-order sum). */
@@ -218,6 +218,10 @@ struct StepOutcome {
   Termination failure = Termination::converged;  ///< `converged` here means "no failure"
   std::string message;
   bool next_evaluated = false;  ///< the interval arrays already hold the evaluation at q_next
+  /** With next_evaluated: so do the residual (res, ctx.residual, its round-off level and
+   *  per-component maxima, over all processes) and ctx.action, as evaluate() would set them at
+   *  q_next; the driver does not evaluate the next iterate again. */
+  bool next_residual = false;
   /** The method checked q_next itself (in the pass that wrote it): the driver takes these two
    *  instead of scanning q_next again. */
   bool next_checked = false;

@@ -38,6 +38,7 @@ bool Iteration::run_level(bool last) {
   const bool clocked = ctx_.clock != ClockMode::none;
   bool recheck_times = false;  // the nodes moved to the clock's times at the tolerance: check them again
   int placements = 0;          // such moves since the last step
+  bool step_evaluated = false; // the last step's outcome left the residual and action at ctx.q set
   if (clocked && times_stop_increasing()) return false;  // the start's times
   for (;;) {
     if (clocked && level_.since_clock >= options_.clock_update_every) {
@@ -45,8 +46,10 @@ bool Iteration::run_level(bool last) {
       if (times_stop_increasing()) return false;
       method_.times_changed();
       level_.since_clock = 0;
+      step_evaluated = false;
     }
-    int bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
+    int bad = step_evaluated ? -1 : partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
+    step_evaluated = false;
     if (bad >= 0) return non_finite_residual(bad);
     if (start_scale_.size() != ctx_.comp_scale.size()) start_scale_ = ctx_.comp_scale;  // the solve's first iterate
     double r = ctx_.residual;
@@ -112,6 +115,7 @@ bool Iteration::run_level(bool last) {
       ctx_.evaluated = Evaluated::nothing;
       ctx_.action_known = false;
     }
+    step_evaluated = outcome.next_evaluated && outcome.next_residual;
     ++iteration_;
     ++level_.level_it;
     ++level_.since_clock;

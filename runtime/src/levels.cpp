@@ -109,13 +109,15 @@ long run_levels(const std::vector<int>& levels, std::size_t first, const SolverS
 
 Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, const Trajectory& coarser, int N) {
   PARDEL_INVARIANT(coarser.N < coarse.N && coarse.N < N, "nested iteration extrapolates from two coarser grids");
-  Trajectory start = resample(problem, coarse, N);
-  const Trajectory other = resample(problem, coarser, N);
+  // The extrapolation at the coarse level's nodes, then one resampling to N: the correction
+  // (q_c - q_cc) is smooth, and the fine grid, four times the coarse one, is resampled once.
+  Trajectory start = resample(problem, coarser, coarse.N);
   const double p = problem.discretization->consistency_order;
   const double hf = std::pow(1.0 / N, p), hc = std::pow(1.0 / coarse.N, p), hcc = std::pow(1.0 / coarser.N, p);
   const double w = (hf - hc) / (hc - hcc);
-  for (std::size_t i = 0; i < start.q.size(); ++i) start.q[i] += w * (start.q[i] - other.q[i]);
-  return start;
+  for (std::size_t i = 0; i < start.q.size(); ++i) start.q[i] = coarse.q[i] + w * (coarse.q[i] - start.q[i]);
+  start.t = coarse.t;
+  return resample(problem, start, N);
 }
 
 void note_stopped_level(const Problem& problem, Trajectory& trajectory, Summary& summary) {

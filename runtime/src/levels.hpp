@@ -40,10 +40,11 @@ std::vector<int> automatic_levels(const Problem& problem);
 std::vector<int> refinement_levels(const Problem& problem, const Options& options, bool automatic);
 
 /**
- * The start of a finer level of nested iteration: the two previous levels' solutions resampled to
- * N and extrapolated in h = T/N under the discretization's error model q(h) = q* + C h^p, i.e.
- * q_N = q_c + (q_c - q_cc) (h^p - h_c^p) / (h_c^p - h_cc^p). Fixed values (boundaries, knots) agree
- * on every level and stay exact.
+ * The start of a finer level of nested iteration: the two previous levels' solutions extrapolated
+ * in h = T/N under the discretization's error model q(h) = q* + C h^p, i.e.
+ * q_N = q_c + (q_c - q_cc) (h^p - h_c^p) / (h_c^p - h_cc^p), at the nodes of the coarse level (q_cc
+ * resampled there), then resampled to N. Fixed values (boundaries, knots) agree on every level and
+ * stay exact.
  */
 Trajectory extrapolated_start(const Problem& problem, const Trajectory& coarse, const Trajectory& coarser, int N);
 

@@ -106,7 +106,7 @@ class LocalSpace {
   }
   int evaluate(Context& ctx, const std::vector<double>& q) const {
     eval_full(ctx, q);
-    return compute_residual(ctx);
+    return compute_residual(ctx, q);
   }
   double action(const Context& ctx) const { return sum_action(ctx); }
   bool assess_factored(Context& ctx, PointAssessment& out, double* const* work) {

@@ -83,7 +83,7 @@ double context_bytes(double N, int d) {
          + N * 8                   // Ld
          + N * d * 8 * 2           // D1, D2
          + N * d * d * 8 * 3       // D11, D12, D22
-         + n1 * 8 * 3;             // node_max, node_scale, node_hq
+         + n1 * 8;                 // node_scratch
 }
 
 double trajectory_bytes(double N, int d) { return (N + 1) * (d + 1) * 8.0; }

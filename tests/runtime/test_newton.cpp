@@ -56,6 +56,35 @@ TEST(Newton, HarmonicMatchesExactDiscreteSolution) {
   }
 }
 
+// The residual, its round-off level and the action that a solve reports are those of the iterate
+// it returns: equal to the bit to a fresh evaluation there (a solve of no iterations from it).
+// After an accepted step the solver reads them from the trial evaluation instead of evaluating
+// the new iterate again, so the trial's round-off term |H| |q| must be that of the new iterate.
+TEST(Newton, TheReportedResidualIsThatOfTheReturnedIterate) {
+  for (pardel::Method method : {pardel::Method::automatic, pardel::Method::newton, pardel::Method::stationary_newton}) {
+    for (int N : {150, 3200}) {  // one level; nested levels 200, 800, 3200 under automatic
+      const auto problem = hand::problem(hand::bratu, 3.0, 1.0, N, 0.2, -0.1);
+      auto traj = pardel::linear_guess(problem);
+      pardel::Options o;
+      o.method = method;
+      o.threads = 1;
+      const auto s = pardel::solve(problem, o, traj);
+      ASSERT_TRUE(s.converged()) << to_string(method) << " N = " << N << ": " << s.brief_report();
+      ASSERT_GE(s.iterations, 2) << "a nonlinear problem: more than one step";
+      auto again = traj;
+      pardel::Options fresh;
+      fresh.method = pardel::Method::newton;
+      fresh.threads = 1;
+      fresh.max_iterations = 0;
+      const auto e = pardel::solve(problem, fresh, again);
+      EXPECT_EQ(e.iterations, 0);
+      EXPECT_EQ(s.residual, e.residual) << to_string(method) << " N = " << N;
+      EXPECT_EQ(s.residual_floor, e.residual_floor) << to_string(method) << " N = " << N;
+      EXPECT_EQ(s.action, e.action) << to_string(method) << " N = " << N;
+    }
+  }
+}
+
 TEST(Newton, ConvergedMessageSaysWhenTheRoundOffLevelSetsTheTarget) {
   // The harmonic oscillator's discrete solution is known: with the default rtol its DEL equations
   // are resolved to rtol and the message says nothing more; with rtol far below double precision

@@ -153,7 +153,7 @@ class DistributedSpace {
   }
   int evaluate(Context& ctx, const std::vector<double>& q) const {
     pardel::detail::eval_full(ctx, q);
-    return globalize_residual(local_, pardel::detail::compute_residual(ctx));
+    return globalize_residual(local_, pardel::detail::compute_residual(ctx, q));
   }
   double action(const Context&) const { return global_sum_Ld(local_); }
   bool assess_factored(Context&, PointAssessment&, double* const*) { return false; }  // assess_distributed does it over the ranks
