@@ -15,18 +15,20 @@ extern "C" PARDEL_HD void bratu_trapezoid_full(double h, double t0, double t1, c
   (void)t0;
   (void)t1;
   const double pd_t0001 = h*0.5;
-  const double pd_t0002 = p[0]*std::exp(q1[0]);
-  const double pd_t0003 = p[0]*std::exp(q0[0]);
-  const double pd_t0004 = q0[0] - q1[0];
-  const double pd_t0005 = 1.0/(h*h);
-  const double pd_t0006 = pd_t0004*pd_t0005*2.0;
-  const double pd_t0007 = 2.0*pd_t0005;
-  Ld[0] = -(pd_t0001*(pd_t0002 + pd_t0003 - pd_t0004*pd_t0004*pd_t0005));
-  D1[0] = -(pd_t0001*(pd_t0003 - pd_t0006));
-  D2[0] = -(pd_t0001*(pd_t0002 + pd_t0006));
-  D11[0] = -(pd_t0001*(pd_t0003 - pd_t0007));
+  const double pd_t0002 = std::exp(q1[0]);
+  const double pd_t0003 = p[0]*pd_t0002;
+  const double pd_t0004 = std::exp(q0[0]);
+  const double pd_t0005 = p[0]*pd_t0004;
+  const double pd_t0006 = q0[0] - q1[0];
+  const double pd_t0007 = 1.0/(h*h);
+  const double pd_t0008 = pd_t0006*pd_t0007*2.0;
+  const double pd_t0009 = 2.0*pd_t0007;
+  Ld[0] = -(pd_t0001*(pd_t0003 + pd_t0005 - pd_t0006*pd_t0006*pd_t0007));
+  D1[0] = -(pd_t0001*(pd_t0005 - pd_t0008));
+  D2[0] = -(pd_t0001*(pd_t0003 + pd_t0008));
+  D11[0] = -(pd_t0001*(pd_t0005 - pd_t0009));
   D12[0] = -(1.0/h);
-  D22[0] = -(pd_t0001*(pd_t0002 - pd_t0007));
+  D22[0] = -(pd_t0001*(pd_t0003 - pd_t0009));
 }
 
 // sweep: 23 operations (38 before CSE)
@@ -35,15 +37,17 @@ extern "C" PARDEL_HD void bratu_trapezoid_sweep(double h, double t0, double t1, 
   (void)t0;
   (void)t1;
   const double pd_t0001 = h*0.5;
-  const double pd_t0002 = p[0]*std::exp(q0[0]);
-  const double pd_t0003 = 1.0/(h*h);
-  const double pd_t0004 = (q0[0] - q1[0])*pd_t0003*2.0;
-  const double pd_t0005 = p[0]*std::exp(q1[0]);
-  const double pd_t0006 = 2.0*pd_t0003;
-  D1[0] = -(pd_t0001*(pd_t0002 - pd_t0004));
-  D2[0] = -(pd_t0001*(pd_t0004 + pd_t0005));
-  D11[0] = -(pd_t0001*(pd_t0002 - pd_t0006));
-  D22[0] = -(pd_t0001*(pd_t0005 - pd_t0006));
+  const double pd_t0002 = std::exp(q0[0]);
+  const double pd_t0003 = p[0]*pd_t0002;
+  const double pd_t0004 = 1.0/(h*h);
+  const double pd_t0005 = (q0[0] - q1[0])*pd_t0004*2.0;
+  const double pd_t0006 = std::exp(q1[0]);
+  const double pd_t0007 = p[0]*pd_t0006;
+  const double pd_t0008 = 2.0*pd_t0004;
+  D1[0] = -(pd_t0001*(pd_t0003 - pd_t0005));
+  D2[0] = -(pd_t0001*(pd_t0005 + pd_t0007));
+  D11[0] = -(pd_t0001*(pd_t0003 - pd_t0008));
+  D22[0] = -(pd_t0001*(pd_t0007 - pd_t0008));
 }
 
 // grad: 22 operations (34 before CSE)
@@ -52,14 +56,16 @@ extern "C" PARDEL_HD void bratu_trapezoid_grad(double h, double t0, double t1, c
   (void)t0;
   (void)t1;
   const double pd_t0001 = h*0.5;
-  const double pd_t0002 = p[0]*std::exp(q1[0]);
-  const double pd_t0003 = p[0]*std::exp(q0[0]);
-  const double pd_t0004 = q0[0] - q1[0];
-  const double pd_t0005 = 1.0/(h*h);
-  const double pd_t0006 = pd_t0004*pd_t0005*2.0;
-  Ld[0] = -(pd_t0001*(pd_t0002 + pd_t0003 - pd_t0004*pd_t0004*pd_t0005));
-  D1[0] = -(pd_t0001*(pd_t0003 - pd_t0006));
-  D2[0] = -(pd_t0001*(pd_t0002 + pd_t0006));
+  const double pd_t0002 = std::exp(q1[0]);
+  const double pd_t0003 = p[0]*pd_t0002;
+  const double pd_t0004 = std::exp(q0[0]);
+  const double pd_t0005 = p[0]*pd_t0004;
+  const double pd_t0006 = q0[0] - q1[0];
+  const double pd_t0007 = 1.0/(h*h);
+  const double pd_t0008 = pd_t0006*pd_t0007*2.0;
+  Ld[0] = -(pd_t0001*(pd_t0003 + pd_t0005 - pd_t0006*pd_t0006*pd_t0007));
+  D1[0] = -(pd_t0001*(pd_t0005 - pd_t0008));
+  D2[0] = -(pd_t0001*(pd_t0003 + pd_t0008));
 }
 
 // action: 13 operations (14 before CSE)
@@ -67,8 +73,10 @@ extern "C" PARDEL_HD double bratu_trapezoid_action(double h, double t0, double t
     const double* p) {
   (void)t0;
   (void)t1;
-  const double pd_t0001 = q0[0] - q1[0];
-  return -(h*0.5*(p[0]*std::exp(q1[0]) + p[0]*std::exp(q0[0]) - pd_t0001*pd_t0001/(h*h)));
+  const double pd_t0001 = std::exp(q1[0]);
+  const double pd_t0002 = std::exp(q0[0]);
+  const double pd_t0003 = q0[0] - q1[0];
+  return -(h*0.5*(p[0]*pd_t0001 + p[0]*pd_t0002 - pd_t0003*pd_t0003/(h*h)));
 }
 
 // grad_extended: the grad kernel in pd_quad, 22 operations; outputs as double-double pairs
@@ -86,14 +94,16 @@ extern "C" void bratu_trapezoid_grad_extended(double h_in, double t0_in, double 
   for (int i = 0; i < 1; ++i) p[i] = p_in[i];
   pd_quad Ld[1], D1[1], D2[1];
   const pd_quad pd_t0001 = h*0.5;
-  const pd_quad pd_t0002 = p[0]*expq(q1[0]);
-  const pd_quad pd_t0003 = p[0]*expq(q0[0]);
-  const pd_quad pd_t0004 = q0[0] - q1[0];
-  const pd_quad pd_t0005 = 1.0/(h*h);
-  const pd_quad pd_t0006 = pd_t0004*pd_t0005*2.0;
-  Ld[0] = -(pd_t0001*(pd_t0002 + pd_t0003 - pd_t0004*pd_t0004*pd_t0005));
-  D1[0] = -(pd_t0001*(pd_t0003 - pd_t0006));
-  D2[0] = -(pd_t0001*(pd_t0002 + pd_t0006));
+  const pd_quad pd_t0002 = expq(q1[0]);
+  const pd_quad pd_t0003 = p[0]*pd_t0002;
+  const pd_quad pd_t0004 = expq(q0[0]);
+  const pd_quad pd_t0005 = p[0]*pd_t0004;
+  const pd_quad pd_t0006 = q0[0] - q1[0];
+  const pd_quad pd_t0007 = 1.0/(h*h);
+  const pd_quad pd_t0008 = pd_t0006*pd_t0007*2.0;
+  Ld[0] = -(pd_t0001*(pd_t0003 + pd_t0005 - pd_t0006*pd_t0006*pd_t0007));
+  D1[0] = -(pd_t0001*(pd_t0005 - pd_t0008));
+  D2[0] = -(pd_t0001*(pd_t0003 + pd_t0008));
   pd_split(Ld, Ld_out, 1);
   pd_split(D1, D1_out, 1);
   pd_split(D2, D2_out, 1);
@@ -130,14 +140,15 @@ extern "C" PARDEL_HD void bratu_midpoint_sweep(double h, double t0, double t1, c
   (void)t0;
   (void)t1;
   const double pd_t0001 = h*0.5;
-  const double pd_t0002 = std::exp(0.5*(q0[0] + q1[0]))*p[0];
-  const double pd_t0003 = 1.0/(h*h);
-  const double pd_t0004 = (q0[0] - q1[0])*pd_t0003*2.0;
-  const double pd_t0005 = -(h*0.25*(pd_t0002 - pd_t0003*4.0));
-  D1[0] = -(pd_t0001*(pd_t0002 - pd_t0004));
-  D2[0] = -(pd_t0001*(pd_t0002 + pd_t0004));
-  D11[0] = pd_t0005;
-  D22[0] = pd_t0005;
+  const double pd_t0002 = std::exp(0.5*(q0[0] + q1[0]));
+  const double pd_t0003 = pd_t0002*p[0];
+  const double pd_t0004 = 1.0/(h*h);
+  const double pd_t0005 = (q0[0] - q1[0])*pd_t0004*2.0;
+  const double pd_t0006 = -(h*0.25*(pd_t0003 - pd_t0004*4.0));
+  D1[0] = -(pd_t0001*(pd_t0003 - pd_t0005));
+  D2[0] = -(pd_t0001*(pd_t0003 + pd_t0005));
+  D11[0] = pd_t0006;
+  D22[0] = pd_t0006;
 }
 
 // grad: 23 operations (38 before CSE)
@@ -161,8 +172,9 @@ extern "C" PARDEL_HD double bratu_midpoint_action(double h, double t0, double t1
     const double* p) {
   (void)t0;
   (void)t1;
-  const double pd_t0001 = q0[0] - q1[0];
-  return -(h*0.5*(std::exp(0.5*(q0[0] + q1[0]))*(p[0]*2.0) - pd_t0001*pd_t0001/(h*h)));
+  const double pd_t0001 = std::exp(0.5*(q0[0] + q1[0]));
+  const double pd_t0002 = q0[0] - q1[0];
+  return -(h*0.5*(pd_t0001*(p[0]*2.0) - pd_t0002*pd_t0002/(h*h)));
 }
 
 // grad_extended: the grad kernel in pd_quad, 23 operations; outputs as double-double pairs

@@ -122,14 +122,16 @@ extern "C" PARDEL_HD void sphere_geodesic_trapezoid_grad(double h, double t0, do
   const double pd_t0009 = h*h;
   const double pd_t0010 = 1.0/pd_t0009;
   const double pd_t0011 = h*0.5;
-  const double pd_t0012 = 2.0*(pd_t0008*pd_t0010);
-  const double pd_t0013 = 1.0/(pd_t0009*pd_t0003);
-  const double pd_t0014 = pd_t0011*(pd_t0002*pd_t0013 + pd_t0007*pd_t0013);
+  const double pd_t0012 = std::cos(q0[0]);
+  const double pd_t0013 = 2.0*(pd_t0008*pd_t0010);
+  const double pd_t0014 = 1.0/(pd_t0009*pd_t0003);
+  const double pd_t0015 = pd_t0011*(pd_t0002*pd_t0014 + pd_t0007*pd_t0014);
+  const double pd_t0016 = std::cos(q1[0]);
   Ld[0] = h*0.25*(pd_t0002*pd_t0005 + pd_t0007*pd_t0005 + pd_t0008*pd_t0008*pd_t0010*2.0);
-  D1[0] = pd_t0011*(pd_t0001*std::cos(q0[0])*pd_t0005 + pd_t0012);
-  D1[1] = pd_t0014;
-  D2[0] = -(pd_t0011*(pd_t0012 - pd_t0006*std::cos(q1[0])*pd_t0005));
-  D2[1] = -pd_t0014;
+  D1[0] = pd_t0011*(pd_t0001*pd_t0012*pd_t0005 + pd_t0013);
+  D1[1] = pd_t0015;
+  D2[0] = -(pd_t0011*(pd_t0013 - pd_t0006*pd_t0016*pd_t0005));
+  D2[1] = -pd_t0015;
 }
 
 // action: 19 operations (28 before CSE)
@@ -170,14 +172,16 @@ extern "C" void sphere_geodesic_trapezoid_grad_extended(double h_in, double t0_i
   const pd_quad pd_t0009 = h*h;
   const pd_quad pd_t0010 = 1.0/pd_t0009;
   const pd_quad pd_t0011 = h*0.5;
-  const pd_quad pd_t0012 = 2.0*(pd_t0008*pd_t0010);
-  const pd_quad pd_t0013 = 1.0/(pd_t0009*pd_t0003);
-  const pd_quad pd_t0014 = pd_t0011*(pd_t0002*pd_t0013 + pd_t0007*pd_t0013);
+  const pd_quad pd_t0012 = cosq(q0[0]);
+  const pd_quad pd_t0013 = 2.0*(pd_t0008*pd_t0010);
+  const pd_quad pd_t0014 = 1.0/(pd_t0009*pd_t0003);
+  const pd_quad pd_t0015 = pd_t0011*(pd_t0002*pd_t0014 + pd_t0007*pd_t0014);
+  const pd_quad pd_t0016 = cosq(q1[0]);
   Ld[0] = h*0.25*(pd_t0002*pd_t0005 + pd_t0007*pd_t0005 + pd_t0008*pd_t0008*pd_t0010*2.0);
-  D1[0] = pd_t0011*(pd_t0001*cosq(q0[0])*pd_t0005 + pd_t0012);
-  D1[1] = pd_t0014;
-  D2[0] = -(pd_t0011*(pd_t0012 - pd_t0006*cosq(q1[0])*pd_t0005));
-  D2[1] = -pd_t0014;
+  D1[0] = pd_t0011*(pd_t0001*pd_t0012*pd_t0005 + pd_t0013);
+  D1[1] = pd_t0015;
+  D2[0] = -(pd_t0011*(pd_t0013 - pd_t0006*pd_t0016*pd_t0005));
+  D2[1] = -pd_t0015;
   pd_split(Ld, Ld_out, 1);
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
@@ -284,14 +288,15 @@ extern "C" PARDEL_HD void sphere_geodesic_midpoint_grad(double h, double t0, dou
   const double pd_t0006 = pd_t0005*pd_t0005;
   const double pd_t0007 = h/(q0[1] - q1[1]);
   const double pd_t0008 = 1.0/(pd_t0007*pd_t0007);
-  const double pd_t0009 = pd_t0005*std::cos(pd_t0004)*pd_t0008;
-  const double pd_t0010 = pd_t0002*pd_t0003*2.0;
-  const double pd_t0011 = pd_t0006/pd_t0007;
+  const double pd_t0009 = std::cos(pd_t0004);
+  const double pd_t0010 = pd_t0005*pd_t0009*pd_t0008;
+  const double pd_t0011 = pd_t0002*pd_t0003*2.0;
+  const double pd_t0012 = pd_t0006/pd_t0007;
   Ld[0] = pd_t0001*(pd_t0002*pd_t0002*pd_t0003 + pd_t0006*pd_t0008);
-  D1[0] = pd_t0001*(pd_t0009 + pd_t0010);
-  D1[1] = pd_t0011;
-  D2[0] = pd_t0001*(pd_t0009 - pd_t0010);
-  D2[1] = -pd_t0011;
+  D1[0] = pd_t0001*(pd_t0010 + pd_t0011);
+  D1[1] = pd_t0012;
+  D2[0] = pd_t0001*(pd_t0010 - pd_t0011);
+  D2[1] = -pd_t0012;
 }
 
 // action: 16 operations (21 before CSE)
@@ -328,14 +333,15 @@ extern "C" void sphere_geodesic_midpoint_grad_extended(double h_in, double t0_in
   const pd_quad pd_t0006 = pd_t0005*pd_t0005;
   const pd_quad pd_t0007 = h/(q0[1] - q1[1]);
   const pd_quad pd_t0008 = 1.0/(pd_t0007*pd_t0007);
-  const pd_quad pd_t0009 = pd_t0005*cosq(pd_t0004)*pd_t0008;
-  const pd_quad pd_t0010 = pd_t0002*pd_t0003*2.0;
-  const pd_quad pd_t0011 = pd_t0006/pd_t0007;
+  const pd_quad pd_t0009 = cosq(pd_t0004);
+  const pd_quad pd_t0010 = pd_t0005*pd_t0009*pd_t0008;
+  const pd_quad pd_t0011 = pd_t0002*pd_t0003*2.0;
+  const pd_quad pd_t0012 = pd_t0006/pd_t0007;
   Ld[0] = pd_t0001*(pd_t0002*pd_t0002*pd_t0003 + pd_t0006*pd_t0008);
-  D1[0] = pd_t0001*(pd_t0009 + pd_t0010);
-  D1[1] = pd_t0011;
-  D2[0] = pd_t0001*(pd_t0009 - pd_t0010);
-  D2[1] = -pd_t0011;
+  D1[0] = pd_t0001*(pd_t0010 + pd_t0011);
+  D1[1] = pd_t0012;
+  D2[0] = pd_t0001*(pd_t0010 - pd_t0011);
+  D2[1] = -pd_t0012;
   pd_split(Ld, Ld_out, 1);
   pd_split(D1, D1_out, 2);
   pd_split(D2, D2_out, 2);
@@ -412,19 +418,22 @@ static void sphere_geodesic_galerkin_lobatto_s_2_ext_grad(double h, double t0, d
   const double pd_t0019 = pd_t0018*pd_t0001;
   const double pd_t0020 = pd_t0019*pd_t0019;
   const double pd_t0021 = pd_t0003*pd_t0001;
-  const double pd_t0022 = pd_t0013*pd_t0001;
-  const double pd_t0023 = pd_t0014*pd_t0015*0.66666666666666663;
-  const double pd_t0024 = pd_t0005*pd_t0007*pd_t0001;
-  const double pd_t0025 = 0.66666666666666663*(pd_t0016*pd_t0020);
-  const double pd_t0026 = pd_t0010*pd_t0011*pd_t0001;
-  const double pd_t0027 = h*0.66666666666666663;
+  const double pd_t0022 = std::cos(q0[0]);
+  const double pd_t0023 = pd_t0013*pd_t0001;
+  const double pd_t0024 = pd_t0014*pd_t0015*0.66666666666666663;
+  const double pd_t0025 = pd_t0005*pd_t0007*pd_t0001;
+  const double pd_t0026 = 0.66666666666666663*(pd_t0016*pd_t0020);
+  const double pd_t0027 = pd_t0010*pd_t0011*pd_t0001;
+  const double pd_t0028 = h*0.66666666666666663;
+  const double pd_t0029 = std::cos(z[0]);
+  const double pd_t0030 = std::cos(q1[0]);
   S[0] = h*((pd_t0003*pd_t0003 + (pd_t0005*pd_t0008 + (pd_t0010*pd_t0012 + pd_t0013*pd_t0013)))*0.083333333333333329 + (pd_t0014*pd_t0014*pd_t0015 + pd_t0017*pd_t0020)*0.33333333333333331);
-  g[0] = -(h*((pd_t0021 - std::cos(q0[0])*(pd_t0009*pd_t0012))*0.16666666666666666 - pd_t0022*0.5 - pd_t0023));
-  g[1] = h*(0.16666666666666666*pd_t0024 + pd_t0025 - 0.5*pd_t0026);
-  g[2] = pd_t0027*(pd_t0021 + std::cos(z[0])*(pd_t0017*pd_t0018)*pd_t0015 - pd_t0022);
-  g[3] = pd_t0027*(pd_t0026 - pd_t0024);
-  g[4] = -(h*(pd_t0023 + pd_t0021*0.5 - 0.16666666666666666*(pd_t0022 + std::cos(q1[0])*(pd_t0004*pd_t0008))));
-  g[5] = -(h*(pd_t0025 + 0.16666666666666666*pd_t0026 - 0.5*pd_t0024));
+  g[0] = -(h*((pd_t0021 - pd_t0022*(pd_t0009*pd_t0012))*0.16666666666666666 - pd_t0023*0.5 - pd_t0024));
+  g[1] = h*(0.16666666666666666*pd_t0025 + pd_t0026 - 0.5*pd_t0027);
+  g[2] = pd_t0028*(pd_t0021 + pd_t0029*(pd_t0017*pd_t0018)*pd_t0015 - pd_t0023);
+  g[3] = pd_t0028*(pd_t0027 - pd_t0025);
+  g[4] = -(h*(pd_t0024 + pd_t0021*0.5 - 0.16666666666666666*(pd_t0023 + pd_t0030*(pd_t0004*pd_t0008))));
+  g[5] = -(h*(pd_t0026 + 0.16666666666666666*pd_t0027 - 0.5*pd_t0025));
 }
 
 // ext_full: 170 operations (732 before CSE)
@@ -758,27 +767,31 @@ static void sphere_geodesic_galerkin_gauss_s_4_ext_grad(double h, double t0, dou
   const double pd_t0031 = pd_t0030*pd_t0030;
   const double pd_t0032 = pd_t0004*pd_t0001;
   const double pd_t0033 = pd_t0026*pd_t0001;
-  const double pd_t0034 = std::cos(pd_t0009)*(pd_t0007*pd_t0010);
-  const double pd_t0035 = std::cos(pd_t0018)*(pd_t0019*pd_t0023);
-  const double pd_t0036 = pd_t0025*pd_t0001;
-  const double pd_t0037 = std::cos(pd_t0029)*(pd_t0028*pd_t0030);
-  const double pd_t0038 = std::cos(pd_t0014)*(pd_t0013*pd_t0015);
-  const double pd_t0039 = pd_t0003*pd_t0001;
-  const double pd_t0040 = pd_t0012*pd_t0016*pd_t0001;
-  const double pd_t0041 = pd_t0020*pd_t0022*pd_t0001;
-  const double pd_t0042 = pd_t0027*pd_t0031*pd_t0001;
-  const double pd_t0043 = pd_t0006*pd_t0011*pd_t0001;
+  const double pd_t0034 = std::cos(pd_t0009);
+  const double pd_t0035 = pd_t0034*(pd_t0007*pd_t0010);
+  const double pd_t0036 = std::cos(pd_t0018);
+  const double pd_t0037 = pd_t0036*(pd_t0019*pd_t0023);
+  const double pd_t0038 = pd_t0025*pd_t0001;
+  const double pd_t0039 = std::cos(pd_t0029);
+  const double pd_t0040 = pd_t0039*(pd_t0028*pd_t0030);
+  const double pd_t0041 = std::cos(pd_t0014);
+  const double pd_t0042 = pd_t0041*(pd_t0013*pd_t0015);
+  const double pd_t0043 = pd_t0003*pd_t0001;
+  const double pd_t0044 = pd_t0012*pd_t0016*pd_t0001;
+  const double pd_t0045 = pd_t0020*pd_t0022*pd_t0001;
+  const double pd_t0046 = pd_t0027*pd_t0031*pd_t0001;
+  const double pd_t0047 = pd_t0006*pd_t0011*pd_t0001;
   S[0] = h*((pd_t0003*pd_t0003 + (pd_t0004*pd_t0004 + (pd_t0007*pd_t0011 + pd_t0013*pd_t0016)))*0.086963711284363462 + (pd_t0020*pd_t0023 + (pd_t0025*pd_t0025 + (pd_t0026*pd_t0026 + pd_t0028*pd_t0031)))*0.16303628871563652);
-  g[0] = h*(pd_t0032*1.0994869450636569 + (pd_t0033*0.1232741032024484 + (pd_t0034*0.076339406272863342 + (pd_t0035*0.040681622474346361 + (pd_t0036*0.029907999238518453 + (pd_t0037*0.02003807601558252 + (pd_t0038*0.0056958598140994963 + pd_t0039*0.0061208410997268927)))))));
-  g[1] = -(h*(0.0061208410997268927*pd_t0040 + 0.1232741032024484*pd_t0041 - 0.029907999238518453*pd_t0042 - 1.0994869450636569*pd_t0043));
-  g[2] = -(h*(pd_t0033*1.2654457260944294 + (pd_t0032*1.1603183569654674 + (pd_t0035*0.19910056555592964 + (pd_t0036*0.12665846775638201 + (pd_t0037*0.062989454444818543 + (pd_t0038*0.016318311803700261 + pd_t0039*0.021531098627420201))))) - pd_t0034*0.11979279930741085));
-  g[3] = h*(pd_t0040*0.021531098627420201 + pd_t0041*1.2654457260944294 - pd_t0042*0.12665846775638201 - pd_t0043*1.1603183569654674);
-  g[4] = h*((pd_t0036 + pd_t0033)*1.2389220914098444 + ((pd_t0037 - pd_t0035)*0.21060501277892579 + ((pd_t0038 - pd_t0034)*0.032827235001148022 + (pd_t0032 + pd_t0039)*0.07624166942950393)));
-  g[5] = -(h*(0.07624166942950393*(pd_t0040 - pd_t0043) + 1.2389220914098444*(pd_t0041 - pd_t0042)));
-  g[6] = -(h*(pd_t0036*1.2654457260944294 + (pd_t0039*1.1603183569654674 + (pd_t0033*0.12665846775638201 + (pd_t0032*0.021531098627420201 + pd_t0038*0.11979279930741085))) - pd_t0034*0.016318311803700261 - pd_t0035*0.062989454444818543 - pd_t0037*0.19910056555592964));
-  g[7] = h*(pd_t0041*0.12665846775638201 + pd_t0040*1.1603183569654674 - pd_t0043*0.021531098627420201 - pd_t0042*1.2654457260944294);
-  g[8] = h*(pd_t0039*1.0994869450636569 + (pd_t0036*0.1232741032024484 + (pd_t0032*0.0061208410997268927 + pd_t0033*0.029907999238518453)) - pd_t0034*0.0056958598140994963 - pd_t0035*0.02003807601558252 - pd_t0037*0.040681622474346361 - pd_t0038*0.076339406272863342);
-  g[9] = -(h*(0.029907999238518453*pd_t0041 + 1.0994869450636569*pd_t0040 - 0.0061208410997268927*pd_t0043 - 0.1232741032024484*pd_t0042));
+  g[0] = h*(pd_t0032*1.0994869450636569 + (pd_t0033*0.1232741032024484 + (pd_t0035*0.076339406272863342 + (pd_t0037*0.040681622474346361 + (pd_t0038*0.029907999238518453 + (pd_t0040*0.02003807601558252 + (pd_t0042*0.0056958598140994963 + pd_t0043*0.0061208410997268927)))))));
+  g[1] = -(h*(0.0061208410997268927*pd_t0044 + 0.1232741032024484*pd_t0045 - 0.029907999238518453*pd_t0046 - 1.0994869450636569*pd_t0047));
+  g[2] = -(h*(pd_t0033*1.2654457260944294 + (pd_t0032*1.1603183569654674 + (pd_t0037*0.19910056555592964 + (pd_t0038*0.12665846775638201 + (pd_t0040*0.062989454444818543 + (pd_t0042*0.016318311803700261 + pd_t0043*0.021531098627420201))))) - pd_t0035*0.11979279930741085));
+  g[3] = h*(pd_t0044*0.021531098627420201 + pd_t0045*1.2654457260944294 - pd_t0046*0.12665846775638201 - pd_t0047*1.1603183569654674);
+  g[4] = h*((pd_t0038 + pd_t0033)*1.2389220914098444 + ((pd_t0040 - pd_t0037)*0.21060501277892579 + ((pd_t0042 - pd_t0035)*0.032827235001148022 + (pd_t0032 + pd_t0043)*0.07624166942950393)));
+  g[5] = -(h*(0.07624166942950393*(pd_t0044 - pd_t0047) + 1.2389220914098444*(pd_t0045 - pd_t0046)));
+  g[6] = -(h*(pd_t0038*1.2654457260944294 + (pd_t0043*1.1603183569654674 + (pd_t0033*0.12665846775638201 + (pd_t0032*0.021531098627420201 + pd_t0042*0.11979279930741085))) - pd_t0035*0.016318311803700261 - pd_t0037*0.062989454444818543 - pd_t0040*0.19910056555592964));
+  g[7] = h*(pd_t0045*0.12665846775638201 + pd_t0044*1.1603183569654674 - pd_t0047*0.021531098627420201 - pd_t0046*1.2654457260944294);
+  g[8] = h*(pd_t0043*1.0994869450636569 + (pd_t0038*0.1232741032024484 + (pd_t0032*0.0061208410997268927 + pd_t0033*0.029907999238518453)) - pd_t0035*0.0056958598140994963 - pd_t0037*0.02003807601558252 - pd_t0040*0.040681622474346361 - pd_t0042*0.076339406272863342);
+  g[9] = -(h*(0.029907999238518453*pd_t0045 + 1.0994869450636569*pd_t0044 - 0.0061208410997268927*pd_t0047 - 0.1232741032024484*pd_t0046));
 }
 
 // ext_full: 787 operations (22737 before CSE)

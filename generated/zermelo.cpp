@@ -794,25 +794,27 @@ extern "C" PARDEL_HD double zermelo_trapezoid_action(double h, double t0, double
   const double pd_t0022 = pd_t0001*pd_t0021;
   const double pd_t0023 = pd_t0003*pd_t0021;
   const double pd_t0024 = pd_t0020/(pd_t0019*pd_t0022 - pd_t0018*pd_t0023);
-  const double pd_t0025 = std::sqrt(-(pd_t0004/pd_t0020 - 1.0/(pd_t0024*pd_t0024))) + 1.0/pd_t0024;
-  const double pd_t0026 = q1[1] - 5.0;
-  const double pd_t0027 = q1[0] - 2.0;
-  const double pd_t0028 = pd_t0027*pd_t0027;
-  const double pd_t0029 = 1.0/(1.0 + 3.0*(pd_t0028 + pd_t0026*pd_t0026));
-  const double pd_t0030 = q1[1] - 4.0;
-  const double pd_t0031 = q1[0] - 4.0;
-  const double pd_t0032 = 1.0/(1.0 + 3.0*(pd_t0030*pd_t0030 + pd_t0031*pd_t0031));
-  const double pd_t0033 = q1[1] - 2.0;
-  const double pd_t0034 = 1.0/(1.0 + 3.0*(pd_t0028 + pd_t0033*pd_t0033));
-  const double pd_t0035 = q1[1] - 1.0;
-  const double pd_t0036 = q1[0] - 5.0;
-  const double pd_t0037 = 1.0/(1.0 + 3.0*(pd_t0036*pd_t0036 + pd_t0035*pd_t0035));
-  const double pd_t0038 = pd_t0026*pd_t0029 + (pd_t0030*pd_t0032 + pd_t0033*pd_t0034) - pd_t0035*pd_t0037;
-  const double pd_t0039 = pd_t0036*pd_t0037 - pd_t0027*pd_t0034 - pd_t0027*pd_t0029 - pd_t0031*pd_t0032;
-  const double pd_t0040 = pd_t0005*(pd_t0038*pd_t0038) + pd_t0005*(pd_t0039*pd_t0039) - 1.0;
-  const double pd_t0041 = pd_t0040/(pd_t0023*pd_t0038 + pd_t0022*pd_t0039);
-  const double pd_t0042 = std::sqrt(-(pd_t0004/pd_t0040 - 1.0/(pd_t0041*pd_t0041))) - 1.0/pd_t0041;
-  return h*0.5*(pd_t0025*pd_t0025 + pd_t0042*pd_t0042);
+  const double pd_t0025 = std::sqrt(-(pd_t0004/pd_t0020 - 1.0/(pd_t0024*pd_t0024)));
+  const double pd_t0026 = pd_t0025 + 1.0/pd_t0024;
+  const double pd_t0027 = q1[1] - 5.0;
+  const double pd_t0028 = q1[0] - 2.0;
+  const double pd_t0029 = pd_t0028*pd_t0028;
+  const double pd_t0030 = 1.0/(1.0 + 3.0*(pd_t0029 + pd_t0027*pd_t0027));
+  const double pd_t0031 = q1[1] - 4.0;
+  const double pd_t0032 = q1[0] - 4.0;
+  const double pd_t0033 = 1.0/(1.0 + 3.0*(pd_t0031*pd_t0031 + pd_t0032*pd_t0032));
+  const double pd_t0034 = q1[1] - 2.0;
+  const double pd_t0035 = 1.0/(1.0 + 3.0*(pd_t0029 + pd_t0034*pd_t0034));
+  const double pd_t0036 = q1[1] - 1.0;
+  const double pd_t0037 = q1[0] - 5.0;
+  const double pd_t0038 = 1.0/(1.0 + 3.0*(pd_t0037*pd_t0037 + pd_t0036*pd_t0036));
+  const double pd_t0039 = pd_t0027*pd_t0030 + (pd_t0031*pd_t0033 + pd_t0034*pd_t0035) - pd_t0036*pd_t0038;
+  const double pd_t0040 = pd_t0037*pd_t0038 - pd_t0028*pd_t0035 - pd_t0028*pd_t0030 - pd_t0032*pd_t0033;
+  const double pd_t0041 = pd_t0005*(pd_t0039*pd_t0039) + pd_t0005*(pd_t0040*pd_t0040) - 1.0;
+  const double pd_t0042 = pd_t0041/(pd_t0023*pd_t0039 + pd_t0022*pd_t0040);
+  const double pd_t0043 = std::sqrt(-(pd_t0004/pd_t0041 - 1.0/(pd_t0042*pd_t0042)));
+  const double pd_t0044 = pd_t0043 - 1.0/pd_t0042;
+  return h*0.5*(pd_t0026*pd_t0026 + pd_t0044*pd_t0044);
 }
 
 // grad_extended: the grad kernel in pd_quad, 391 operations; outputs as double-double pairs
@@ -1474,8 +1476,9 @@ extern "C" PARDEL_HD double zermelo_midpoint_action(double h, double t0, double 
   const double pd_t0018 = (q0[0] - q1[0])/h;
   const double pd_t0019 = h/(q0[1] - q1[1]);
   const double pd_t0020 = pd_t0017/(pd_t0016*pd_t0018 + pd_t0015/pd_t0019);
-  const double pd_t0021 = 2.0*(1.0/pd_t0020) - std::sqrt(4.0*(1.0/(pd_t0020*pd_t0020)) - (pd_t0018*pd_t0018 + 1.0/(pd_t0019*pd_t0019))/pd_t0017);
-  return h*(pd_t0021*pd_t0021);
+  const double pd_t0021 = std::sqrt(4.0*(1.0/(pd_t0020*pd_t0020)) - (pd_t0018*pd_t0018 + 1.0/(pd_t0019*pd_t0019))/pd_t0017);
+  const double pd_t0022 = 2.0*(1.0/pd_t0020) - pd_t0021;
+  return h*(pd_t0022*pd_t0022);
 }
 
 // grad_extended: the grad kernel in pd_quad, 224 operations; outputs as double-double pairs
@@ -1597,7 +1600,8 @@ extern "C" PARDEL_HD double zermelo_clock(double h, double t0, const double* q0,
   const double pd_t0016 = h/(q0[1] - q1[1]);
   const double pd_t0017 = (q0[0] - q1[0])/h;
   const double pd_t0018 = pd_t0015/(pd_t0013/pd_t0016 - pd_t0017*pd_t0014);
-  return h*(1.0/pd_t0018 + std::sqrt(-((pd_t0017*pd_t0017 + 1.0/(pd_t0016*pd_t0016))/pd_t0015 - 1.0/(pd_t0018*pd_t0018))));
+  const double pd_t0019 = std::sqrt(-((pd_t0017*pd_t0017 + 1.0/(pd_t0016*pd_t0016))/pd_t0015 - 1.0/(pd_t0018*pd_t0018)));
+  return h*(1.0/pd_t0018 + pd_t0019);
 }
 
 static const char* const zermelo_coords[] = {

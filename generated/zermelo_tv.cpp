@@ -486,15 +486,20 @@ extern "C" PARDEL_HD double zermelo_tv_trapezoid_action(double h, double t0, dou
   const double pd_t0013 = pd_t0006*pd_t0003;
   const double pd_t0014 = h/pd_t0008;
   const double pd_t0015 = pd_t0013*pd_t0013 + 1.0/(pd_t0014*pd_t0014);
-  const double pd_t0016 = pd_t0012 - std::sqrt(pd_t0012*pd_t0012 - pd_t0015*pd_t0011);
-  const double pd_t0017 = p[0]*std::sin(q1[1] + 2.0*q1[0]);
-  const double pd_t0018 = 0.5*t1;
-  const double pd_t0019 = pd_t0017*std::sin(pd_t0018);
-  const double pd_t0020 = pd_t0017*std::cos(pd_t0018);
-  const double pd_t0021 = pd_t0019*pd_t0019 + pd_t0020*pd_t0020 - 1.0;
-  const double pd_t0022 = pd_t0021/(pd_t0013*pd_t0020 + pd_t0019/pd_t0014);
-  const double pd_t0023 = 1.0/pd_t0022 - std::sqrt(-(pd_t0015/pd_t0021 - 1.0/(pd_t0022*pd_t0022)));
-  return h*0.5*(pd_t0016*pd_t0016 + pd_t0023*pd_t0023);
+  const double pd_t0016 = std::sqrt(pd_t0012*pd_t0012 - pd_t0015*pd_t0011);
+  const double pd_t0017 = pd_t0012 - pd_t0016;
+  const double pd_t0018 = std::sin(q1[1] + 2.0*q1[0]);
+  const double pd_t0019 = p[0]*pd_t0018;
+  const double pd_t0020 = 0.5*t1;
+  const double pd_t0021 = std::sin(pd_t0020);
+  const double pd_t0022 = pd_t0019*pd_t0021;
+  const double pd_t0023 = std::cos(pd_t0020);
+  const double pd_t0024 = pd_t0019*pd_t0023;
+  const double pd_t0025 = pd_t0022*pd_t0022 + pd_t0024*pd_t0024 - 1.0;
+  const double pd_t0026 = pd_t0025/(pd_t0013*pd_t0024 + pd_t0022/pd_t0014);
+  const double pd_t0027 = std::sqrt(-(pd_t0015/pd_t0025 - 1.0/(pd_t0026*pd_t0026)));
+  const double pd_t0028 = 1.0/pd_t0026 - pd_t0027;
+  return h*0.5*(pd_t0017*pd_t0017 + pd_t0028*pd_t0028);
 }
 
 // grad_extended: the grad kernel in pd_quad, 213 operations; outputs as double-double pairs
@@ -920,15 +925,19 @@ extern "C" PARDEL_HD void zermelo_tv_midpoint_grad(double h, double t0, double t
 extern "C" PARDEL_HD double zermelo_tv_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
   const double pd_t0001 = (q0[0] - q1[0])/h;
-  const double pd_t0002 = std::sin((q0[1] + q1[1])*0.5 + (q0[0] + q1[0]))*p[0];
-  const double pd_t0003 = (t1 + t0)*0.25;
-  const double pd_t0004 = pd_t0002*std::cos(pd_t0003);
-  const double pd_t0005 = pd_t0002*std::sin(pd_t0003);
-  const double pd_t0006 = h/(q0[1] - q1[1]);
-  const double pd_t0007 = 1.0/(pd_t0005*pd_t0005 + pd_t0004*pd_t0004 - 1.0);
-  const double pd_t0008 = (pd_t0001*pd_t0004 + pd_t0005/pd_t0006)*pd_t0007;
-  const double pd_t0009 = pd_t0008 - std::sqrt(pd_t0008*pd_t0008 - (pd_t0001*pd_t0001 + 1.0/(pd_t0006*pd_t0006))*pd_t0007);
-  return h*(pd_t0009*pd_t0009);
+  const double pd_t0002 = std::sin((q0[1] + q1[1])*0.5 + (q0[0] + q1[0]));
+  const double pd_t0003 = pd_t0002*p[0];
+  const double pd_t0004 = (t1 + t0)*0.25;
+  const double pd_t0005 = std::cos(pd_t0004);
+  const double pd_t0006 = pd_t0003*pd_t0005;
+  const double pd_t0007 = std::sin(pd_t0004);
+  const double pd_t0008 = pd_t0003*pd_t0007;
+  const double pd_t0009 = h/(q0[1] - q1[1]);
+  const double pd_t0010 = 1.0/(pd_t0008*pd_t0008 + pd_t0006*pd_t0006 - 1.0);
+  const double pd_t0011 = (pd_t0001*pd_t0006 + pd_t0008/pd_t0009)*pd_t0010;
+  const double pd_t0012 = std::sqrt(pd_t0011*pd_t0011 - (pd_t0001*pd_t0001 + 1.0/(pd_t0009*pd_t0009))*pd_t0010);
+  const double pd_t0013 = pd_t0011 - pd_t0012;
+  return h*(pd_t0013*pd_t0013);
 }
 
 // grad_extended: the grad kernel in pd_quad, 120 operations; outputs as double-double pairs
@@ -1002,15 +1011,19 @@ extern "C" void zermelo_tv_midpoint_grad_extended(double h_in, double t0_in, dou
 // ---- clock: h * dt/ds at the left end of the interval
 // 33 operations (212 before CSE)
 extern "C" PARDEL_HD double zermelo_tv_clock(double h, double t0, const double* q0, const double* q1, const double* p) {
-  const double pd_t0001 = p[0]*std::sin(q0[1] + q0[0]*2.0);
-  const double pd_t0002 = t0*0.5;
-  const double pd_t0003 = pd_t0001*std::cos(pd_t0002);
-  const double pd_t0004 = (q0[0] - q1[0])/h;
-  const double pd_t0005 = pd_t0001*std::sin(pd_t0002);
-  const double pd_t0006 = h/(q0[1] - q1[1]);
-  const double pd_t0007 = 1.0/(pd_t0005*pd_t0005 + pd_t0003*pd_t0003 - 1.0);
-  const double pd_t0008 = (pd_t0003*pd_t0004 + pd_t0005/pd_t0006)*pd_t0007;
-  return -(h*(pd_t0008 - std::sqrt(pd_t0008*pd_t0008 - (pd_t0004*pd_t0004 + 1.0/(pd_t0006*pd_t0006))*pd_t0007)));
+  const double pd_t0001 = std::sin(q0[1] + q0[0]*2.0);
+  const double pd_t0002 = p[0]*pd_t0001;
+  const double pd_t0003 = t0*0.5;
+  const double pd_t0004 = std::cos(pd_t0003);
+  const double pd_t0005 = pd_t0002*pd_t0004;
+  const double pd_t0006 = (q0[0] - q1[0])/h;
+  const double pd_t0007 = std::sin(pd_t0003);
+  const double pd_t0008 = pd_t0002*pd_t0007;
+  const double pd_t0009 = h/(q0[1] - q1[1]);
+  const double pd_t0010 = 1.0/(pd_t0008*pd_t0008 + pd_t0005*pd_t0005 - 1.0);
+  const double pd_t0011 = (pd_t0005*pd_t0006 + pd_t0008/pd_t0009)*pd_t0010;
+  const double pd_t0012 = std::sqrt(pd_t0011*pd_t0011 - (pd_t0006*pd_t0006 + 1.0/(pd_t0009*pd_t0009))*pd_t0010);
+  return -(h*(pd_t0011 - pd_t0012));
 }
 
 static const char* const zermelo_tv_coords[] = {

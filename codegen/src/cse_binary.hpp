@@ -89,8 +89,10 @@ long long tree_ops(const BDag& dag, const std::vector<int>& roots);
  */
 void share_reciprocals(BDag& dag, const std::vector<int>& roots);
 
-/** The printer of straight-line C: temporaries for nodes used twice, in evaluation order
- *  (cse_print.cpp). */
+/** The printer of straight-line C: temporaries for nodes used twice and for every function call,
+ *  in evaluation order (cse_print.cpp). All temporaries precede the stores to the outputs, so a
+ *  compiler sees every call's argument before any store that might alias the inputs, and can pair
+ *  sin and cos of one argument into one sincos. */
 class Printer {
  public:
   Printer(const BDag& dag, std::string prefix, bool extended = false)
@@ -99,7 +101,10 @@ class Printer {
   KernelCode emit(const std::vector<std::string>& targets, const std::vector<int>& roots);
 
  private:
-  bool temporary(int id) const { return !dag_.leaf(id) && uses_[static_cast<std::size_t>(id)] >= 2; }
+  bool temporary(int id) const {
+    return !dag_.leaf(id) &&
+           (uses_[static_cast<std::size_t>(id)] >= 2 || dag_.nodes[static_cast<std::size_t>(id)].op == BOp::call);
+  }
 
   void schedule(int id, KernelCode& code);
   static int precedence(BOp op);

@@ -1,8 +1,8 @@
 /**
  * @file cse_print.cpp
  * The printer of the CSE: counts the uses of every node of the binary DAG, schedules the
- * temporaries (nodes used twice, named pd_tNNNN in evaluation order) and prints C text, in double
- * or in extended precision.
+ * temporaries (nodes used twice and function calls, named pd_tNNNN in evaluation order) and prints
+ * C text, in double or in extended precision.
  */
 #include <cstdio>
 
