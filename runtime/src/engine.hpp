@@ -217,11 +217,10 @@ int first_non_finite_node(const Context& ctx, const std::vector<double>& q);
 struct StepOutcome {
   Termination failure = Termination::converged;  ///< `converged` here means "no failure"
   std::string message;
-  bool next_evaluated = false;  ///< the interval arrays already hold the evaluation at q_next
-  /** With next_evaluated: so do the residual (res, ctx.residual, its round-off level and
-   *  per-component maxima, over all processes) and ctx.action, as evaluate() would set them at
-   *  q_next; the driver does not evaluate the next iterate again. */
-  bool next_residual = false;
+  /** The context already holds the evaluation at q_next: the interval arrays, the residual (res,
+   *  ctx.residual, its round-off level and per-component maxima, over all processes) and
+   *  ctx.action, as evaluate() would set them; the driver does not evaluate the next iterate again. */
+  bool next_evaluated = false;
   /** The method checked q_next itself (in the pass that wrote it): the driver takes these two
    *  instead of scanning q_next again. */
   bool next_checked = false;

@@ -115,7 +115,7 @@ bool Iteration::run_level(bool last) {
       ctx_.evaluated = Evaluated::nothing;
       ctx_.action_known = false;
     }
-    step_evaluated = outcome.next_evaluated && outcome.next_residual;
+    step_evaluated = outcome.next_evaluated;
     ++iteration_;
     ++level_.level_it;
     ++level_.since_clock;

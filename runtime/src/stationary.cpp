@@ -72,7 +72,6 @@ class StationaryNewton : public Method_ {
           ctx.action_known = true;
           StepOutcome done;
           done.next_evaluated = true;
-          done.next_residual = true;
           return done;
         }
       }

@@ -311,7 +311,6 @@ class TrustRegionNewton : public Method_ {
         last_step_newton_ = step.newton && !watchdog_.active;
         StepOutcome done;
         done.next_evaluated = true;
-        done.next_residual = true;
         return done;
       }
       trial_.refused(ctx, [&] { space_.evaluate(ctx, ctx.q); });  // the evaluation at q again
