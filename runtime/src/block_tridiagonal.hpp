@@ -143,6 +143,7 @@ class BlockTridiagonal {
   bool factor_ldlt() {
     failed_ = -1;
     indefinite_ = false;
+    if constexpr (D == 2) return factor_ldlt_2x2();
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
       if (i == 0) {
@@ -166,6 +167,48 @@ class BlockTridiagonal {
         }
         W_[ii] = off_[ii];
         cholesky_solve_columns(L, W_[ii]);  // S_i^{-1} C_i
+      }
+    }
+    return true;
+  }
+
+  /** factor_ldlt() for 2 x 2 blocks, where the recurrence's chain of dependent operations sets the
+   *  time: S_i^{-1} C_i by the adjugate, adj(S_i) C_i / det S_i, so that S_{i+1} = D_{i+1} -
+   *  C_i^T S_i^{-1} C_i waits for one division per node; each pivot's Cholesky factor (for the
+   *  solves and the definiteness rule), whose success decides positive definiteness as for other
+   *  sizes, is computed beside that chain. Where the determinant is not a positive finite number
+   *  with a finite inverse (over- or underflow) S_i^{-1} C_i comes from the Cholesky factor. */
+  bool factor_ldlt_2x2() {
+    double w00 = 0, w01 = 0, w10 = 0, w11 = 0;  // S_{i-1}^{-1} C_{i-1}
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t ii = static_cast<std::size_t>(i);
+      const Mat& Dk = diag_[ii];
+      double s00 = Dk(0, 0), s10 = Dk(1, 0), s11 = Dk(1, 1);
+      if (i > 0) {
+        const Mat& Cp = off_[ii - 1];
+        s00 -= Cp(0, 0) * w00 + Cp(1, 0) * w10;
+        s10 -= Cp(0, 1) * w00 + Cp(1, 1) * w10;
+        s11 -= Cp(0, 1) * w01 + Cp(1, 1) * w11;
+      }
+      Mat& L = factor_[ii];
+      L << s00, s10, s10, s11;
+      if (!cholesky_in_place(L)) {
+        failed_ = i;
+        return false;
+      }
+      const Mat& C = off_[ii];
+      Mat& W = W_[ii];
+      const double det = s00 * s11 - s10 * s10, inv = 1 / det;
+      if (det > 0 && std::isfinite(inv) && inv > 0) {
+        w00 = (s11 * C(0, 0) - s10 * C(1, 0)) * inv;
+        w10 = (s00 * C(1, 0) - s10 * C(0, 0)) * inv;
+        w01 = (s11 * C(0, 1) - s10 * C(1, 1)) * inv;
+        w11 = (s00 * C(1, 1) - s10 * C(0, 1)) * inv;
+        W << w00, w01, w10, w11;
+      } else {
+        W = C;
+        cholesky_solve_columns(L, W);
+        w00 = W(0, 0), w01 = W(0, 1), w10 = W(1, 0), w11 = W(1, 1);
       }
     }
     return true;

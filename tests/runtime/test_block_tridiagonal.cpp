@@ -116,6 +116,48 @@ TEST(BlockTridiagonal, FixedSizeBlocksMatchDenseSolve) {
   check_solvers<4>(21, 4, 4u, true);
 }
 
+TEST(BlockTridiagonal, TwoByTwoPivotsAtAnyScale) {
+  // Blocks of size 2 form S^-1 C by the adjugate; where det S overflows (entries 1e155) or
+  // underflows (1e-160) they take it from the Cholesky factor: the solve is the dense one's,
+  // scaled, at every scale.
+  for (double s : {1.0, 1e155, 1e-160}) {
+    Context ctx = random_context(12, 2, 6.0, 5u);
+    const Eigen::MatrixXd H = dense_hessian(ctx);
+    const Eigen::VectorXd b = right_hand_side(ctx);
+    const Eigen::VectorXd exact = H.ldlt().solve(b) / s;
+    for (std::vector<double>* v : {&ctx.D11, &ctx.D12, &ctx.D22})
+      for (double& x : *v) x *= s;
+    BlockTridiagonal<2> T;
+    T.resize(ctx.N, 2);
+    T.assemble(ctx, 0.0);
+    ASSERT_TRUE(T.factor_ldlt()) << "scale " << s;
+    Eigen::VectorXd x(exact.size());
+    T.solve_ldlt(b.data(), x.data());
+    EXPECT_LT((x - exact).norm(), 1e-12 * exact.norm()) << "scale " << s;
+  }
+}
+
+TEST(BlockTridiagonal, TwoByTwoPivotsFailWhereTheGeneralOnesDo) {
+  // An indefinite Hessian: the first pivot that is not positive definite is the same block for
+  // the 2 x 2 path and for dynamic blocks.
+  int indefinite = 0;
+  for (unsigned seed : {31u, 32u, 33u, 34u, 35u, 36u}) {
+    Context ctx = random_context(40, 2, 0.0, seed);
+    if (dense_hessian(ctx).llt().info() == Eigen::Success) continue;
+    ++indefinite;
+    BlockTridiagonal<2> fixed;
+    BlockTridiagonal<Eigen::Dynamic> dynamic;
+    fixed.resize(ctx.N, 2);
+    dynamic.resize(ctx.N, 2);
+    fixed.assemble(ctx, 0.0);
+    dynamic.assemble(ctx, 0.0);
+    EXPECT_FALSE(fixed.factor_ldlt());
+    EXPECT_FALSE(dynamic.factor_ldlt());
+    EXPECT_EQ(fixed.failed_block(), dynamic.failed_block()) << "seed " << seed;
+  }
+  EXPECT_GE(indefinite, 3);
+}
+
 TEST(BlockTridiagonal, DynamicBlocksMatchDenseSolve) {
   for (int N : {5, 18}) {
     check_solvers<Eigen::Dynamic>(N, 5, 7u + N, false);
