@@ -183,6 +183,7 @@ json body_json(const Checkpoint& c) {
       {"seconds", number(s.seconds)},
       {"method_state", numbers(s.method_state)},
       {"component_start_scale", numbers(s.component_start_scale)},
+      {"component_previous_residual", numbers(s.component_previous_residual)},
       {"dim", s.trajectory.dim},
       {"t", numbers(s.trajectory.t)},
       {"q", numbers(s.trajectory.q)},
@@ -340,12 +341,15 @@ const json& read_state(const json& body, const Reader& rd, Checkpoint& c) {
   s.level_checkpoint_residual = rd.real(st, "level_checkpoint_residual", "state");
   s.seconds = rd.real(st, "seconds", "state");
   s.method_state = rd.reals(st, "method_state", "state");
-  if (st.contains("component_start_scale")) {  // absent in checkpoints written before it was kept
-    s.component_start_scale = rd.reals(st, "component_start_scale", "state");
-    if (!s.component_start_scale.empty() && s.component_start_scale.size() != static_cast<std::size_t>(c.dim))
-      rd.fail(fmt::format("key state.component_start_scale has {} values; dim = {} needs {}",
-                          s.component_start_scale.size(), c.dim, c.dim));
-  }
+  // Per-component values: none or dim of them; absent in checkpoints written before they were kept.
+  const auto per_component = [&](const char* key, std::vector<double>& values) {
+    if (!st.contains(key)) return;
+    values = rd.reals(st, key, "state");
+    if (!values.empty() && values.size() != static_cast<std::size_t>(c.dim))
+      rd.fail(fmt::format("key state.{} has {} values; dim = {} needs {}", key, values.size(), c.dim, c.dim));
+  };
+  per_component("component_start_scale", s.component_start_scale);
+  per_component("component_previous_residual", s.component_previous_residual);
   s.trajectory.N = s.N;
   s.trajectory.dim = static_cast<int>(rd.integer(st, "dim", "state", 1, 1 << 20));
   s.trajectory.t = rd.reals(st, "t", "state");

@@ -328,7 +328,9 @@ inline double component_floor(const Context& ctx, int i) {
  * set; else max(rtol x the component's own scale, 10 x its round-off level, 10 x the round-off level
  * of its terms at the solve's start (`start_scale`, the size of the component's terms at the first
  * iterate: a component whose terms vanish at the solution, a coordinate at rest, has no scale of its
- * own there; its residual is then resolved once it is below the rounding of what it was).
+ * own there; its residual is then resolved once it is below the rounding of what it was). The
+ * caller passes start_scale = 0 where that last term does not apply (Iteration: unless the
+ * component's residual has stopped falling).
  */
 inline double component_target(const Options& options, const Context& ctx, int i, double start_scale) {
   if (options.tol > 0) return options.tol;

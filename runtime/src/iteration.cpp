@@ -33,7 +33,10 @@ std::chrono::steady_clock::duration steady_seconds(double seconds) {
 }  // namespace
 
 bool Iteration::run_level(bool last) {
-  if (!resumed_level_) level_ = LevelCounters{};
+  if (!resumed_level_) {
+    level_ = LevelCounters{};
+    previous_comp_residual_.clear();
+  }
   resumed_level_ = false;
   const bool clocked = ctx_.clock != ClockMode::none;
   bool recheck_times = false;  // the nodes moved to the clock's times at the tolerance: check them again
@@ -107,6 +110,7 @@ bool Iteration::run_level(bool last) {
     if (answer_at_tolerance(last, r, target, &settled)) return settled;
     if (last && refined_at_round_off(r, target)) continue;
     if (stalled_at_round_off(r, target) || reached_max_iterations(r, target) || diverged(r)) return false;
+    previous_comp_residual_.assign(ctx_.comp_residual.begin(), ctx_.comp_residual.end());
     StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
     if (step_failed(outcome, last, r, target, &settled)) return settled;
     std::swap(ctx_.q, ctx_.q_next);
@@ -305,8 +309,15 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
 }
 
 double Iteration::component_target(int i) const {
+  // The rounding of the start's terms resolves a component only once the iteration cannot reduce
+  // its residual any more (it fell less than tenfold in the last step on this level): a component
+  // far from its solution at the start (a guess 1e10 times off in a coordinate of small units)
+  // has a large start scale while its equations are still far from holding, and Newton's next
+  // step would resolve them.
   const std::size_t ii = static_cast<std::size_t>(i);
-  return detail::component_target(options_, ctx_, i, ii < start_scale_.size() ? start_scale_[ii] : 0.0);
+  const bool stopped_falling = ii < start_scale_.size() && ii < previous_comp_residual_.size() &&
+                               !(ctx_.comp_residual[ii] < 0.1 * previous_comp_residual_[ii]);
+  return detail::component_target(options_, ctx_, i, stopped_falling ? start_scale_[ii] : 0.0);
 }
 
 int Iteration::unresolved_component() const {
@@ -443,6 +454,7 @@ void Iteration::capture_counters(SolverState& st) const {
   st.seconds = seconds();
   st.history = s_.history;
   st.component_start_scale = start_scale_;
+  st.component_previous_residual = previous_comp_residual_;
 }
 
 void Iteration::continue_count(const SolverState& st) {
@@ -463,6 +475,7 @@ void Iteration::resume_counters(const SolverState& st) {
   best_residual_ = st.best_residual;
   level_ = LevelCounters{st.level_iteration, st.since_clock_update, st.level_initial_residual,
                          st.level_checkpoint_residual};
+  previous_comp_residual_ = st.component_previous_residual;
   resumed_level_ = true;
 }
 

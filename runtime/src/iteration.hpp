@@ -141,6 +141,9 @@ class Iteration {
   long iteration_ = 0, next_record_ = 0;
   /** Per component: the size of its terms at the solve's first iterate (detail::component_target). */
   std::vector<double> start_scale_;
+  /** Per component: the residual at the iterate the last step on this level started from (empty
+   *  before the level's first step), which tells whether a component's residual still falls. */
+  std::vector<double> previous_comp_residual_;
   double r_initial_ = 0, last_good_residual_ = 0;
   double best_residual_ = std::numeric_limits<double>::infinity();
   long best_iteration_ = 0;

@@ -2,7 +2,8 @@
  * @file test_component_scale.cpp
  * What a solve may claim, on models written for it: the convergence test holds every component to
  * its own scale (two uncoupled pendulums whose Lagrangians differ by 10^8, against the same motions
- * solved at equal scales; a coordinate at rest), the inertia is judged in the Jacobi-scaled Hessian
+ * solved at equal scales; a coordinate at rest; a coordinate of size 1e-7 from a guess 1e10 times
+ * off, against the linear discrete solution by Thomas' algorithm), the inertia is judged in the Jacobi-scaled Hessian
  * (a badly scaled minimum is no degenerate point; a singular matrix still has its zero), node times
  * that do not increase under a clock are never converged, and a solve that did not converge is not
  * assessed (nor one interrupted during its assessment) and returns the requested grid.
@@ -12,12 +13,14 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "block_tridiagonal.hpp"
 #include "pardel/pardel.hpp"
 
 #ifdef PARDEL_HAVE_SCALE_MODELS
 #include "clock_line.hpp"
+#include "faint_coupled.hpp"
 #include "lopsided_pendulums.hpp"
 #endif
 
@@ -171,6 +174,68 @@ TEST(ComponentScale, ACoordinateAtRestConverges) {
     double ymax = 0;
     for (int k = 0; k <= tr.N; ++k) ymax = std::max(ymax, std::fabs(tr.node(k)[1]));
     EXPECT_LT(ymax, 1e-9) << pardel::to_string(method);
+  }
+}
+
+/** The solution of a tridiagonal system (sub- and superdiagonal `off`, diagonal `diag`) by Thomas'
+ *  algorithm. */
+std::vector<double> thomas(double off, const std::vector<double>& diag, std::vector<double> rhs) {
+  const std::size_t n = diag.size();
+  std::vector<double> c(n), x(n);
+  double denom = diag[0];
+  c[0] = off / denom;
+  rhs[0] /= denom;
+  for (std::size_t i = 1; i < n; ++i) {
+    denom = diag[i] - off * c[i - 1];
+    c[i] = off / denom;
+    rhs[i] = (rhs[i] - off * rhs[i - 1]) / denom;
+  }
+  x[n - 1] = rhs[n - 1];
+  for (std::size_t i = n - 1; i-- > 0;) x[i] = rhs[i] - c[i] * x[i + 1];
+  return x;
+}
+
+TEST(ComponentScale, ACoordinateFarFromItsGuessIsSolved) {
+  // faint_coupled: x of size 1e5, y of size 1e-7, from a guess whose middle node has y = 1000.
+  // The trapezoid's DEL equations are linear: (2 q_k - q_{k-1} - q_{k+1}) / h + h grad W(q_k) = 0
+  // with grad W = (-x + c y, y + c x). x's do not feel c y (1e-19 against terms of 1e5 / h), so x
+  // solves its own tridiagonal system, and then y the one forced by -h c x_k: the reference, by
+  // Thomas' algorithm, against which y must hold to far below its size.
+  const pardel_model& m = faint_coupled_model;
+  pardel::Problem p;
+  p.model = &m;
+  p.discretization = pardel::find_discretization(m, "trapezoid");
+  p.params.assign(m.param_defaults, m.param_defaults + m.nparams);
+  p.T = 2;
+  p.N = 64;
+  p.q0 = {1e5, 0.0};
+  p.qN = {-5e4, 1e-7};
+  const double h = p.T / p.N, c = 1e-12;
+  const std::size_t n = static_cast<std::size_t>(p.N - 1);
+  std::vector<double> dx(n, 2 / h - h), rx(n, 0.0), dy(n, 2 / h + h);
+  rx.front() += p.q0[0] / h;
+  rx.back() += p.qN[0] / h;
+  const std::vector<double> x = thomas(-1 / h, dx, rx);
+  std::vector<double> ry(n);
+  for (std::size_t k = 0; k < n; ++k) ry[k] = -h * c * x[k];
+  ry.front() += p.q0[1] / h;
+  ry.back() += p.qN[1] / h;
+  const std::vector<double> y = thomas(-1 / h, dy, ry);
+  double ysize = 0;
+  for (double v : y) ysize = std::max(ysize, std::fabs(v));
+  ASSERT_GT(ysize, 5e-8);
+  for (pardel::Method method : {pardel::Method::automatic, pardel::Method::newton}) {
+    pardel::Trajectory tr = pardel::polyline_guess(p, {{1e5, 0.0}, {0.0, 1000.0}, {-5e4, 1e-7}});
+    const pardel::Summary s = pardel::solve(p, with_method(method), tr);
+    ASSERT_EQ(s.termination, Termination::converged) << pardel::to_string(method) << ": " << s.message;
+    ASSERT_EQ(tr.N, p.N);
+    double xerr = 0, yerr = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      xerr = std::max(xerr, std::fabs(tr.node(static_cast<int>(k) + 1)[0] - x[k]));
+      yerr = std::max(yerr, std::fabs(tr.node(static_cast<int>(k) + 1)[1] - y[k]));
+    }
+    EXPECT_LT(xerr, 1e-8 * 1e5) << pardel::to_string(method);
+    EXPECT_LT(yerr, 1e-8 * ysize) << pardel::to_string(method);
   }
 }
 

@@ -227,6 +227,9 @@ struct SolverState {
   /** Per component, the size of its terms at the solve's first iterate (the convergence test's
    *  reference for a component at rest; empty: taken from the resumed iterate). */
   std::vector<double> component_start_scale;
+  /** Per component, the residual at the iterate the last step started from (empty: no step on this
+   *  level yet), which tells the convergence test whether a component's residual still falls. */
+  std::vector<double> component_previous_residual;
   /** newton with refinement: the solution of the level before `level` (N = 0: none), which with
    *  this level's solution extrapolates the start of the next level. */
   Trajectory previous_level;
