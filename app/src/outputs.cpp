@@ -198,6 +198,8 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
                                        ? nlohmann::ordered_json(summary.error_observed_order)
                                        : nlohmann::ordered_json()},
                 {"reliable", summary.error_reliable},
+                {"solve", std::isfinite(summary.solve_error) ? nlohmann::ordered_json(summary.solve_error)
+                                                             : nlohmann::ordered_json()},
                 {"note", summary.error_note}};
   j["grid"] = {{"accuracy", scene.options.accuracy > 0 ? nlohmann::ordered_json(scene.options.accuracy) : nlohmann::ordered_json()},
                {"sizes", summary.grid_sizes},

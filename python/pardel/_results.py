@@ -30,8 +30,10 @@ class Result:
     cost_definition), point (kind, inertia, lambda_min, ... as in summary.json), p0 and pN (the
     discrete boundary momenta -D1 Ld(q0, q1) and D2 Ld(q_{N-1}, q_N)), history (arrays iteration,
     N, residual, action, seconds), error_estimate (Richardson's estimate of the discretization error
-    of the coordinates at the nodes, NaN when not estimated), error_by_coordinate (dict by name,
-    empty when not estimated), error_note (how it was made, or "not estimated: " and why),
+    of the coordinates at the nodes plus solve_error, NaN when not estimated), error_by_coordinate
+    (dict by name, empty when not estimated), solve_error (the solve's own error, the largest |delta|
+    of the Newton correction delta = -H^-1 r at the returned iterate over the nodes and coordinates,
+    NaN where not computed), error_note (how it was made, or "not estimated: " and why),
     extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
     solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
     wall_seconds, assessment_seconds (the point assessment's part of it), model (the model's name), coords (its coordinate names), stopped_by_callback
@@ -57,6 +59,7 @@ class Result:
     point: Dict[str, Any]
     error_estimate: float
     error_by_coordinate: Dict[str, float]
+    solve_error: float
     error_note: str
     extrapolated: bool
     grid_sizes: List[int]
@@ -92,6 +95,7 @@ class Result:
         # summary.json writes a missing estimate as null; here it is NaN, as in the C++ Summary.
         self.error_estimate = float("nan") if s["error_estimate"] is None else s["error_estimate"]
         self.error_by_coordinate = dict(s["error"]["by_coordinate"])
+        self.solve_error = float("nan") if s["error"].get("solve") is None else s["error"]["solve"]
         self.error_note = s["error"]["note"]
         self.extrapolated = s["error"]["extrapolated"]
         self.grid_sizes = list(s["grid"]["sizes"])

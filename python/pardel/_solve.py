@@ -258,7 +258,7 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
     else:
         base_params = None
     arguments = _solve_arguments(m, q0[0], qN[0], T, N, None, None, dict(options, params=base_params, threads=threads), where)
-    scene = Scene(_pardel.scene_from_arguments(os.fsencode(m.spec), arguments, m._handle))
+    scene = Scene(_pardel.scene_from_arguments(os.fsencode(m.spec), arguments, m._handle, where))
     if guess is not None:
         guess = batch_of(guess, 2)
     if named:  # the scene's params (defaults and scalars), with the per-problem columns given
@@ -351,6 +351,8 @@ def _kernels(model, discretization, h, t0, t1, q0, q1, params):
     _check_model(where, "model", model)
     _check_string(where, "discretization", discretization)
     h, t0, t1 = (_check_number(where, name, value) for name, value in (("h", h), ("t0", t0), ("t1", t1)))
+    if not h > 0:  # as `pardel kernels --h`: a step that is not positive has no discrete Lagrangian
+        raise PardelError("%s: h, the step, must be a finite number > 0, got %s" % (where, _shown(h)))
     q0, q1 = _check_vector(where, "q0", q0), _check_vector(where, "q1", q1)
     if params is not None:
         params = _check_params(where, "params", params)

@@ -23,8 +23,14 @@ def _check_result(where, result):
         raise TypeError("%s: result must be a pardel.Result, got %s" % (where, shown))
 
 
-def _axes(ax):
+def _axes(where, ax):
+    """ax when given (a matplotlib Axes, else TypeError naming it), else the axes of a new figure."""
     if ax is not None:
+        from matplotlib.axes import Axes
+
+        if not isinstance(ax, Axes):
+            shown = "%s %.60r" % (type(ax).__name__, ax)
+            raise TypeError("%s: ax must be a matplotlib Axes or None, got %s" % (where, shown))
         return ax
     import matplotlib.pyplot as plt
 
@@ -37,7 +43,7 @@ def path(result: Result, ax: Optional[Axes] = None, label: Optional[str] = None)
     _check_result("pardel.plot.path", result)
     if len(result.coords) < 2:
         raise ValueError("pardel.plot.path: result: the model has one coordinate; use pardel.plot.coordinates")
-    ax = _axes(ax)
+    ax = _axes("pardel.plot.path", ax)
     x, y = result.q[:, 0], result.q[:, 1]
     ax.plot(x, y, "-", lw=1.5, label=label or "%s (%s)" % (result.model, result.status))
     ax.plot([x[0]], [y[0]], "o", color="tab:green")
@@ -55,7 +61,7 @@ def path(result: Result, ax: Optional[Axes] = None, label: Optional[str] = None)
 def coordinates(result: Result, ax: Optional[Axes] = None) -> Axes:
     """Each coordinate against the node times."""
     _check_result("pardel.plot.coordinates", result)
-    ax = _axes(ax)
+    ax = _axes("pardel.plot.coordinates", ax)
     for i, name in enumerate(result.coords):
         ax.plot(result.t, result.q[:, i], "-", lw=1.2, label=name)
     ax.set_xlabel("t")
@@ -67,7 +73,7 @@ def coordinates(result: Result, ax: Optional[Axes] = None) -> Axes:
 def convergence(result: Result, ax: Optional[Axes] = None) -> Axes:
     """The DEL residual (infinity norm) of each recorded iteration, on a log scale."""
     _check_result("pardel.plot.convergence", result)
-    ax = _axes(ax)
+    ax = _axes("pardel.plot.convergence", ax)
     h = result.history
     residual = np.asarray(h["residual"], dtype=float)
     positive = residual > 0

@@ -96,9 +96,9 @@ Scene parse_generated_scene(const std::string& text, const std::string& model_sp
                             const ModelHandle* loaded = nullptr);
 
 /** A scene from pardel.solve's arguments (their TOML table read by the scene reader, then the
- *  options outside the scene schema). */
+ *  options outside the scene schema); `where` names the calling function in messages. */
 Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments,
-                           const ModelHandle* loaded = nullptr);
+                           const ModelHandle* loaded = nullptr, const std::string& where = "pardel.solve");
 
 /** A scene file read with `overrides` (as --set). */
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides);

@@ -119,10 +119,10 @@ void define_entry_points(py::module_& m) {
       py::arg("spec"));
   m.def(
       "scene_from_arguments",
-      [](const std::string& model, const py::dict& arguments, const ModelHandle* loaded) {
-        return raising_interrupts([&] { return scene_from_arguments(model, arguments, loaded); });
+      [](const std::string& model, const py::dict& arguments, const ModelHandle* loaded, const std::string& where) {
+        return raising_interrupts([&] { return scene_from_arguments(model, arguments, loaded, where); });
       },
-      py::arg("model"), py::arg("arguments"), py::arg("loaded") = nullptr);
+      py::arg("model"), py::arg("arguments"), py::arg("loaded") = nullptr, py::arg("where") = "pardel.solve");
   m.def(
       "load_scene",
       [](const std::string& path, const std::vector<std::string>& overrides) {

@@ -288,10 +288,11 @@ Scene parse_generated_scene(const std::string& text, const std::string& model_sp
  *  parse_generated_scene reads their text (the same checks and messages: a table built in memory
  *  has no positions), then the options outside the scene schema. `loaded`: the model a pardel.Model
  *  holds for model_spec, used instead of resolving the spec again (for a .lag path that is reading,
- *  hashing and checking the file and its cached library: about 0.5 ms a call). */
-Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments,
-                           const ModelHandle* loaded) {
-  Scene scene = app::read_scene_table(scene_table(model_spec, arguments, false, loaded), kGeneratedSource,
+ *  hashing and checking the file and its cached library: about 0.5 ms a call). `where`: the
+ *  calling function, which messages name. */
+Scene scene_from_arguments(const std::string& model_spec, const py::dict& arguments, const ModelHandle* loaded,
+                           const std::string& where) {
+  Scene scene = app::read_scene_table(scene_table(model_spec, arguments, false, loaded), where,
                                       generated_scene_resolver(model_spec, loaded), bundled_model_names());
   // Options outside the scene schema.
   auto number = [&arguments](const char* name, auto* target) {

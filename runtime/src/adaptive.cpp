@@ -40,8 +40,11 @@ constexpr double kMinGrowth = 1.5;
 /// the local error vanishes (0.03 measured better than 0.1 on the boundary layer of
 /// tools/benchmarks/adaptive_layer.py: fewer nodes outside the layers).
 constexpr double kFloorShare = 0.03;
-/// The next grid's N is predicted for this share of the requested accuracy.
+/// The next grid's N is predicted for this share of the requested accuracy; a solve's own error
+/// above this share of it is reduced by a smaller tolerance (or is round-off, and ends the solve).
 constexpr double kTargetShare = 0.5;
+/// Solves again on one grid with a smaller tolerance, at most.
+constexpr int kMaxTightening = 3;
 /// A grid that met the request is followed by one of the predicted N when that is at most this
 /// share of its N ...
 constexpr double kShrink = 0.8;
@@ -407,10 +410,20 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
   bool shrinking = false, shrink_failed = false;
   Problem met_problem;       // the last grid that met the request, before a smaller one
   Trajectory met_solution;  // and its solution
+  Summary best;             // the converged grid with the smallest estimate, and its solution
+  Trajectory best_solution;
+  int tightened = 0;        // solves again on one grid with a smaller tolerance
+  bool reached = false;
   for (int round = 0;; ++round) {
     summary = solve(current, options, guess);  // options.accuracy = 0: one grid
     sizes.push_back(current.N);
     iterations += summary.iterations;
+    const bool improved = summary.converged() && std::isfinite(summary.error_estimate) &&
+                          !(best.error_estimate <= summary.error_estimate);
+    if (improved) {
+      best = summary;
+      best_solution = guess;
+    }
     if (summary.termination == Termination::invalid_input && round == 0) {
       trajectory = guess;
       summary.grid_sizes = sizes;
@@ -436,6 +449,27 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       guess = met_solution;
       continue;
     }
+    const double own = summary.solve_error;
+    if (!met && std::isfinite(own) && own > kTargetShare * accuracy) {
+      // The solve's own error (the Newton correction at the answer) takes most of the request, and
+      // a finer grid would not reduce it. Above round-off the tolerance left it: solve again on
+      // this grid with the tolerance scaled down to leave a tenth of the request. At round-off,
+      // which grows on finer grids, the grids go on only while the estimate falls.
+      const bool round_off = !(summary.residual > 10 * summary.residual_floor);
+      if (!round_off && tightened < kMaxTightening && round + 1 < kMaxGrids) {
+        const double factor = std::max(1e-6, 0.1 * accuracy / own);
+        options.rtol *= factor;
+        if (options.tol > 0) options.tol *= factor;
+        ++tightened;
+        continue;
+      }
+      if (round_off && !improved && best.converged()) {
+        outcome = "accuracy " + number(accuracy) + " not reached: the estimate stopped falling (" + number(estimate) +
+                  " on N = " + std::to_string(current.N) + ", of which the solve's own error at the round-off " +
+                  "level " + number(own) + ", which finer grids make larger)";
+        break;
+      }
+    }
     const Prediction next = predict_grid(current, guess, p, estimate, accuracy);
     const long N_predicted = next.N;
     const int max_N = requested.accuracy_max_N - requested.accuracy_max_N % kMultiple;
@@ -449,6 +483,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       if (N_predicted == 0 || shrink_failed || smaller > kShrink * current.N || round + 2 >= kMaxGrids) {
         outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
                   number(estimate) + ") after " + std::to_string(sizes.size()) + " grid" + (sizes.size() == 1 ? "" : "s");
+        reached = true;
         break;
       }
       shrinking = true;
@@ -473,6 +508,15 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
     guess = interpolate(guess, times);
     current.N = static_cast<int>(times.size()) - 1;
     current.times = std::move(times);
+  }
+  if (!reached && best.converged() &&
+      !(summary.converged() && summary.error_estimate <= best.error_estimate)) {
+    // Not reached: the grid with the smallest estimate is returned, not a later, worse one (finer
+    // grids whose round-off grows).
+    outcome += "; the grid with the smallest estimate, N = " + std::to_string(best_solution.N) + " (estimate " +
+               number(best.error_estimate) + "), is returned";
+    summary = best;
+    guess = best_solution;
   }
   trajectory = guess;
   summary.iterations = iterations;

@@ -536,23 +536,46 @@ bool classify_indefinite(PointAssessment& out) {
   return false;
 }
 
-void assess(Context& ctx, PointAssessment& out) {
-  out = PointAssessment{};
-  if (ctx.N < 2) return;
+namespace {
+
+/** Calls f(H) with H the unshifted Hessian at ctx.q, assembled (the full kernel evaluated there
+ *  where ctx lacks it); false, without calling f, for N < 2 or a second derivative that is not
+ *  finite. */
+template <class F>
+bool with_hessian(Context& ctx, F&& f) {
+  if (ctx.N < 2) return false;
   ensure_interval_arrays(ctx, Evaluated::full);
   if (ctx.evaluated != Evaluated::full) eval_full(ctx, ctx.q);
-  for (double v : ctx.D11)
-    if (!std::isfinite(v)) return;
-  for (double v : ctx.D12)
-    if (!std::isfinite(v)) return;
-  for (double v : ctx.D22)
-    if (!std::isfinite(v)) return;
+  for (const std::vector<double>* a : {&ctx.D11, &ctx.D12, &ctx.D22})
+    for (double v : *a)
+      if (!std::isfinite(v)) return false;
   dispatch_dim_cold(ctx.dim, [&](auto D) {
     BlockTridiagonal<decltype(D)::value> H;
     H.resize(ctx.N, ctx.dim);
     H.assemble(ctx, 0.0);
-    assess_hessian(ctx, H, false, out);
+    f(H);
   });
+  return true;
+}
+
+}  // namespace
+
+void assess(Context& ctx, PointAssessment& out) {
+  out = PointAssessment{};
+  with_hessian(ctx, [&](auto& H) { assess_hessian(ctx, H, false, out); });
+}
+
+bool newton_correction(Context& ctx, std::vector<double>& delta) {
+  bool solved = false;
+  with_hessian(ctx, [&](auto& H) {
+    if (!H.factor_ldlt() && !H.factor_indefinite()) return;
+    const std::size_t dz = static_cast<std::size_t>(ctx.dim), n = static_cast<std::size_t>(ctx.N - 1) * dz;
+    delta.resize(n);
+    for (std::size_t i = 0; i < n; ++i) delta[i] = ctx.is_free[dz + i] ? -ctx.res[dz + i] : 0.0;
+    H.solve_ldlt(delta.data(), delta.data());
+    solved = true;
+  });
+  return solved;
 }
 
 bool lagrangian_regular(const Context& ctx, std::string* message) {

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "block_tridiagonal.hpp"
 #include "engine.hpp"
@@ -19,6 +20,12 @@ class LevelEigenvectors;
 
 /** Assesses ctx.q (evaluating the full kernel there if needed) into `out`. */
 void assess(Context& ctx, PointAssessment& out);
+
+/** Into delta (the unknowns of nodes 1..N-1, node after node), the Newton correction -H^-1 r at
+ *  ctx.q, H the unshifted Hessian there (evaluating the full kernel if needed) factored by block
+ *  LDL^T, or where that fails by the indefinite factorization; false where neither can (a
+ *  singular H, a non-finite second derivative). */
+bool newton_correction(Context& ctx, std::vector<double>& delta);
 
 /** Whether a solve that ended with `termination` has its point assessed: only a converged one.
  *  Any other iterate is no solution of the DEL equations, and what its Hessian is says nothing

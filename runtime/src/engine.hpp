@@ -261,6 +261,14 @@ class Method_ {
     (void)out;
     return false;
   }
+  /** Into delta (the unknowns of nodes 1..N-1, node after node), the Newton correction -H^-1 r at
+   *  ctx.q from a factorization of the unshifted Hessian that the method holds there (Newton's,
+   *  made when it accepted to stop at a minimum); false where it holds none. */
+  virtual bool newton_correction(Context& ctx, std::vector<double>& delta) {
+    (void)ctx;
+    (void)delta;
+    return false;
+  }
   /** Seconds the method spent on its coarse levels preparing the point assessment (Newton's
    *  eigenvector estimates, LevelEigenvectors); counted in Summary::assessment_seconds. */
   virtual double level_assessment_seconds() const { return 0; }

@@ -189,6 +189,34 @@ bool nested_level(const Problem& problem, const Trajectory& fine, const Trajecto
   return true;
 }
 
+void record_solve_error(const std::vector<double>& delta, int dim, int ncoords, Summary& summary) {
+  const std::size_t dz = static_cast<std::size_t>(dim), nc = static_cast<std::size_t>(std::min(ncoords, dim));
+  std::vector<double> by(nc, 0.0);
+  bool finite = true;
+  for (std::size_t i = 0; i < delta.size(); ++i) {
+    const std::size_t a = i % dz;
+    if (a >= nc) continue;
+    if (!std::isfinite(delta[i])) finite = false;
+    by[a] = std::max(by[a], std::fabs(delta[i]));
+  }
+  if (!finite) return;
+  summary.solve_error = nc > 0 ? *std::max_element(by.begin(), by.end()) : 0.0;
+  summary.solve_error_by_coordinate = std::move(by);
+}
+
+void include_solve_error(Summary& summary) {
+  if (!std::isfinite(summary.error_estimate) || !std::isfinite(summary.solve_error)) return;
+  std::vector<double>& by = summary.error_by_coordinate;
+  if (by.size() == summary.solve_error_by_coordinate.size() && !by.empty()) {
+    for (std::size_t i = 0; i < by.size(); ++i) by[i] += summary.solve_error_by_coordinate[i];
+    summary.error_estimate = *std::max_element(by.begin(), by.end());
+  } else {
+    summary.error_estimate += summary.solve_error;
+  }
+  summary.error_note += "; with the solve's own error " + number(summary.solve_error, 3) +
+                        " (the Newton correction at the answer) added";
+}
+
 void not_estimated(Summary& summary, const std::string& why) {
   summary.error_estimate = std::numeric_limits<double>::quiet_NaN();
   summary.error_by_coordinate.clear();

@@ -10,6 +10,7 @@
 #define PARDEL_RUNTIME_ERROR_ESTIMATE_HPP
 
 #include <string>
+#include <vector>
 
 #include "pardel/pardel.hpp"
 
@@ -50,6 +51,15 @@ struct ThirdLevel {
  */
 void richardson(const Problem& problem, const Trajectory& coarse, int ratio, const ThirdLevel& third, bool extrapolate,
                 Trajectory& fine, Summary& summary);
+
+/** Summary::solve_error and solve_error_by_coordinate from the Newton correction `delta` (the
+ *  unknowns of the interior nodes, dim components each, the first ncoords of them coordinates);
+ *  NaN where a value is not finite. */
+void record_solve_error(const std::vector<double>& delta, int dim, int ncoords, Summary& summary);
+
+/** Adds Summary::solve_error to the estimate (where both are numbers): each coordinate's to its
+ *  coordinate, the estimate their largest; and says so in the note. */
+void include_solve_error(Summary& summary);
 
 /** Sets the summary's estimate to "not estimated" with the reason (`why`, after "not estimated: "). */
 void not_estimated(Summary& summary, const std::string& why);

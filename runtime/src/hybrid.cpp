@@ -42,6 +42,9 @@ class Hybrid final : public Method_ {
   }
   void times_changed() override { newton_->times_changed(); }
   double level_assessment_seconds() const override { return newton_->level_assessment_seconds(); }
+  bool newton_correction(Context& ctx, std::vector<double>& delta) override {
+    return newton_mode_ && newton_->newton_correction(ctx, delta);
+  }
 
   /** {phase (0 sweeps, 1 newton), sweeps since the last check, then Newton's state}. Collective. */
   std::vector<double> save_state() const override {

@@ -109,6 +109,13 @@ class LocalSpace {
     return compute_residual(ctx, q);
   }
   double action(const Context& ctx) const { return sum_action(ctx); }
+  bool newton_correction(Context& ctx, std::vector<double>& delta) {
+    if (cyclic_) return false;  // cyclic reduction keeps no factorization to solve with again
+    delta.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) delta[i] = ctx.is_free[dz_ + i] ? -ctx.res[dz_ + i] : 0.0;
+    H_.solve_ldlt(delta.data(), delta.data());
+    return true;
+  }
   bool assess_factored(Context& ctx, PointAssessment& out, double* const* work) {
     if (cyclic_) return false;  // cyclic reduction keeps no factorization to solve with again
     assess_positive_definite(ctx, H_, out, work, &eigenvectors_);

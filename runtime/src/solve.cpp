@@ -121,6 +121,9 @@ class Driver : public detail::Iteration {
  *  the tolerance, the finer first (N = 0: none), for the error estimate. */
 struct SolvedLevels {
   Trajectory below, further;
+  /** The Newton correction at the returned iterate (Summary::solve_error), the unknowns of nodes
+   *  1..N-1; empty where not computed. The estimate compares the corrected iterate. */
+  std::vector<double> correction;
 };
 
 /** What a solve_once does besides solving. */
@@ -264,7 +267,22 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     flags.coarser_levels->below = std::move(starts.previous());
     flags.coarser_levels->further = std::move(further);
   }
+  // The solve's own error (Summary::solve_error), one process: from the method's factorization
+  // at the answer before the assessment uses it (Newton at a minimum), else from a factorization
+  // of its own after the method's storage is released.
+  const bool solve_error = flags.assess && options.error_estimate && summary.converged() &&
+                           !topology->releases_whole_trajectories();
+  std::vector<double> delta;
+  bool corrected = solve_error && method->newton_correction(topology->context(), delta);
   assess_point(options, flags, method, *topology, summary);
+  if (solve_error && !corrected) {
+    method.reset();
+    corrected = detail::newton_correction(topology->context(), delta);
+  }
+  if (corrected) {
+    detail::record_solve_error(delta, topology->context().dim, problem.model->ncoords, summary);
+    if (flags.coarser_levels) flags.coarser_levels->correction = std::move(delta);
+  }
   finished();
   detail::note_stopped_level(problem, trajectory, summary);
   if (warm) detail::note_warm_start(*warm, summary);
@@ -461,7 +479,19 @@ void estimate_against_coarse(const Problem& problem, const Options& requested, c
   Trajectory third_solved;
   const detail::ThirdLevel third =
       third_level(problem, requested, summary.method, levels, *coarse, ratio, make, no_solve, third_solved, how);
-  detail::richardson(problem, *coarse, ratio, third, requested.extrapolate, trajectory, summary);
+  if (levels.correction.empty()) {
+    detail::richardson(problem, *coarse, ratio, third, requested.extrapolate, trajectory, summary);
+  } else {
+    // Richardson's difference of the iterate plus its Newton correction, the discrete solution to
+    // first order: the tolerance's share of the error, added after (include_solve_error), would
+    // otherwise also enter the difference and the order observed.
+    Trajectory corrected = trajectory;
+    const std::size_t offset = static_cast<std::size_t>(corrected.dim);
+    for (std::size_t i = 0; i < levels.correction.size() && offset + i < corrected.q.size(); ++i)
+      corrected.q[offset + i] += levels.correction[i];
+    detail::richardson(problem, *coarse, ratio, third, requested.extrapolate, corrected, summary);
+    if (summary.extrapolated) trajectory = std::move(corrected);
+  }
   summary.error_note += how;
 }
 
@@ -479,8 +509,10 @@ void estimate_error(const Problem& problem, const Options& requested, const Solv
   const std::unique_ptr<detail::Topology> topology = make();
   const std::string no_solve = topology->coarse_solve_refusal();
   const auto start = std::chrono::steady_clock::now();
-  if (no_solve.empty() || topology->holds_result())
+  if (no_solve.empty() || topology->holds_result()) {
     estimate_against_coarse(problem, requested, levels, no_solve, trajectory, summary, make);
+    detail::include_solve_error(summary);
+  }
   summary.error_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!no_solve.empty()) topology->share_estimate(summary);
   summary.wall_seconds += summary.error_seconds;

@@ -35,6 +35,7 @@
  *   void trial_point(Context&, step);  (ctx.q_next = ctx.q + step)
  *   int evaluate(Context&, q);  (full evaluation and residual: the first non-finite node or -1)
  *   double action(const Context&);
+ *   bool newton_correction(Context&, std::vector<double>& delta);  (-H^-1 r from that factorization, or false)
  *   bool assess_factored(Context&, PointAssessment&, work);  (after factor at lambda = 0 succeeded there, with
  *     four vectors of size() as scratch; false: cannot)
  *   void level_settled(Context&, work);  (a coarse level stopped with H factored at lambda = 0 at or next to
@@ -238,6 +239,11 @@ class TrustRegionNewton : public Method_ {
     double* const work[4] = {rhs_.data(), p_.data(), u_.data(), w_.data()};  // free once the level stopped
     space_.level_settled(ctx, work);
     level_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  /** At a minimum where accept_stop() factored the Hessian: the Newton correction from it. */
+  bool newton_correction(Context& ctx, std::vector<double>& delta) override {
+    return stop_factored_ && space_.newton_correction(ctx, delta);
   }
 
   /** At a minimum where accept_stop() factored the Hessian, the assessment reuses that factorization. */

@@ -195,6 +195,9 @@ def test_complex_arrays_are_refused_not_cast(spring_lag):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, params={"a": 1.5 + 0j})
     with pytest.raises(TypeError, match=r"^pardel\.kernels: q1 must be real, got complex128$"):
         pardel.kernels(spring_lag, "trapezoid", 0.1, 0, 0.1, [0, 0], np.array([0.1, 0.2], dtype=complex))
+    for h in (0.0, -0.1):  # as `pardel kernels --h`: no discrete Lagrangian without a positive step
+        with pytest.raises(pardel.PardelError, match=r"^pardel\.kernels: h, the step, must be a finite number > 0"):
+            pardel.kernels(spring_lag, "trapezoid", h, 0, 0.1, [0, 0], [0.1, 0.2])
     with pytest.raises(TypeError, match=r"^pardel\.solve: T must be real, got complex 1j$"):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1j, N=10)
 

@@ -101,6 +101,7 @@ def test_a_single_value_is_broadcast_over_the_batch():
     (dict(q0="0 0", qN=[1, 1]), TypeError, r"pardel.solve_batch: q0 must be an array"),
     (dict(q0=[0, 0], qN=[1, np.nan]), pardel.PardelError, r"qN must be finite"),
     (dict(q0=[0, 0], qN=[1, 1], threads=0.5), TypeError, r"threads must be an int"),
+    (dict(q0=[0, 0], qN=[1, 1], method="bogus"), pardel.PardelError, r"^pardel\.solve_batch: .*unknown method 'bogus'"),
 ])
 def test_errors_name_the_argument(arguments, error, match):
     with pytest.raises(error, match=match):

@@ -4,6 +4,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 import pardel  # noqa: E402
 import pardel.plot  # noqa: E402
@@ -21,6 +22,11 @@ def test_plots_draw_the_result(spring_lag, tmp_path):
     ax = pardel.plot.coordinates(r)
     assert [line.get_label() for line in ax.lines] == ["x", "y"]
     np.testing.assert_array_equal(ax.lines[1].get_data()[0], r.t)
+
+    for draw in (pardel.plot.path, pardel.plot.coordinates, pardel.plot.convergence):
+        with pytest.raises(TypeError, match=r"^pardel\.plot\.%s: ax must be a matplotlib Axes or None, got int 5$"
+                           % draw.__name__):
+            draw(r, ax=5)
 
     ax = pardel.plot.convergence(r)
     iterations, residuals = ax.lines[0].get_data()

@@ -8,7 +8,9 @@
  * or marked unreliable by the order observed over a third grid level; the automatic method's grid
  * levels are reused where nested, for the third level too; it is not estimated, with the
  * reason, where the solve did not converge, N is odd or below 4, it is switched off, or the coarse
- * solve is interrupted; extrapolation makes the returned path far more accurate.
+ * solve is interrupted; extrapolation makes the returned path far more accurate; the solve's own
+ * error (the Newton correction at the answer) is the distance to the discrete solution and is in
+ * the estimate.
  */
 #include <gtest/gtest.h>
 
@@ -226,6 +228,52 @@ TEST(ErrorEstimate, CoarseHighOrderGridsAreWithinAFactor3OrMarkedUnreliable) {
   EXPECT_GT(unreliable, 0);
   EXPECT_GT(reliable, 0);
   EXPECT_GT(unchecked, 0);
+}
+
+TEST(ErrorEstimate, TheSolvesOwnErrorIsInTheEstimate) {
+  // galerkin_gauss(s=3, 4) on x'' = 6x^2 (a = 1) at the default rtol: on these grids the
+  // discretization error is near or below what the tolerance leaves. solve_error (the Newton
+  // correction at the answer) is checked against the distance to the discrete solution itself (a
+  // solve at rtol 1e-15, converged at its round-off level), and the estimate, which includes it,
+  // against the true error at the common nodes.
+  int compared = 0;
+  for (int stages : {3, 4}) {
+    for (int N : {8, 16, 32}) {
+      const pardel::Problem p = pole_problem(stages, N, 1.0);
+      pardel::Options o;
+      o.method = pardel::Method::newton;
+      pardel::Trajectory tr = pardel::linear_guess(p);
+      const pardel::Summary s = pardel::solve(p, o, tr);
+      ASSERT_TRUE(s.converged()) << s.brief_report();
+      pardel::Options exact_o = o;
+      exact_o.rtol = 1e-15;
+      exact_o.error_estimate = false;
+      pardel::Trajectory discrete = tr;
+      const pardel::Summary d = pardel::solve(p, exact_o, discrete);
+      ASSERT_TRUE(d.converged()) << d.brief_report();
+      EXPECT_TRUE(std::isnan(d.solve_error));  // not computed without the estimate
+      double distance = 0, truth = 0;
+      for (int k = 0; k <= N; ++k) {
+        distance = std::max(distance, std::fabs(tr.node(k)[0] - discrete.node(k)[0]));
+        if (k % 2 == 0) truth = std::max(truth, std::fabs(tr.node(k)[0] - pole_exact(tr.t[static_cast<std::size_t>(k)], 1.0)));
+      }
+      std::printf("s = %d N = %2d: solve error %.3e, distance to the discrete solution %.3e; estimate %.3e, true "
+                  "%.3e\n", stages, N, s.solve_error, distance, s.error_estimate, truth);
+      ASSERT_TRUE(std::isfinite(s.solve_error));
+      ASSERT_EQ(s.solve_error_by_coordinate.size(), 1u);
+      EXPECT_NE(s.error_note.find("with the solve's own error"), std::string::npos) << s.error_note;
+      if (distance > 1e-14) {  // above the round-off of x (at most 1)
+        ++compared;
+        EXPECT_GT(s.solve_error, distance / 3);
+        EXPECT_LT(s.solve_error, distance * 3);
+      }
+      if (truth > 1e-14 && s.error_reliable) {
+        EXPECT_GT(s.error_estimate, truth / 3);
+        EXPECT_LT(s.error_estimate, truth * 3);
+      }
+    }
+  }
+  EXPECT_GT(compared, 0);
 }
 
 TEST(ErrorEstimate, ReusesTheAutomaticMethodsNestedLevel) {

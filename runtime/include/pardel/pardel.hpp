@@ -409,13 +409,21 @@ struct Summary {
   double residual_floor = 0;  ///< round-off level of the residual at the returned iterate
   double tolerance = 0;       ///< the residual that counted as converged (Options::rtol or tol)
   PointAssessment point;      ///< what the returned trajectory is (minimum, saddle, degenerate)
-  /** Richardson's estimate of the discretization error of the coordinates at the nodes
-   *  (Options::error_estimate): max over the common nodes of the two grids and over the
+  /** The estimated error of the coordinates at the nodes (Options::error_estimate): Richardson's
+   *  estimate of the discretization error, max over the common nodes of the two grids and over the
    *  coordinates of |x_N - x_coarse| / (r^p - 1), r the ratio of the grids and p the
    *  discretization's consistency_order (the observed order where error_reliable is false because
-   *  it fell short); NaN when not estimated (error_note says why). */
+   *  it fell short), plus solve_error where that was computed; NaN when not estimated (error_note
+   *  says why). */
   double error_estimate = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> error_by_coordinate;  ///< the same per coordinate (ncoords values; empty when not estimated)
+  /** The solve's own error (Options::error_estimate, one process): max over the interior nodes and
+   *  the coordinates of |delta|, delta = -H^-1 r the Newton correction at the returned iterate (H
+   *  the Hessian of the discrete action, r the DEL residual there): how far, to first order, the
+   *  tolerance or round-off left the iterate from the discrete solution. NaN where not computed (a
+   *  solve that did not converge, over MPI ranks, a singular Hessian). */
+  double solve_error = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> solve_error_by_coordinate;  ///< the same per coordinate (empty where not computed)
   int error_coarse_N = 0;       ///< the coarse grid it was estimated against (0: not estimated)
   double error_seconds = 0;     ///< time the estimate took (its coarse solve), included in wall_seconds
   bool extrapolated = false;    ///< the returned trajectory holds the extrapolated values (Options::extrapolate)

@@ -156,6 +156,7 @@ class DistributedSpace {
     return globalize_residual(local_, pardel::detail::compute_residual(ctx, q));
   }
   double action(const Context&) const { return global_sum_Ld(local_); }
+  bool newton_correction(Context&, std::vector<double>&) { return false; }  // the solve error is made in one process
   bool assess_factored(Context&, PointAssessment&, double* const*) { return false; }  // assess_distributed does it over the ranks
   void level_settled(Context&, double* const*) {}  // the assessment over ranks starts from its own vectors
 
