@@ -31,9 +31,9 @@ class Result:
     discrete boundary momenta -D1 Ld(q0, q1) and D2 Ld(q_{N-1}, q_N)), history (arrays iteration,
     N, residual, action, seconds), error_estimate (Richardson's estimate of the discretization error
     of the coordinates at the nodes plus solve_error, NaN when not estimated), error_by_coordinate
-    (dict by name, empty when not estimated), solve_error (the solve's own error, the largest |delta|
-    of the Newton correction delta = -H^-1 r at the returned iterate over the nodes and coordinates,
-    NaN where not computed), error_note (how it was made, or "not estimated: " and why),
+    (dict by name, empty when not estimated), solve_error (the solve's own error, the largest absolute
+    value of the Newton correction delta = -H^-1 r at the returned iterate over the nodes and
+    coordinates, NaN where not computed), error_note (how it was made, or "not estimated: " and why),
     extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
     solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
     wall_seconds, assessment_seconds (the point assessment's part of it), model (the model's name), coords (its coordinate names), stopped_by_callback

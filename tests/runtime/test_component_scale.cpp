@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "block_tridiagonal.hpp"
@@ -177,6 +178,20 @@ TEST(ComponentScale, ACoordinateAtRestConverges) {
   }
 }
 
+/** A problem of model m under the trapezoid with its default params, over [0, T] on N intervals. */
+pardel::Problem trapezoid_problem(const pardel_model& m, double T, int N, std::vector<double> q0,
+                                  std::vector<double> qN) {
+  pardel::Problem p;
+  p.model = &m;
+  p.discretization = pardel::find_discretization(m, "trapezoid");
+  p.params.assign(m.param_defaults, m.param_defaults + m.nparams);
+  p.T = T;
+  p.N = N;
+  p.q0 = std::move(q0);
+  p.qN = std::move(qN);
+  return p;
+}
+
 /** The solution of a tridiagonal system (sub- and superdiagonal `off`, diagonal `diag`) by Thomas'
  *  algorithm. */
 std::vector<double> thomas(double off, const std::vector<double>& diag, std::vector<double> rhs) {
@@ -201,15 +216,7 @@ TEST(ComponentScale, ACoordinateFarFromItsGuessIsSolved) {
   // with grad W = (-x + c y, y + c x). x's do not feel c y (1e-19 against terms of 1e5 / h), so x
   // solves its own tridiagonal system, and then y the one forced by -h c x_k: the reference, by
   // Thomas' algorithm, against which y must hold to far below its size.
-  const pardel_model& m = faint_coupled_model;
-  pardel::Problem p;
-  p.model = &m;
-  p.discretization = pardel::find_discretization(m, "trapezoid");
-  p.params.assign(m.param_defaults, m.param_defaults + m.nparams);
-  p.T = 2;
-  p.N = 64;
-  p.q0 = {1e5, 0.0};
-  p.qN = {-5e4, 1e-7};
+  const pardel::Problem p = trapezoid_problem(faint_coupled_model, 2, 64, {1e5, 0.0}, {-5e4, 1e-7});
   const double h = p.T / p.N, c = 1e-12;
   const std::size_t n = static_cast<std::size_t>(p.N - 1);
   std::vector<double> dx(n, 2 / h - h), rx(n, 0.0), dy(n, 2 / h + h);
@@ -251,15 +258,7 @@ TEST(ComponentScale, ABadlyScaledMinimumIsAMinimum) {
 }
 
 pardel::Problem clock_problem(pardel::ClockMode mode, double from, double to) {
-  const pardel_model& m = clock_line_model;
-  pardel::Problem p;
-  p.model = &m;
-  p.discretization = pardel::find_discretization(m, "trapezoid");
-  p.params.assign(m.param_defaults, m.param_defaults + m.nparams);
-  p.T = 1;
-  p.N = 60;
-  p.q0 = {from};
-  p.qN = {to};
+  pardel::Problem p = trapezoid_problem(clock_line_model, 1, 60, {from}, {to});
   p.clock = mode;
   return p;
 }
