@@ -443,6 +443,16 @@ int main(int argc, char** argv) {
     return fail(kExitUsage);
   }
 
+#ifdef PARDEL_HAVE_MODEL_LOADER
+  // A .lag file's first use compiles it (seconds, minutes for a large model under a high-order
+  // discretization): said on a terminal, as the progress line is, unless --quiet.
+  const bool quiet = (*solve_cmd && s.quiet) || (sweep_cmd.parsed() && sweep_cmd.quiet());
+  if (!quiet && pardel::mpi::world_rank() == 0 && ::isatty(STDERR_FILENO))
+    pardel::set_compile_notice([](const std::string& path) {
+      std::cerr << "pardel: compiling " << path << " (its first use; later runs load it from the model cache) ...\n"
+                << std::flush;
+    });
+#endif
   try {
     if (*models) return run_models(models_json);
     if (*kernels) return run_kernels(k, resolve_model_spec);

@@ -39,6 +39,8 @@ class SweepCommand {
   explicit SweepCommand(CLI::App& app);
   /** Whether the command line chose `sweep`. */
   bool parsed() const { return command_->parsed(); }
+  /** Whether --quiet was given. */
+  bool quiet() const { return args_.quiet; }
   /**
    * Runs the sweep on every rank; returns the exit status (the same on every rank): 0 when at
    * least one variant converged, 2 for a bad sweep file, scene or option (the message printed by

@@ -233,6 +233,19 @@ LoaderToolchain loader_toolchain() {
 #endif
 }
 
+namespace {
+std::mutex notice_mutex;
+std::function<void(const std::string&)>& compile_notice() {
+  static std::function<void(const std::string&)> notice;
+  return notice;
+}
+}  // namespace
+
+void set_compile_notice(std::function<void(const std::string& path)> notice) {
+  std::lock_guard<std::mutex> lock(notice_mutex);
+  compile_notice() = std::move(notice);
+}
+
 void set_loader_toolchain(const LoaderToolchain& toolchain) {
 #ifdef PARDEL_LOADER_GEN
   std::lock_guard<std::mutex> lock(toolchain_mutex);
@@ -338,6 +351,10 @@ const pardel_model* resolve_model(const std::string& name_or_path) {
         notice = "warning: the cached model " + dir.string() + " was not loaded and is compiled again: " + why;
       std::error_code ec;
       fs::remove_all(dir, ec);
+    }
+    {
+      std::lock_guard<std::mutex> lock(notice_mutex);
+      if (compile_notice()) compile_notice()(name_or_path);
     }
     build_into(lag, dir, tools);
   }

@@ -205,3 +205,28 @@ TEST_F(ModelLoaderTest, ACachedModelIsCompiledAgainWhenATemplateOrAKernelHeaderC
 }
 
 }  // namespace
+
+namespace {
+
+// The compile notice (set_compile_notice): called once, with the path as given, when a .lag file
+// without a cache entry is compiled; not for a model already loaded, not for a bundled name.
+TEST_F(ModelLoaderTest, TheCompileNoticeNamesTheFileBeforeItsCompile) {
+  if (!pardel::can_compile_lag_files()) GTEST_SKIP() << "this build has no generator";
+  const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
+  // A text of its own (the cache is keyed by the text's digest), so that it is compiled here.
+  const fs::path lag = write_lag("noticed.lag", "# run " + std::to_string(stamp) +
+                                                    "\nmodel noticed\ncoords x\nparam k = 3\nL = x'^2/2 - k*x^2/2\n");
+  std::vector<std::string> noticed;
+  pardel::set_compile_notice([&noticed](const std::string& path) { noticed.push_back(path); });
+  ASSERT_NE(pardel::resolve_model("fuel_nav"), nullptr);
+  EXPECT_TRUE(noticed.empty());
+  const pardel_model* model = pardel::resolve_model(lag.string());
+  ASSERT_NE(model, nullptr);
+  ASSERT_EQ(noticed.size(), 1u);
+  EXPECT_EQ(noticed[0], lag.string());
+  EXPECT_EQ(pardel::resolve_model(lag.string()), model);
+  EXPECT_EQ(noticed.size(), 1u);
+  pardel::set_compile_notice({});
+}
+
+}  // namespace

@@ -7,6 +7,7 @@
 #ifndef PARDEL_MODEL_LOADER_HPP
 #define PARDEL_MODEL_LOADER_HPP
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -47,6 +48,12 @@ const pardel_model* resolve_model(const std::string& name_or_path);
  * line on stderr, the Python module as a pardel.ModelWarning), once per model and process.
  */
 std::string model_warnings(const pardel_model* model);
+
+/** Sets what resolve_model calls, with the path it was given, just before it compiles a .lag file
+ *  that has no usable cache entry (a compile takes seconds, minutes for a large model under a
+ *  high-order discretization, where a command line says what it is waiting for); an empty
+ *  function: nothing. The loader itself prints nothing. */
+void set_compile_notice(std::function<void(const std::string& path)> notice);
 
 /** True when this build can compile .lag files at run time (pardel-gen and a compiler found). */
 bool can_compile_lag_files();
