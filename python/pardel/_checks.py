@@ -230,3 +230,16 @@ def _checked_options(where, options):
             value = _check_knots(where, name, value)
         arguments[name] = value
     return arguments
+
+
+def _core_call(where, call, *args):
+    """call(*args) into the compiled core, whose refusals of an argument (the guess's shape, a
+    params list's length) do not know which function was called: such a PardelError is raised again,
+    of the same class, with `where` in front, as the package's own checks write it."""
+    try:
+        return call(*args)
+    except PardelError as error:
+        message = str(error)
+        if message.startswith("pardel"):
+            raise
+        raise type(error)("%s: %s" % (where, message)) from None

@@ -10,7 +10,7 @@ import numpy as np
 from . import _pardel
 from ._checks import (_MAX_N, _check_array, _check_callback, _check_int, _check_number, _check_option,
                       _check_overrides, _check_params, _check_path, _check_string, _check_vector, _checked_options,
-                      _checkpoint_path, _is_real, _kind, _shown)
+                      _checkpoint_path, _core_call, _is_real, _kind, _shown)
 from ._models import Model, _check_model, _model_spec
 from ._pardel import PardelError
 from ._results import BatchResult, Result, SweepResult, _finish
@@ -96,8 +96,9 @@ def _solve_scene(where, scene, guess, threads, on_iteration, checkpoint):
     path = _checkpoint_path(where, checkpoint)
     if path is not None and scene._text is None and scene._file is None:
         raise PardelError("%s: checkpoint needs a scene from pardel.load_scene (a checkpoint records its file)" % where)
-    raw = _pardel.solve_scene(scene._core, q, t, on_iteration, threads, None if path is None else os.fsencode(path),
-                              scene._text if path is not None else None, scene._file, scene._overrides)
+    raw = _core_call(where, _pardel.solve_scene, scene._core, q, t, on_iteration, threads,
+                     None if path is None else os.fsencode(path), scene._text if path is not None else None,
+                     scene._file, scene._overrides)
     return _finish(where, raw, scene.info["model"].info()["coords"], path)
 
 
@@ -134,11 +135,11 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
     if path is None:
         # a Model solves with the model it holds (its .lag file is not read again)
         loaded = model._handle if isinstance(model, Model) else None
-        scene = Scene(_pardel.scene_from_arguments(os.fsencode(spec), arguments, loaded))
+        scene = Scene(_core_call("pardel.solve", _pardel.scene_from_arguments, os.fsencode(spec), arguments, loaded))
     else:  # the options all in the scene text, which the checkpoint records (a model's path absolute)
         if spec.endswith(".lag") or "/" in spec:
             spec = os.path.abspath(spec)
-        text = _pardel.scene_text_from_arguments(os.fsencode(spec), arguments)
+        text = _core_call("pardel.solve", _pardel.scene_text_from_arguments, os.fsencode(spec), arguments)
         scene = Scene(_pardel.scene_from_text(text))
         scene._text = text
     return _solve_scene("pardel.solve", scene, guess, None, on_iteration, path)
@@ -258,7 +259,7 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
     else:
         base_params = None
     arguments = _solve_arguments(m, q0[0], qN[0], T, N, None, None, dict(options, params=base_params, threads=threads), where)
-    scene = Scene(_pardel.scene_from_arguments(os.fsencode(m.spec), arguments, m._handle, where))
+    scene = Scene(_core_call(where, _pardel.scene_from_arguments, os.fsencode(m.spec), arguments, m._handle, where))
     if guess is not None:
         guess = batch_of(guess, 2)
     if named:  # the scene's params (defaults and scalars), with the per-problem columns given
@@ -335,7 +336,7 @@ def check(scene: Scene, q: Guess = None) -> Dict[str, Any]:
     `pardel check`), the members of pardel::Certificate that --json leaves out."""
     _check_scene("pardel.check", "scene", scene)
     arr, t = _guess_arrays(q, "pardel.check", "q")
-    return _pardel.check_scene(scene._core, arr, t)
+    return _core_call("pardel.check", _pardel.check_scene, scene._core, arr, t)
 
 
 def kernels(model: ModelLike, discretization: str, h: float, t0: float, t1: float, q0: ArrayLike, q1: ArrayLike,
@@ -368,4 +369,4 @@ def _kernels(model, discretization, h, t0, t1, q0, q1, params):
                     where, name, m.name, ", ".join(values)))
             values[name] = value
         params = list(values.values())
-    return _pardel.kernels(m._handle, discretization, h, t0, t1, q0, q1, [float(v) for v in params])
+    return _core_call(where, _pardel.kernels, m._handle, discretization, h, t0, t1, q0, q1, [float(v) for v in params])

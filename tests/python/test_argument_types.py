@@ -195,6 +195,13 @@ def test_complex_arrays_are_refused_not_cast(spring_lag):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, params={"a": 1.5 + 0j})
     with pytest.raises(TypeError, match=r"^pardel\.kernels: q1 must be real, got complex128$"):
         pardel.kernels(spring_lag, "trapezoid", 0.1, 0, 0.1, [0, 0], np.array([0.1, 0.2], dtype=complex))
+    # Refusals the compiled core makes name the function too.
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: guess: shape \(11, 3\) given"):
+        pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, guess=np.zeros((11, 3)))
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: params: 3 values given"):
+        pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, params=[1.0, 2.0, 3.0])
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.kernels: q0 and q1 need 2 values each"):
+        pardel.kernels(spring_lag, "trapezoid", 0.1, 0, 0.1, [0, 0, 0], [0.1, 0.2])
     for h in (0.0, -0.1):  # as `pardel kernels --h`: no discrete Lagrangian without a positive step
         with pytest.raises(pardel.PardelError, match=r"^pardel\.kernels: h, the step, must be a finite number > 0"):
             pardel.kernels(spring_lag, "trapezoid", h, 0, 0.1, [0, 0], [0.1, 0.2])
