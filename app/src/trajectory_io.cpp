@@ -329,4 +329,23 @@ void remove_stale_temporaries(const std::string& path) {
   }
 }
 
+std::string boundary_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model) {
+  const std::size_t d = static_cast<std::size_t>(trajectory.dim);
+  if (trajectory.N < 1 || problem.q0.size() != d || problem.qN.size() != d || trajectory.q.size() < 2 * d) return "";
+  const std::vector<std::string> names = state_column_names(model);
+  for (int end = 0; end < 2; ++end) {
+    const double* node = trajectory.q.data() + (end == 0 ? 0 : static_cast<std::size_t>(trajectory.N) * d);
+    const std::vector<double>& boundary = end == 0 ? problem.q0 : problem.qN;
+    for (std::size_t a = 0; a < d; ++a) {
+      const double given = node[a], wanted = boundary[a];
+      if (std::fabs(given - wanted) <= 1e-9 * std::max({1.0, std::fabs(given), std::fabs(wanted)})) continue;
+      const std::string name = a < names.size() ? names[a] : std::to_string(a);
+      return fmt::format("node {} has {} = {}, the scene's boundary.{} has {} = {}: the trajectory is a path of "
+                         "another boundary-value problem",
+                         end == 0 ? 0 : trajectory.N, name, given, end == 0 ? "q0" : "qN", name, wanted);
+    }
+  }
+  return "";
+}
+
 }  // namespace pardel::app

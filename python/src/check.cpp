@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "pardel/app/outputs.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 namespace pardel::python {
 
@@ -20,8 +21,17 @@ namespace pardel::python {
  *  member of pardel::Certificate), the certificate dictionary with one more key: report (the text
  *  `pardel check` prints). */
 py::object check_scene(Scene scene, const py::object& q, const py::object& t) {
+  // A given trajectory is checked on its own nodes, not resampled to the scene's N.
+  if (!q.is_none()) {
+    const auto rows = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(q);
+    if (rows && rows.ndim() == 2 && rows.shape(0) >= 2) scene.problem.N = static_cast<int>(rows.shape(0) - 1);
+  }
   Trajectory trajectory = initial_trajectory(scene, q, t);
-  if (!q.is_none()) scene.problem.N = trajectory.N;
+  if (!q.is_none()) {
+    scene.problem.N = trajectory.N;
+    const std::string mismatch = app::boundary_mismatch(scene.problem, trajectory, *scene.model);
+    if (!mismatch.empty()) throw InputError("q: " + mismatch);
+  }
   Certificate certificate;
   double residual = 0, action = 0;
   {

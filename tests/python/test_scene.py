@@ -59,6 +59,20 @@ def test_check_returns_the_certificate(tmp_path, spring_lag):
     assert c["certificate"]["inertia_positive"] == 2 * 29
 
 
+def test_check_takes_the_trajectory_on_its_own_nodes_and_ends(tmp_path, spring_lag):
+    scene_path, _ = write_scene(tmp_path, spring_lag)
+    scene = pardel.load_scene(scene_path)
+    r = pardel.solve_scene(scene)
+    coarse = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=2.0, N=15, discretization="midpoint", params={"a": 1.2})
+    c = pardel.check(scene, coarse.q)  # 16 rows: checked on 15 intervals, not resampled to 30
+    assert c["N"] == 15
+    assert c["residual"] < 1e-8
+    other = r.q.copy()
+    other[-1, 0] += 1
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.check: q: node 30 has x = .* the scene's boundary\.qN"):
+        pardel.check(scene, other)
+
+
 def spring_jacobi_gap(omega, T, N):
     """1 - rho of block Jacobi for the midpoint rule of L = x'^2/2 - omega^2 x^2/2 on N intervals,
     both ends fixed: H is tridiagonal Toeplitz, diagonal 2 (1/h - h w^2/4), off-diagonal

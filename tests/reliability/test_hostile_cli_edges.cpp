@@ -257,6 +257,22 @@ TEST_F(HostileCliEdges, CheckSetWithACarriageReturnIsRefused) {
       << o.output;
 }
 
+TEST_F(HostileCliEdges, CheckOfATrajectoryOfAnotherProblemIsRefused) {
+  // A solution of zermelo_1 checked against the same scene with another boundary.qN: refused with
+  // the node and the component, not a certificate of a problem the scene does not pose.
+  const fs::path out = dir_ / "solved";
+  const Outcome solved = pardel({"solve", kScenes + "/zermelo_1.toml", "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(solved.status, 0) << solved.output;
+  const std::string csv = (out / "trajectory.csv").string();
+  const Outcome same = pardel({"check", kScenes + "/zermelo_1.toml", "--trajectory", csv});
+  EXPECT_EQ(same.status, 0) << same.output;
+  const Outcome other = pardel({"check", kScenes + "/zermelo_1.toml", "--set", "boundary.qN=[7, 2]", "--trajectory", csv});
+  EXPECT_EQ(other.status, 2) << other.output;
+  EXPECT_NE(other.output.find("the scene's boundary.qN has x = 7: the trajectory is a path of another boundary-value problem"),
+            std::string::npos)
+      << other.output;
+}
+
 TEST_F(HostileCliEdges, SweepSetWithALineBreakIsRefused) {
   const Outcome o = pardel({"sweep", kSweep50, "--set", "solver.tol=1e-8\ngrid.N=3", "--out",
                             (dir_ / "out").string(), "--no-plot", "--quiet"});

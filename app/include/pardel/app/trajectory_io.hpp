@@ -45,6 +45,13 @@ std::string trajectory_csv(const pardel_model& model, const Trajectory& trajecto
  */
 Trajectory read_trajectory_csv(const std::string& path, const pardel_model& model);
 
+/** Why `trajectory` is not a path of `problem`'s boundary-value problem: its first or last node
+ *  differs from problem.q0 or problem.qN (by more than 1e-9 of the larger value, or of 1), named
+ *  with the component ("node 0 has x = 5, the scene's boundary.q0 has x = 0"); "" when both ends
+ *  agree. A check of a trajectory against a scene (`pardel check`, pardel.check) refuses one
+ *  whose ends are another problem's. */
+std::string boundary_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model);
+
 /** Writes `content` to `path` through a temporary file in the same folder and a rename, so that
  *  readers never see a half-written file. Throws std::runtime_error naming the path on failure. */
 void write_file_atomic(const std::string& path, const std::string& content);
