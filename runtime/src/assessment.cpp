@@ -569,10 +569,7 @@ bool newton_correction(Context& ctx, std::vector<double>& delta) {
   bool solved = false;
   with_hessian(ctx, [&](auto& H) {
     if (!H.factor_ldlt() && !H.factor_indefinite()) return;
-    const std::size_t dz = static_cast<std::size_t>(ctx.dim), n = static_cast<std::size_t>(ctx.N - 1) * dz;
-    delta.resize(n);
-    for (std::size_t i = 0; i < n; ++i) delta[i] = ctx.is_free[dz + i] ? -ctx.res[dz + i] : 0.0;
-    H.solve_ldlt(delta.data(), delta.data());
+    H.newton_correction(ctx, delta);
     solved = true;
   });
   return solved;

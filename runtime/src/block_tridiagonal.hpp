@@ -214,6 +214,15 @@ class BlockTridiagonal {
     return true;
   }
 
+  /** After factor_ldlt (or factor_indefinite) of H at ctx.q: into delta (the unknowns of nodes
+   *  1..N-1), the Newton correction -H^-1 r from ctx's DEL residual r, zero on fixed components. */
+  void newton_correction(const Context& ctx, std::vector<double>& delta) {
+    const std::size_t dz = static_cast<std::size_t>(d_), n = static_cast<std::size_t>(std::max(n_, 0)) * dz;
+    delta.resize(n);
+    for (std::size_t i = 0; i < n; ++i) delta[i] = ctx.is_free[dz + i] ? -ctx.res[dz + i] : 0.0;
+    solve_ldlt(delta.data(), delta.data());
+  }
+
   /** Solves H x = b after factor_ldlt (or factor_indefinite); b and x in node layout of nodes 1..N-1 (dim each). x may
    *  be b; the forward substitution's intermediate is kept in x. */
   void solve_ldlt(const double* b, double* x) {

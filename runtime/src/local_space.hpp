@@ -111,9 +111,7 @@ class LocalSpace {
   double action(const Context& ctx) const { return sum_action(ctx); }
   bool newton_correction(Context& ctx, std::vector<double>& delta) {
     if (cyclic_) return false;  // cyclic reduction keeps no factorization to solve with again
-    delta.resize(n_);
-    for (std::size_t i = 0; i < n_; ++i) delta[i] = ctx.is_free[dz_ + i] ? -ctx.res[dz_ + i] : 0.0;
-    H_.solve_ldlt(delta.data(), delta.data());
+    H_.newton_correction(ctx, delta);
     return true;
   }
   bool assess_factored(Context& ctx, PointAssessment& out, double* const* work) {
