@@ -212,7 +212,9 @@ TEST(SweepCommand, SigtermStopsTheSweepAndKeepsWhatWasDone) {
   }
   EXPECT_LE(interrupted, 1);
   const auto summary = nlohmann::json::parse(slurp(dir / "out/sweep.json"));
-  EXPECT_EQ(summary["failures"]["interrupted"], interrupted);
+  // failures lists the statuses that occurred: no "interrupted" when the signal landed after a
+  // variant converged.
+  EXPECT_EQ(summary["failures"].value("interrupted", 0), interrupted);
   EXPECT_EQ(summary["variants"], 10);
   const int started = static_cast<int>(rows.size()) - 1;
   EXPECT_EQ(summary["not_started"], 10 - started);
