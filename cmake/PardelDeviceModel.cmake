@@ -2,7 +2,7 @@
 # kernels compiled as CUDA, with every extern symbol its header declares (kernels, the model's
 # descriptor) renamed with the prefix pardel_device_ so that a program links it beside the host
 # build of the same model, and the launch loop of each discretization whose sweep kernel the header
-# declares PARDEL_HD (batch_device.cuh), the model's dimension a constant.
+# declares PARDEL_HD (batch_device.cuh: the sweeps and Newton), the model's dimension a constant.
 #
 #   pardel_device_model_source(<model> <generated .cpp> <generated .hpp> <output .cu> <registration>)
 #
@@ -52,10 +52,15 @@ function(pardel_device_model_source model cpp hpp out registration)
       "                              double* D1, double* D2, double* D11, double* D22) {\n"
       "    ${_symbol}_sweep(h, t0, t1, q0, q1, p, D1, D2, D11, D22);\n"
       "  }\n"
+      "  PARDEL_HD static void full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,\n"
+      "                             double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {\n"
+      "    ${_symbol}_full(h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);\n"
+      "  }\n"
       "};\n")
     string(APPEND _adds
       "  pardel::cuda_detail::add_entry(entries, ${model}_model, ${_symbol}_sweep,\n"
-      "                                 &pardel::cuda_detail::run_batch<${_symbol}_device, ${_dim}>);\n")
+      "                                 &pardel::cuda_detail::run_batch<${_symbol}_device, ${_dim}>,\n"
+      "                                 &pardel::cuda_detail::run_newton_batch<${_symbol}_device, ${_dim}>);\n")
   endforeach()
   if(registration STREQUAL "static")
     set(_registration

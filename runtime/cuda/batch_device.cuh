@@ -6,8 +6,9 @@
  * (enough to fill the device once), whose threads take the problem's nodes in turn, one node at a
  * time; each block reduces what its nodes found and folds it into the problem's record with one
  * atomic per value, and the problem's last block to arrive makes the decision
- * (batch_sweep::decide). Included by the generated per-model registration sources
- * (runtime/cuda/CMakeLists.txt).
+ * (batch_sweep::decide). And Newton (batch_newton.hpp), one thread per problem over the batch's
+ * interleaved arrays, check_every iterations per launch. Included by the generated per-model
+ * registration sources (runtime/cuda/CMakeLists.txt).
  */
 #ifndef PARDEL_CUDA_BATCH_DEVICE_CUH
 #define PARDEL_CUDA_BATCH_DEVICE_CUH
@@ -16,6 +17,7 @@
 
 #include <cub/block/block_reduce.cuh>
 
+#include "batch_newton.hpp"
 #include "batch_sweep.hpp"
 #include "device_registry.hpp"
 
@@ -263,6 +265,156 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
     r.comp_residual.assign(s.comp_residual, s.comp_residual + D);
     r.comp_target.assign(s.comp_target, s.comp_target + D);
   }
+  return "";
+}
+
+
+namespace bn = pardel::batch_newton;
+
+constexpr int kNewtonBlock = 64;
+
+/** Each problem's guess (contiguous, B (N+1) D values) into its interleaved iterate buffer 0. One
+ *  thread per value. */
+template <int D>
+__global__ void interleave_kernel(int B, int N, const double* contiguous, double* work) {
+  const long n = (static_cast<long>(N) + 1) * D;
+  const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i >= n * B) return;
+  const long b = i / n, e = i % n;
+  work[e * B + b] = contiguous[i];
+}
+
+template <class Kernel, int D>
+__global__ void newton_start_kernel(int B, int N, double* work, const double* __restrict__ t,
+                                    const double* __restrict__ h, const double* __restrict__ p, int np,
+                                    bs::Settings set, const int* invalid, bn::State<D>* state, int* running) {
+  const int b = blockIdx.x * blockDim.x + threadIdx.x;
+  if (b >= B) return;
+  if (invalid[b]) {
+    bs::start(state[b].s);
+    state[b].s.status = bs::not_started;
+    state[b].current = 0;
+    return;
+  }
+  bn::State<D> ns;
+  const bn::Arrays<D> a = bn::arrays<D>(work, N, B, b);
+  bn::start<Kernel, D>(N, t, h, p + static_cast<long>(b) * np, set, a, ns);
+  state[b] = ns;
+  if (ns.s.status != bs::running) atomicSub(running, 1);
+}
+
+template <class Kernel, int D>
+__global__ void newton_kernel(int B, int N, int count, double* work, const double* __restrict__ t,
+                              const double* __restrict__ h, const double* __restrict__ p, int np, bs::Settings set,
+                              bn::State<D>* state, int* running) {
+  const int b = blockIdx.x * blockDim.x + threadIdx.x;
+  if (b >= B || state[b].s.status != bs::running) return;
+  bn::State<D> ns = state[b];
+  const bn::Arrays<D> a = bn::arrays<D>(work, N, B, b);
+  bn::advance<Kernel, D>(N, t, h, p + static_cast<long>(b) * np, set, a, ns, count);
+  state[b] = ns;
+  if (ns.s.status != bs::running) atomicSub(running, 1);
+}
+
+/** Each problem's iterate (interleaved, buffer state[b].current) back into the contiguous array. */
+template <int D>
+__global__ void gather_kernel(int B, int N, const double* work, const bn::State<D>* state, double* contiguous) {
+  const long n = (static_cast<long>(N) + 1) * D;
+  const long i = static_cast<long>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i >= n * B) return;
+  const long b = i / n, e = i % n;
+  const long buffer = state[b].current == 0 ? 0 : n;
+  contiguous[i] = work[(buffer + e) * B + b];
+}
+
+/** Newton's launch loop for one model and discretization (a DeviceRunner, device_registry.hpp):
+ *  the guesses interleaved, the first evaluation, then launches of check_every iterations per
+ *  problem until none runs (or keep_going says stop: the running problems end interrupted). */
+template <class Kernel, int D>
+std::string run_newton_batch(const DeviceBatch& in, DeviceBatchResult& result) {
+  const int B = in.B, N = in.N;
+  const long nodes = static_cast<long>(N) + 1;
+  const std::size_t values = static_cast<std::size_t>(B) * static_cast<std::size_t>(nodes) * D;
+  cudaError_t err = cudaSuccess;
+  Buffers buf;
+  double* q = buf.get<double>(values, err);
+  double* work = buf.get<double>(static_cast<std::size_t>(B) * static_cast<std::size_t>(bn::values_per_problem<D>(N)), err);
+  double* t = buf.get<double>(static_cast<std::size_t>(nodes), err);
+  double* h = buf.get<double>(static_cast<std::size_t>(N), err);
+  double* p = buf.get<double>(static_cast<std::size_t>(B) * in.np, err);
+  auto* state = buf.get<bn::State<D>>(static_cast<std::size_t>(B), err);
+  int* flags = buf.get<int>(static_cast<std::size_t>(B) + 1, err);  // invalid[B], the running count
+  if (err != cudaSuccess) return std::string("device allocation failed: ") + cudaGetErrorString(err);
+  struct Events {
+    cudaEvent_t e[4];
+    Events() {
+      for (cudaEvent_t& x : e) cudaEventCreate(&x);
+    }
+    ~Events() {
+      for (cudaEvent_t x : e) cudaEventDestroy(x);
+    }
+  } events;
+  cudaEvent_t &e0 = events.e[0], &e1 = events.e[1], &e2 = events.e[2], &e3 = events.e[3];
+  cudaEventRecord(e0);
+  int running = 0;
+  for (int b = 0; b < B; ++b) running += in.invalid[b] ? 0 : 1;
+  err = cudaMemcpy(q, in.q, sizeof(double) * values, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(t, in.t, sizeof(double) * nodes, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(h, in.h, sizeof(double) * N, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess && in.np > 0)
+    err = cudaMemcpy(p, in.p, sizeof(double) * static_cast<std::size_t>(B) * in.np, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(flags, in.invalid, sizeof(int) * B, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(flags + B, &running, sizeof(int), cudaMemcpyHostToDevice);
+  if (err != cudaSuccess) return std::string("copy to the device failed: ") + cudaGetErrorString(err);
+  const unsigned per_value = static_cast<unsigned>((values + 255) / 256);
+  const unsigned per_problem = static_cast<unsigned>((B + kNewtonBlock - 1) / kNewtonBlock);
+  interleave_kernel<D><<<per_value, 256>>>(B, N, q, work);
+  cudaEventRecord(e1);
+  newton_start_kernel<Kernel, D><<<per_problem, kNewtonBlock>>>(B, N, work, t, h, p, in.np, in.settings, flags, state,
+                                                                flags + B);
+  err = cudaMemcpy(&running, flags + B, sizeof(int), cudaMemcpyDeviceToHost);
+  while (err == cudaSuccess && running > 0) {
+    if (in.keep_going && !in.keep_going()) break;  // the running problems end interrupted
+    newton_kernel<Kernel, D><<<per_problem, kNewtonBlock>>>(B, N, in.check_every, work, t, h, p, in.np, in.settings,
+                                                            state, flags + B);
+    err = cudaMemcpy(&running, flags + B, sizeof(int), cudaMemcpyDeviceToHost);  // waits for the launch
+  }
+  if (err == cudaSuccess) err = cudaGetLastError();
+  if (err != cudaSuccess) return std::string("a device Newton iteration failed: ") + cudaGetErrorString(err);
+  cudaEventRecord(e2);
+  gather_kernel<D><<<per_value, 256>>>(B, N, work, state, q);
+  std::vector<bn::State<D>> host_state(static_cast<std::size_t>(B));
+  err = cudaMemcpy(host_state.data(), state, sizeof(bn::State<D>) * B, cudaMemcpyDeviceToHost);
+  if (err == cudaSuccess) err = cudaMemcpy(result.q, q, sizeof(double) * values, cudaMemcpyDeviceToHost);
+  if (err != cudaSuccess) return std::string("copy from the device failed: ") + cudaGetErrorString(err);
+  cudaEventRecord(e3);
+  cudaEventSynchronize(e3);
+  float ms[3] = {0, 0, 0};
+  cudaEventElapsedTime(&ms[0], e0, e1);
+  cudaEventElapsedTime(&ms[1], e1, e2);
+  cudaEventElapsedTime(&ms[2], e2, e3);
+  result.upload = ms[0] * 1e-3;
+  result.sweeps = ms[1] * 1e-3;
+  result.download = ms[2] * 1e-3;
+  long longest = 0;
+  for (int b = 0; b < B; ++b) {
+    const bn::State<D>& ns = host_state[static_cast<std::size_t>(b)];
+    const bs::ProblemState<D>& s = ns.s;
+    ProblemRecord& r = result.records[static_cast<std::size_t>(b)];
+    r.status = s.status;
+    r.iterations = s.iterations;
+    r.node = s.node;
+    r.unresolved = s.unresolved;
+    r.reason = ns.reason;
+    r.residual = s.residual;
+    r.scale = s.scale;
+    r.target = s.target;
+    r.r_initial = s.r_initial;
+    r.comp_residual.assign(s.comp_residual, s.comp_residual + D);
+    r.comp_target.assign(s.comp_target, s.comp_target + D);
+    if (s.status != bs::not_started && s.iterations > longest) longest = s.iterations;
+  }
+  result.sweeps_run = longest;
   return "";
 }
 

@@ -38,6 +38,7 @@ struct Settings {
   double tol = 0, rtol = 1e-10;
   long max_iterations = 1000000;
   double divergence_factor = 1e8;
+  int difference = 1;     ///< Newton: the shift's metric is the kinetic form (1) or the identity (0)
 };
 
 /** One interval's sweep-kernel outputs. */
@@ -178,6 +179,29 @@ PARDEL_HD inline bool newton_step(double* M, double* r, double* x) {
   }
 }
 
+/** The DEL residual r = D2 of interval k-1 + D1 of interval k at interior node k, folded into
+ *  `stats` (its size, the size of its terms, per component; the node if it is not finite). False
+ *  when it is not finite. */
+template <int D>
+PARDEL_HD inline bool node_residual(int k, const double* left_D2, const double* right_D1, double* r, Stats<D>& stats) {
+  double mx = 0, scale = 0;
+  bool finite = true;
+  for (int i = 0; i < D; ++i) {
+    const double a = left_D2[i], b = right_D1[i];
+    const double v = a + b;
+    if (!isfinite(v)) finite = false;
+    scale = larger(scale, fabs(a) + fabs(b));
+    stats.comp_residual[i] = larger(stats.comp_residual[i], fabs(v));
+    stats.comp_scale[i] = larger(stats.comp_scale[i], fabs(a) + fabs(b));
+    r[i] = v;
+    mx = larger(mx, fabs(v));
+  }
+  if (!finite) stats.bad_residual = first_node(stats.bad_residual, k);
+  stats.residual = larger(stats.residual, mx);
+  stats.scale = larger(stats.scale, scale);
+  return finite;
+}
+
 /**
  * The update of interior node k of one problem: q, t, h of the problem's N+1 nodes and N
  * intervals, its params p; `left` and `right` the sweep kernel of intervals k-1 and k at the
@@ -191,21 +215,7 @@ PARDEL_HD inline void update_node(int k, const double* q, const double* t, const
   const double eps = 2.220446049250313e-16;
   const double* qk = q + static_cast<long>(k) * D;
   double r[D], x[D], M[D * D];
-  double mx = 0, scale = 0;
-  bool finite = true;
-  for (int i = 0; i < D; ++i) {
-    const double a = left.D2[i], b = right.D1[i];
-    const double v = a + b;
-    if (!isfinite(v)) finite = false;
-    scale = larger(scale, fabs(a) + fabs(b));
-    stats.comp_residual[i] = larger(stats.comp_residual[i], fabs(v));
-    stats.comp_scale[i] = larger(stats.comp_scale[i], fabs(a) + fabs(b));
-    r[i] = v;
-    mx = larger(mx, fabs(v));
-  }
-  if (!finite) stats.bad_residual = first_node(stats.bad_residual, k);
-  stats.residual = larger(stats.residual, mx);
-  stats.scale = larger(stats.scale, scale);
+  const bool finite = node_residual<D>(k, left.D2, right.D1, r, stats);
   for (int i = 0; i < D * D; ++i) M[i] = left.D22[i] + right.D11[i];
   for (int i = 0; i < D; ++i) x[i] = qk[i];
   bool fine = newton_step<D>(M, r, x);

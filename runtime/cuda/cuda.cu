@@ -15,16 +15,19 @@
 #include <vector>
 
 #include "batch_entries.hpp"
+#include "batch_newton.hpp"
 #include "device_registry.hpp"
+#include "engine.hpp"
 #include "pardel/cuda.hpp"
 
 namespace pardel {
 namespace cuda_detail {
 
 void add_entry(std::vector<DeviceEntry>& entries, const pardel_model& model, pardel_sweep_kernel sweep,
-               DeviceRunner run) {
+               DeviceRunner run, DeviceRunner run_newton) {
   for (int i = 0; i < model.ndiscretizations; ++i)
-    if (model.discretizations[i].sweep == sweep) entries.push_back({&model, &model.discretizations[i], run});
+    if (model.discretizations[i].sweep == sweep)
+      entries.push_back({&model, &model.discretizations[i], run, run_newton});
 }
 
 }  // namespace cuda_detail
@@ -92,12 +95,19 @@ std::string device_list() {
   return list.empty() ? std::string("none") : list;
 }
 
+/** Whether the device has this method: the sweeps, and Newton (auto is Newton there, on one grid). */
+bool on_device(Method m) {
+  return m == Method::jacobi || m == Method::jacobi_newton || m == Method::newton || m == Method::automatic;
+}
+bool newton_on_device(Method m) { return m == Method::newton || m == Method::automatic; }
+
 /** Why the device does not take these options or this base problem ("" when it does). */
 std::string options_refusal(const Problem& base, const Options& options) {
   std::string error;
   if (!options.is_valid(&error)) return error;
-  if (options.method != Method::jacobi && options.method != Method::jacobi_newton)
-    return std::string("the device solves with methods jacobi and jacobi-newton; method ") +
+  if (!on_device(options.method))
+    return std::string("the device solves with methods jacobi, jacobi-newton, newton and auto (newton on one grid); "
+                       "method ") +
            to_string(options.method) + " runs on the CPU (solver.device = \"cpu\")";
   if (options.resume_from) return "solve_batch_cuda does not resume solves (Options::resume_from is set)";
   if (options.refine_start_N > 0) return "the device solves on one grid: refine_start_N must be 0";
@@ -143,6 +153,17 @@ std::string record_message(const cuda_detail::ProblemRecord& r, const Options& o
                     static_cast<double>(options.max_iterations), r.residual, r.target) +
              (r.residual <= r.target ? unresolved : std::string());
     case bs::stalled:
+      if (r.reason == batch_newton::no_descent)
+        return format("newton stalled in iteration %.0f: no step of the Newton system, its shift grown 40 times, "
+                      "decreased the action or cut the DEL residual below 0.9 of its best; the DEL residual "
+                      "%.3g is ",
+                      static_cast<double>(r.iterations + 1), r.residual) +
+               (detail::at_round_off(r.residual, 16 * 2.220446049250313e-16 * r.scale)
+                    ? std::string("at the round-off level of this problem and the tolerance cannot be reached in "
+                                  "double precision")
+                    : std::string("far above the round-off level of this problem: the action's derivatives disagree "
+                                  "with its values here (a model that is not smooth at this iterate)")) +
+               unresolved;
       return format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and no component "
                     "has come 1%% closer to its own target in 200 iterations",
                     r.residual, 16 * 2.220446049250313e-16 * r.scale) +
@@ -155,6 +176,10 @@ std::string record_message(const cuda_detail::ProblemRecord& r, const Options& o
     case bs::running:
       return format("interrupted by keep_going at iteration %.0f", static_cast<double>(r.iterations));
     default:
+      if (r.reason == batch_newton::no_definite_shift)
+        return format("newton: no shift made the Hessian of the action positive definite in iteration %.0f (its "
+                      "entries are not finite); the last finite iterate is returned",
+                      static_cast<double>(r.iterations + 1));
       return r.node >= 0 ? "non-finite DEL residual, value or singular diagonal block at node " +
                                std::to_string(r.node) + format(" (iteration %.0f); the last finite iterate is returned",
                                                                static_cast<double>(r.iterations))
@@ -271,9 +296,13 @@ BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const
   const pardel_model& model = *base.model;
   const int B = static_cast<int>(problems.size()), N = base.N, dim = model.dim, np = model.nparams;
   const std::size_t nodes = static_cast<std::size_t>(N) + 1, per = nodes * static_cast<std::size_t>(dim);
-  // Memory: the two iterate buffers and the per-problem records on the device, against what it
-  // has free, before anything is allocated there or on the host.
-  const double device_bytes = 2.0 * B * per * 8 + B * (np * 8.0 + 1024) + nodes * 16.0;
+  // Memory: the two iterate buffers (the sweeps), or the guesses and Newton's arrays, and the
+  // per-problem records on the device, against what it has free, before anything is allocated
+  // there or on the host.
+  const bool newton = newton_on_device(options.method);
+  const double per_problem = newton ? (static_cast<double>(per) + static_cast<double>(nodes) * (4 * dim + 3 * dim * dim)) * 8
+                                    : 2.0 * per * 8;
+  const double device_bytes = B * per_problem + B * (np * 8.0 + 1024) + nodes * 16.0;
   std::size_t free_bytes = 0, total_bytes = 0;
   if (cudaMemGetInfo(&free_bytes, &total_bytes) != cudaSuccess || device_bytes > 0.9 * free_bytes) {
     batch.refusal = format("a batch of %.0f problems needs about %.3g GB on the device, which has %.3g GB free", B,
@@ -304,13 +333,14 @@ BatchSummary solve_batch_cuda(const Problem& base, const Options& options, const
   in.settings.rtol = options.rtol;
   in.settings.max_iterations = options.max_iterations;
   in.settings.divergence_factor = options.divergence_factor;
+  in.settings.difference = options.newton_shift == NewtonShift::difference ? 1 : 0;
   in.check_every = settings.check_every;
   in.blocks_per_problem = settings.blocks_per_problem;
   in.keep_going = options.keep_going;
   cuda_detail::DeviceBatchResult out;
   out.q = q.data();  // the guesses are on the device once uploaded: the answers come back here
   out.records.resize(static_cast<std::size_t>(B));
-  const std::string failed = entry->run(in, out);
+  const std::string failed = (newton ? entry->run_newton : entry->run)(in, out);
   if (!failed.empty()) {
     batch.entries.clear();
     batch.refusal = failed;

@@ -35,6 +35,7 @@ struct ProblemRecord {
   int status = batch_sweep::not_started;
   long iterations = 0;
   int node = -1, unresolved = -1;
+  int reason = 0;  ///< Newton: a batch_newton::Reason (why it stalled or is non-finite)
   double residual = 0, scale = 0, target = 0, r_initial = 0;
   std::vector<double> comp_residual, comp_target;
 };
@@ -43,7 +44,7 @@ struct DeviceBatchResult {
   double* q = nullptr;  ///< B (N+1) dim values, written: each problem's returned iterate
   std::vector<ProblemRecord> records;
   double upload = 0, sweeps = 0, download = 0;
-  long sweeps_run = 0;
+  long sweeps_run = 0;  ///< sweeps launched; Newton: iterations of the problem that ran longest
 };
 
 /** Runs a batch of one model and discretization; returns "" or what failed on the device. */
@@ -52,7 +53,8 @@ using DeviceRunner = std::string (*)(const DeviceBatch&, DeviceBatchResult&);
 struct DeviceEntry {
   const pardel_model* model;
   const pardel_discretization* discretization;
-  DeviceRunner run;
+  DeviceRunner run;         ///< the Jacobi and Jacobi-Newton sweeps
+  DeviceRunner run_newton;  ///< Newton, one thread per problem
 };
 
 /** Every (model, discretization) of the device build (filled by the generated registration): the
@@ -67,7 +69,7 @@ struct DeviceRegistration {
 
 /** Adds the discretization of `model` whose sweep kernel is `sweep` (a host address). */
 void add_entry(std::vector<DeviceEntry>& entries, const pardel_model& model, pardel_sweep_kernel sweep,
-               DeviceRunner run);
+               DeviceRunner run, DeviceRunner run_newton);
 
 }  // namespace pardel::cuda_detail
 

@@ -1,0 +1,369 @@
+/**
+ * @file batch_newton.hpp
+ * The single-source core of the batched Newton solver: one problem's Newton iteration on the
+ * whole DEL system, as PARDEL_HD functions that the device solver (batch_device.cuh) runs with
+ * one thread per problem, and that host_newton() below runs in a plain loop (the host path,
+ * compiled by any C++ compiler and tested on every build).
+ *
+ * Each iteration solves for the Newton step by block LDL^T over the interior nodes (each pivot
+ * Cholesky-factored, so that success certifies the Hessian positive definite) and globalizes it
+ * the cheap way, by Levenberg-Marquardt on the discrete action: the full Newton step of a positive
+ * definite Hessian is tried first; refused, or where the Hessian is not positive definite, the
+ * step of H + lambda M (M the CPU solver's shift metric, lambda remembered between iterations and
+ * at least 1e-6 of the largest diagonal entry) is tried, lambda growing 2-, 4-, 8-fold ... on each
+ * refusal. A step is accepted when the action falls by at least 1e-4 of the decrease its quadratic
+ * model predicts or when the DEL residual falls below 0.9 of the best one so far (the CPU solver's
+ * constants, runtime/src/constants.hpp); after an accepted shifted step with ratio rho of actual
+ * to predicted decrease, the next iteration starts from lambda max(1/3, 1 - (2 rho - 1)^3)
+ * (Nielsen's update), after a full Newton step from a third of the remembered one. Each trial point is
+ * evaluated (the model's full kernel once per interval: action, residual and Hessian, streamed
+ * interval by interval) into the second of two sets of arrays, which becomes the iterate's when
+ * the step is accepted, so that a refusal costs no evaluation of the iterate again. A problem
+ * for which 40 growing shifts give no acceptable step stops as stalled. The stopping rules
+ * after each accepted step are the sweeps' (batch_sweep::decide: the CPU solver's residual,
+ * relative and per-component tests).
+ *
+ * A problem's arrays are Views with a stride: on the host a problem's values are contiguous
+ * (stride 1); on the device the batch's problems are interleaved (stride B, element i of problem b
+ * at i B + b), so that the threads of a warp, one problem each, read consecutive addresses.
+ */
+#ifndef PARDEL_CUDA_BATCH_NEWTON_HPP
+#define PARDEL_CUDA_BATCH_NEWTON_HPP
+
+#include <math.h>
+
+#include "batch_sweep.hpp"
+#include "constants.hpp"
+#include "pardel/kernel_abi.h"
+
+namespace pardel::batch_newton {
+
+namespace bs = pardel::batch_sweep;
+
+/** Element i of one problem's array: at[i * stride]. */
+struct View {
+  double* at;
+  long stride;
+  PARDEL_HD double& operator[](long i) const { return at[i * stride]; }
+};
+
+/** One problem's arrays over its N + 1 nodes: two sets (the iterate's and a trial point's) of the
+ *  values, the DEL residual at each node, and per node the diagonal Hessian block and the coupling
+ *  block D12 of the interval to its right; then the step and the elimination's S_k^-1 B_k. */
+template <int D>
+struct Arrays {
+  View x[2], r[2], A[2], B[2], step, C;
+};
+
+/** Values per problem: (N + 1)(5 D + 5 D^2). */
+template <int D>
+PARDEL_HD inline long values_per_problem(int N) {
+  return (static_cast<long>(N) + 1) * (5 * D + 5 * D * D);
+}
+
+/** Problem b's arrays in `base`, which holds `stride` problems' values interleaved (stride 1: one
+ *  problem's, contiguous, with b = 0). */
+template <int D>
+PARDEL_HD inline Arrays<D> arrays(double* base, int N, long stride, long b) {
+  const long n1 = static_cast<long>(N) + 1, v = n1 * D, m = n1 * D * D;
+  Arrays<D> a;
+  const long offsets[10] = {0, v, 2 * v, 3 * v, 4 * v, 5 * v, 5 * v + m, 5 * v + 2 * m, 5 * v + 3 * m, 5 * v + 4 * m};
+  View* views[10] = {&a.x[0], &a.x[1], &a.r[0], &a.r[1], &a.step, &a.A[0], &a.A[1], &a.B[0], &a.B[1], &a.C};
+  for (int i = 0; i < 10; ++i) *views[i] = View{base + offsets[i] * stride + b, stride};
+  return a;
+}
+
+/** Why a problem stopped as stalled or non-finite, beyond the sweeps' reasons. */
+enum Reason : int {
+  none = 0,
+  no_descent = 1,      ///< stalled: no step, the shift grown 40 times, was acceptable
+  no_definite_shift = 2  ///< non_finite: no shift made the Hessian positive definite (it is not finite)
+};
+
+/** One problem's record between iterations. */
+template <int D>
+struct State {
+  bs::ProblemState<D> s;  ///< status, iterations and the residual tests (batch_sweep::decide)
+  int current;            ///< the set of arrays (0 or 1) holding the iterate and its evaluation
+  int reason;             ///< a Reason
+  double action;          ///< the discrete action at the iterate
+  double best_residual;   ///< the smallest DEL residual of the accepted iterates
+  double lambda;          ///< the Levenberg-Marquardt shift to start from (0: none yet)
+  double shift;           ///< the shift of the last accepted step (0: the full Newton step)
+  int shifted;            ///< the accepted steps that were shifted
+};
+
+/**
+ * Evaluates the problem at set `which`'s values: the action (returned), and at each interior node
+ * the DEL residual (r), the diagonal Hessian block (A) and the coupling block to the next interior
+ * node (B) of that set, with the residual's sizes folded into `st` as the sweeps fold them (and the largest |x|,
+ * the first node whose value is not finite). `Kernel::full` is the model's full kernel.
+ */
+template <class Kernel, int D>
+PARDEL_HD inline double evaluate(int N, const double* t, const double* h, const double* p, const Arrays<D>& a,
+                                 int which, bs::Stats<D>& st) {
+  const View x = a.x[which];
+  double x0[D], x1[D], Ld, D1[D], D2[D], D11[D * D], D12[D * D], D22[D * D], left_D2[D], left_D22[D * D], r[D];
+  double action = 0;
+  for (int i = 0; i < D; ++i) x0[i] = x[i];
+  for (int j = 0; j < N; ++j) {
+    double probe = 0;
+    for (int i = 0; i < D; ++i) {
+      x1[i] = x[(static_cast<long>(j) + 1) * D + i];
+      probe += x1[i] * 0.0;
+      st.qmax = bs::larger(st.qmax, fabs(x1[i]));
+    }
+    if (!(probe == 0)) st.bad_value = bs::first_node(st.bad_value, j + 1);
+    Kernel::full(h[j], t[j], t[j + 1], x0, x1, p, &Ld, D1, D2, D11, D12, D22);
+    action += Ld;
+    if (j >= 1) {  // node j: interval j-1 to its left, j to its right
+      bs::node_residual<D>(j, left_D2, D1, r, st);
+      const long at = static_cast<long>(j) * D, block = static_cast<long>(j) * D * D;
+      for (int i = 0; i < D; ++i) a.r[which][at + i] = r[i];
+      for (int i = 0; i < D * D; ++i) a.A[which][block + i] = left_D22[i] + D11[i];
+      if (j + 1 <= N - 1)
+        for (int i = 0; i < D * D; ++i) a.B[which][block + i] = D12[i];
+    }
+    for (int i = 0; i < D; ++i) {
+      left_D2[i] = D2[i];
+      x0[i] = x1[i];
+    }
+    for (int i = 0; i < D * D; ++i) left_D22[i] = D22[i];
+  }
+  return action;
+}
+
+/** Cholesky factor of the symmetric D x D matrix S in place (lower triangle); false when a pivot is
+ *  not a positive finite number. */
+template <int D>
+PARDEL_HD inline bool cholesky(double* S) {
+  for (int j = 0; j < D; ++j) {
+    double d = S[j * D + j];
+    for (int k = 0; k < j; ++k) d -= S[j * D + k] * S[j * D + k];
+    if (!(d > 0) || !isfinite(d)) return false;
+    const double l = sqrt(d);
+    S[j * D + j] = l;
+    for (int i = j + 1; i < D; ++i) {
+      double v = S[i * D + j];
+      for (int k = 0; k < j; ++k) v -= S[i * D + k] * S[j * D + k];
+      S[i * D + j] = v / l;
+    }
+  }
+  return true;
+}
+
+/** y <- (L L^T)^-1 y for the factor L of cholesky(). */
+template <int D>
+PARDEL_HD inline void cholesky_solve(const double* L, double* y) {
+  for (int i = 0; i < D; ++i) {
+    double v = y[i];
+    for (int k = 0; k < i; ++k) v -= L[i * D + k] * y[k];
+    y[i] = v / L[i * D + i];
+  }
+  for (int i = D - 1; i >= 0; --i) {
+    double v = y[i];
+    for (int k = i + 1; k < D; ++k) v -= L[k * D + i] * y[k];
+    y[i] = v / L[i * D + i];
+  }
+}
+
+/**
+ * step = -(H + shift M)^-1 r over the interior nodes 1 .. N-1 by block LDL^T (block Thomas), M the
+ * metric of the shift: the identity, or (difference = 1) the kinetic form tridiag(-1, 2, -1) per
+ * component, as the CPU solver's Options::newton_shift. With the shifted blocks A'_k and B'_k:
+ * S_1 = A'_1, S_k = A'_k - B'_{k-1}^T C_{k-1} with C_k = S_k^-1 B'_k, each S_k Cholesky-factored.
+ * False, with the step unfinished, where a pivot is not positive definite.
+ */
+template <int D>
+PARDEL_HD inline bool direction(int N, double shift, int difference, const Arrays<D>& a, int set = 0) {
+  const double diagonal = difference ? 2 * shift : shift, off = difference ? shift : 0.0;
+  const View A = a.A[set], B = a.B[set], r = a.r[set];
+  double S[D * D], y[D], z[D], col[D];
+  for (int i = 0; i < D; ++i) z[i] = 0;
+  for (int k = 1; k <= N - 1; ++k) {
+    const long at = static_cast<long>(k) * D, block = static_cast<long>(k) * D * D;
+    const long before = block - static_cast<long>(D) * D;
+    for (int i = 0; i < D * D; ++i) S[i] = A[block + i];
+    for (int i = 0; i < D; ++i) {
+      S[i * D + i] += diagonal;
+      y[i] = r[at + i];
+    }
+    if (k >= 2) {
+      // S -= B'_{k-1}^T C_{k-1};  y -= B'_{k-1}^T z_{k-1}
+      for (int i = 0; i < D; ++i) {
+        for (int j = 0; j < D; ++j) {
+          double v = 0;
+          for (int m = 0; m < D; ++m) v += (B[before + m * D + i] - (m == i ? off : 0.0)) * a.C[before + m * D + j];
+          S[i * D + j] -= v;
+        }
+        double w = 0;
+        for (int m = 0; m < D; ++m) w += (B[before + m * D + i] - (m == i ? off : 0.0)) * z[m];
+        y[i] -= w;
+      }
+    }
+    if (!cholesky<D>(S)) return false;
+    cholesky_solve<D>(S, y);
+    for (int i = 0; i < D; ++i) {
+      z[i] = y[i];
+      a.step[at + i] = y[i];
+    }
+    if (k <= N - 2) {
+      for (int j = 0; j < D; ++j) {
+        for (int i = 0; i < D; ++i) col[i] = B[block + i * D + j] - (i == j ? off : 0.0);
+        cholesky_solve<D>(S, col);
+        for (int i = 0; i < D; ++i) a.C[block + i * D + j] = col[i];
+      }
+    }
+  }
+  // Back substitution: x_k = z_k - C_k x_{k+1}; then the step is -x.
+  for (int k = N - 2; k >= 1; --k) {
+    const long at = static_cast<long>(k) * D, block = static_cast<long>(k) * D * D;
+    for (int i = 0; i < D; ++i) {
+      double v = 0;
+      for (int j = 0; j < D; ++j) v += a.C[block + i * D + j] * a.step[at + D + j];
+      a.step[at + i] -= v;
+    }
+  }
+  for (long i = D; i < static_cast<long>(N) * D; ++i) a.step[i] = -a.step[i];
+  for (int i = 0; i < D; ++i) a.step[i] = a.step[static_cast<long>(N) * D + i] = 0;
+  return true;
+}
+
+/** s^T H s for the step s and the Hessian of set `which` (A on the diagonal, B above, B^T below). */
+template <int D>
+PARDEL_HD inline double curvature(int N, const Arrays<D>& a, int which) {
+  const View A = a.A[which], B = a.B[which], s = a.step;
+  double sum = 0;
+  for (int k = 1; k <= N - 1; ++k) {
+    const long at = static_cast<long>(k) * D, block = static_cast<long>(k) * D * D;
+    for (int i = 0; i < D; ++i) {
+      double row = 0;
+      for (int j = 0; j < D; ++j) row += A[block + i * D + j] * s[at + j];
+      if (k <= N - 2)
+        for (int j = 0; j < D; ++j) row += 2 * B[block + i * D + j] * s[at + D + j];
+      sum += s[at + i] * row;
+    }
+  }
+  return sum;
+}
+
+/** The first evaluation of a problem whose guess (with its boundary values) is in set 0, and the
+ *  decision on it (iteration 0). */
+template <class Kernel, int D>
+PARDEL_HD inline void start(int N, const double* t, const double* h, const double* p, const bs::Settings& set,
+                            const Arrays<D>& a, State<D>& ns) {
+  bs::start(ns.s);
+  ns.current = 0;
+  ns.reason = none;
+  ns.lambda = 0;
+  ns.shift = 0;
+  ns.shifted = 0;
+  bs::Stats<D> st;
+  bs::clear(st);
+  ns.action = evaluate<Kernel, D>(N, t, h, p, a, 0, st);
+  ns.best_residual = st.residual;
+  if (st.bad_value >= 0 || !isfinite(ns.action)) st.bad_residual = bs::first_node(st.bad_residual, st.bad_value);
+  bs::decide(ns.s, st, 0, set);
+}
+
+/**
+ * One Newton iteration of a running problem whose evaluation at the iterate is in set
+ * ns.current: the full Newton step if the Hessian is positive definite, then shifted steps until
+ * one is accepted, which becomes the iterate and is decided on.
+ */
+template <class Kernel, int D>
+PARDEL_HD inline void iterate(int N, const double* t, const double* h, const double* p, const bs::Settings& set,
+                              const Arrays<D>& a, State<D>& ns) {
+  using namespace pardel::detail;  // the CPU solver's constants
+  const int here = ns.current, there = 1 - here;
+  double largest = 0;
+  for (int k = 1; k <= N - 1; ++k)
+    for (int i = 0; i < D; ++i)
+      largest = bs::larger(largest, fabs(a.A[here][static_cast<long>(k) * D * D + i * D + i]));
+  const View q = a.x[here], trial = a.x[there], r = a.r[here];
+  const long n = (static_cast<long>(N) + 1) * D;
+  for (int i = 0; i < D; ++i) {
+    trial[i] = q[i];
+    trial[n - D + i] = q[n - D + i];
+  }
+  const bool newton = direction<D>(N, 0, set.difference, a, here);
+  bool definite = newton;
+  double lambda = 0, grow = 2;
+  for (int attempt = 0; attempt <= 40; ++attempt) {
+    if (!newton || attempt > 0) {
+      if (!(largest > 0) || !isfinite(largest)) break;
+      if (lambda == 0) {
+        lambda = bs::larger(ns.lambda, 1e-6 * largest);
+      } else {
+        lambda *= grow;
+        grow *= 2;
+      }
+      if (!direction<D>(N, lambda, set.difference, a, here)) continue;  // not yet positive definite
+      definite = true;
+    }
+    double slope = 0;  // r . step
+    for (long i = D; i < n - D; ++i) slope += r[i] * a.step[i];
+    const double predicted = slope + 0.5 * curvature<D>(N, a, here);  // negative: the model's decrease
+    for (long i = D; i < n - D; ++i) trial[i] = q[i] + a.step[i];
+    bs::Stats<D> st;
+    bs::clear(st);
+    const double action = evaluate<Kernel, D>(N, t, h, p, a, there, st);
+    if (st.bad_residual >= 0 || st.bad_value >= 0 || !isfinite(action)) continue;
+    const double rho = predicted < 0 ? (action - ns.action) / predicted : 0;
+    if (!(rho >= kAcceptRatio) && !(st.residual <= kResidualAccept * ns.best_residual)) continue;
+    if (lambda > 0) {
+      const double c = 2 * rho - 1;  // Nielsen's update
+      const double f = 1 - c * c * c;
+      ns.lambda = lambda * (f > 1.0 / 3 ? f : 1.0 / 3);
+      ++ns.shifted;
+    } else {
+      ns.lambda *= 1.0 / 3;
+    }
+    ns.shift = lambda;
+    ns.current = there;
+    ns.action = action;
+    if (st.residual < ns.best_residual) ns.best_residual = st.residual;
+    bs::decide(ns.s, st, ns.s.iterations + 1, set);
+    return;
+  }
+  // The iterate stays in set `here`; its record (residual, tests) is the last decision's.
+  if (!definite) {
+    ns.s.status = bs::non_finite;
+    ns.reason = no_definite_shift;
+  } else {
+    ns.s.status = bs::stalled;
+    ns.reason = no_descent;
+  }
+}
+
+/** Up to `count` iterations of a problem, fewer when it stops. */
+template <class Kernel, int D>
+PARDEL_HD inline void advance(int N, const double* t, const double* h, const double* p, const bs::Settings& set,
+                              const Arrays<D>& a, State<D>& ns, int count) {
+  for (int c = 0; c < count && ns.s.status == bs::running; ++c) iterate<Kernel, D>(N, t, h, p, set, a, ns);
+}
+
+/**
+ * The host path: B problems of N intervals each, solved one after another (q: B (N+1) D values,
+ * the guesses with their boundary values in, the answers out; t, h shared; p: B x np params;
+ * work: values_per_problem<D>(N) doubles). The device solver runs the same functions with one
+ * thread per problem (batch_device.cuh).
+ */
+template <class Kernel, int D>
+void host_newton(int B, int N, double* q, const double* t, const double* h, const double* p, int np,
+                 const bs::Settings& set, double* work, State<D>* state) {
+  const long n = (static_cast<long>(N) + 1) * D;
+  for (int b = 0; b < B; ++b) {
+    const Arrays<D> a = arrays<D>(work, N, 1, 0);
+    double* qb = q + b * n;
+    for (long i = 0; i < n; ++i) a.x[0][i] = qb[i];
+    const double* pb = p + static_cast<long>(b) * np;
+    start<Kernel, D>(N, t, h, pb, set, a, state[b]);
+    while (state[b].s.status == bs::running) advance<Kernel, D>(N, t, h, pb, set, a, state[b], 1);
+    for (long i = 0; i < n; ++i) qb[i] = a.x[state[b].current][i];
+  }
+}
+
+}  // namespace pardel::batch_newton
+
+#endif  // PARDEL_CUDA_BATCH_NEWTON_HPP
