@@ -302,10 +302,10 @@ TEST(PardelSolve, DeviceOptionIsCheckedAndARefusedDeviceWritesNothing) {
   const Result bad = pardel("solve '" + (dir / "small.toml") + "' --quiet --no-plot --device gpu");
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("--device: gpu not in {cpu,cuda}"), std::string::npos) << bad.err;
-  // Newton does not run on the device; a build without CUDA or a machine without a device refuses
+  // Hybrid does not run on the device; a build without CUDA or a machine without a device refuses
   // any method: either way the error names the device and nothing is written.
   const Result refused = pardel("solve '" + (dir / "small.toml") + "' --out '" + (dir / "out") +
-                                "' --quiet --no-plot --device cuda --set solver.method=newton");
+                                "' --quiet --no-plot --device cuda --set solver.method=hybrid");
   EXPECT_EQ(refused.code, 2);
   EXPECT_NE(refused.err.find("error: device cuda: "), std::string::npos) << refused.err;
   EXPECT_FALSE(fs::exists(dir / "out"));

@@ -9,7 +9,9 @@
 // necessarily at the same sweep). A model added with pardel_add_model(... DEVICE) (a double swing of
 // the runtime tests) is registered beside the bundled ones and solved the same way. What the device
 // refuses, and that registration, are checked without a device; the comparisons skip, saying why,
-// where there is none.
+// where there is none. Newton on the device (one problem per thread) against its host path
+// (batch_newton.hpp's host_newton, the same functions in a plain loop: the same statuses and
+// answers) and against solve_batch's trust-region Newton (both converge, to minima).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,10 +22,13 @@
 #include <string>
 #include <vector>
 
+#include "batch_newton.hpp"
+#include "fuel_nav.hpp"
 #include "pardel/cuda.hpp"
 #include "pardel/pardel.hpp"
+#include "zermelo.hpp"
 
-extern "C" const pardel_model fuel_nav_model, zermelo_model, pendulum_model, harmonic_model, bratu_model;
+extern "C" const pardel_model pendulum_model, harmonic_model, bratu_model;
 #ifdef PARDEL_HAVE_DEVICE_TEST_MODEL
 #include "double_swing.hpp"
 #endif
@@ -139,8 +144,8 @@ int compare(const pardel::Problem& base, const pardel::Options& options, const s
 TEST(DeviceBatchRefusals, MethodsKnotsAndModelsTheDeviceLacks) {
   const pardel::Problem base = problem_of(fuel_nav_model, 5, 20, {0, 0}, {1, 1});
   std::vector<pardel::BatchProblem> one(1);
-  pardel::BatchSummary s = pardel::solve_batch_cuda(base, options_of(pardel::Method::newton, 10), one);
-  EXPECT_NE(s.refusal.find("jacobi-newton"), std::string::npos) << s.refusal;
+  pardel::BatchSummary s = pardel::solve_batch_cuda(base, options_of(pardel::Method::hybrid, 10), one);
+  EXPECT_NE(s.refusal.find("jacobi, jacobi-newton, newton and auto"), std::string::npos) << s.refusal;
   EXPECT_TRUE(s.entries.empty());
   pardel::Problem knotted = base;
   knotted.knots.push_back(pardel::Knot{});
@@ -257,15 +262,112 @@ TEST(DeviceBatch, ManyBlocksPerProblemAndThreadsThatTakeSeveralNodes) {
   compare(bratu, options_of(pardel::Method::jacobi_newton, 400), hot, 5);
 }
 
+/** Newton on the device against its host path (the same functions: the same status, answers to
+ *  1e-8, iteration counts within 2) and against the CPU's trust-region Newton (both converge, the
+ *  device's answers are minima). Returns the problems whose answer is the CPU's. */
+template <class Kernel>
+int compare_newton(const pardel::Problem& base, const std::vector<pardel::BatchProblem>& batch) {
+  namespace bn = pardel::batch_newton;
+  std::string why;
+  if (!pardel::cuda_device_available(&why)) {
+    std::printf("skipped: %s\n", why.c_str());
+    return -1;
+  }
+  const pardel::Options options = options_of(pardel::Method::newton, 500);
+  pardel::CudaSettings settings;
+  settings.check_every = 3;
+  const pardel::BatchSummary gpu = pardel::solve_batch_cuda(base, options, batch, settings);
+  EXPECT_TRUE(gpu.refusal.empty()) << gpu.refusal;
+  if (!gpu.refusal.empty()) return 0;
+  const pardel::BatchSummary cpu = pardel::solve_batch(base, options, batch);
+  const int B = static_cast<int>(batch.size()), N = base.N, np = base.model->nparams;
+  constexpr int D = 2;
+  const std::size_t per = static_cast<std::size_t>(N + 1) * D;
+  std::vector<double> q(B * per), p(static_cast<std::size_t>(B) * np), t(N + 1), h(N, base.T / N),
+      work(static_cast<std::size_t>(bn::values_per_problem<D>(N)));
+  for (int b = 0; b < B; ++b) {
+    std::copy(batch[b].guess.q.begin(), batch[b].guess.q.end(), q.begin() + b * per);
+    for (int i = 0; i < np; ++i) p[b * np + i] = base.model->param_defaults[i];
+  }
+  for (int k = 0; k <= N; ++k) t[k] = base.t0 + base.T * k / N;
+  t[N] = base.t0 + base.T;
+  pardel::batch_sweep::Settings set;
+  set.rtol = options.rtol;
+  set.max_iterations = options.max_iterations;
+  std::vector<bn::State<D>> host(B);
+  bn::host_newton<Kernel, D>(B, N, q.data(), t.data(), h.data(), p.data(), np, set, work.data(), host.data());
+  int same_as_cpu = 0;
+  for (int b = 0; b < B; ++b) {
+    const pardel::Summary& g = gpu.entries[b].summary;
+    SCOPED_TRACE("problem " + std::to_string(b) + ": device: " + g.message);
+    EXPECT_EQ(g.termination, pardel::Termination::converged);
+    EXPECT_EQ(host[b].s.status, pardel::batch_sweep::converged);
+    EXPECT_LE(std::labs(g.iterations - host[b].s.iterations), 2);
+    EXPECT_EQ(g.point.kind, pardel::PointKind::minimum);
+    EXPECT_TRUE(cpu.entries[b].summary.converged()) << cpu.entries[b].summary.message;
+    double diff = 0, diff_cpu = 0;
+    for (std::size_t i = 0; i < per; ++i) {
+      diff = std::max(diff, std::fabs(gpu.entries[b].trajectory.q[i] - q[b * per + i]));
+      diff_cpu = std::max(diff_cpu, std::fabs(gpu.entries[b].trajectory.q[i] - cpu.entries[b].trajectory.q[i]));
+    }
+    EXPECT_LE(diff, 1e-8);
+    same_as_cpu += diff_cpu <= 1e-7;
+  }
+  return same_as_cpu;
+}
+
+/** Random polyline guesses through two interior points. */
+std::vector<pardel::BatchProblem> polyline_batch(const pardel::Problem& base, std::vector<std::vector<double>> inner,
+                                                 double jitter, int B, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter, jitter);
+  std::vector<pardel::BatchProblem> out(static_cast<std::size_t>(B));
+  for (pardel::BatchProblem& bp : out) {
+    std::vector<std::vector<double>> points{base.q0};
+    for (const auto& c : inner) points.push_back({c[0] + u(rng), c[1] + u(rng)});
+    points.push_back(base.qN);
+    bp.guess = pardel::polyline_guess(base, points);
+  }
+  return out;
+}
+
+struct FuelKernel {
+  PARDEL_HD static void full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+                             double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+    fuel_nav_trapezoid_full(h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+  }
+};
+struct ZermeloKernel {
+  PARDEL_HD static void full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
+                             double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+    zermelo_trapezoid_full(h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
+  }
+};
+
+TEST(DeviceNewton, FuelNavigationAsOnTheHostPath) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(fuel_nav_model, 30, 200, {0, 0}, {6, 5});
+  const int same = compare_newton<FuelKernel>(base, polyline_batch(base, {{2, 1.5}, {4, 3.5}}, 1.0, 96, 3));
+  std::printf("fuel navigation: %d of 96 answers are the CPU Newton's\n", same);
+}
+
+TEST(DeviceNewton, ZermeloRoutesAsOnTheHostPath) {
+  PARDEL_NEEDS_DEVICE();
+  const pardel::Problem base = problem_of(zermelo_model, 1, 80, {0, 0}, {6, 2});
+  const int same = compare_newton<ZermeloKernel>(base, polyline_batch(base, {{1, 3.5}, {4, 5.5}}, 0.5, 96, 4));
+  std::printf("Zermelo: %d of 96 answers are the CPU Newton's\n", same);
+}
+
 TEST(DeviceSolve, OptionsDeviceCudaRunsSolveOnTheDevice) {
   pardel::enable_cuda();
   const pardel::Problem base = problem_of(fuel_nav_model, 5, 30, {0, 0}, {1.5, 1});
-  pardel::Options o = options_of(pardel::Method::newton, 100);
+  pardel::Options o = options_of(pardel::Method::hybrid, 100);
   o.device = pardel::Device::cuda;
   pardel::Trajectory tr = pardel::linear_guess(base);
   pardel::Summary s = pardel::solve(base, o, tr);
   EXPECT_EQ(s.termination, pardel::Termination::invalid_input);
-  EXPECT_NE(s.message.find("device cuda: the device solves with methods jacobi and jacobi-newton"), std::string::npos)
+  EXPECT_NE(s.message.find("device cuda: the device solves with methods jacobi, jacobi-newton, newton and auto"),
+            std::string::npos)
       << s.message;
   PARDEL_NEEDS_DEVICE();
   o.method = pardel::Method::jacobi_newton;

@@ -57,6 +57,6 @@ def test_override_errors_name_the_override():
 def test_device_is_checked_and_a_refused_device_solve_names_the_device(spring_lag):
     with pytest.raises(pardel.PardelError, match=r"unknown device 'gpu'"):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, device="gpu")
-    # Newton does not run on the device (and a build or machine without CUDA refuses it too).
+    # Hybrid does not run on the device (and a build or machine without CUDA refuses it too).
     with pytest.raises(pardel.PardelError, match=r"device cuda: "):
-        pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, device="cuda", method="newton")
+        pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, device="cuda", method="hybrid")

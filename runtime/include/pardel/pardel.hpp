@@ -139,7 +139,7 @@ std::vector<std::string> linear_solver_names();
 enum class Device {
   cpu,   ///< the host's cores (OpenMP)
   cuda,  ///< an NVIDIA GPU: solve_batch_cuda (pardel/cuda.hpp), in a program that linked pardel::cuda
-         ///< and called enable_cuda(); jacobi and jacobi-newton on one grid (docs/gpu.md)
+         ///< and called enable_cuda(); jacobi, jacobi-newton, newton and auto (newton) on one grid (docs/gpu.md)
 };
 const char* to_string(Device device);
 /** Parses "cpu", "cuda"; false if unknown. */
