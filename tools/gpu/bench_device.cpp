@@ -3,7 +3,8 @@
  * The GPU benchmark (run by tools/gpu/run.sh): solve_batch_cuda against solve_batch on all CPU
  * cores of the same machine, with the same options, on
  *  - batches of Zermelo routes (the seed's four vortices, N = 80) and fuel-navigation variants
- *    (N = 100) from random polyline guesses, by Jacobi-Newton to the default tolerance;
+ *    (N = 100) from random polyline guesses, by Jacobi-Newton to the default tolerance; and by
+ *    Newton (Zermelo, and fuel navigation at N = 200), against the CPU's Newton;
  *  - one fuel-navigation problem at N = 10^7: the time of one Jacobi-Newton sweep;
  *  - OpenMP scaling of the CPU batch and of the CPU sweeps from 1 to all cores.
  * CPU sweep times are differences of two solves with different sweep counts, so that solve()'s
@@ -127,17 +128,20 @@ struct BatchRow {
   double cpu_s = 0;
   long cpu_converged = 0;
   int same_status = 0, same_iterations = 0;
+  int same_answer = 0;  ///< answers within 1e-7 of the CPU's (Newton may reach another minimum)
   double max_diff = 0;
 };
 
+/** One batch on the device and a sample of it on all CPU cores, by `o.method`; the batch is
+ *  written for the JAX peer when `for_peer`. */
 BatchRow run_batch(const Args& a, const std::string& name, const pardel::Problem& base,
-                   const std::vector<std::vector<double>>& inner, double jitter, long max_iterations) {
+                   const std::vector<std::vector<double>>& inner, double jitter, const pardel::Options& o,
+                   bool for_peer) {
   BatchRow row;
   row.name = name;
   row.B = a.batch;
   row.N = base.N;
   const auto batch = polyline_batch(base, inner, jitter, a.batch, 1);
-  const pardel::Options o = jacobi_newton(max_iterations);
   pardel::CudaSettings settings;
   settings.assess = false;  // timed: the device's part alone (the assessment is a host step)
   pardel::CudaBatchTimes times;
@@ -159,7 +163,7 @@ BatchRow run_batch(const Args& a, const std::string& name, const pardel::Problem
   row.min_it = its.front();
   row.median_it = its[its.size() / 2];
   row.max_it = its.back();
-  write_for_peer(a, name, base, batch, gpu, o, settings.check_every);
+  if (for_peer) write_for_peer(a, name, base, batch, gpu, o, settings.check_every);
   // The CPU sample, all cores.
   row.sample = std::min(a.cpu_sample, a.batch);
   const std::vector<pardel::BatchProblem> sample(batch.begin(), batch.begin() + row.sample);
@@ -175,8 +179,11 @@ BatchRow run_batch(const Args& a, const std::string& name, const pardel::Problem
     const auto& c = cpu.entries[static_cast<std::size_t>(b)];
     row.same_status += g.summary.termination == c.summary.termination;
     row.same_iterations += g.summary.iterations == c.summary.iterations;
+    double diff = 0;
     for (std::size_t i = 0; i < c.trajectory.q.size(); ++i)
-      row.max_diff = std::max(row.max_diff, std::fabs(g.trajectory.q[i] - c.trajectory.q[i]));
+      diff = std::max(diff, std::fabs(g.trajectory.q[i] - c.trajectory.q[i]));
+    row.max_diff = std::max(row.max_diff, diff);
+    row.same_answer += diff <= 1e-7;
   }
   return row;
 }
@@ -246,29 +253,37 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::vector<BatchRow> rows;
-  rows.push_back(run_batch(a, "zermelo_N80", zermelo, {{1, 3.5}, {4, 5.5}}, 0.5, 100000));
-  rows.push_back(run_batch(a, "fuel_nav_N100", fuel, {{2, 1.5}, {4, 3.5}}, 1.0, 100000));
-  std::printf("\nbatches: Jacobi-Newton to the default tolerance (rtol 1e-10), random polyline guesses\n");
-  std::printf("%-14s %6s %4s | %9s %9s %8s %9s | %6s %7s %9s %10s | %7s %7s %9s | %8s\n", "batch", "B", "N",
+  rows.push_back(run_batch(a, "zermelo_N80", zermelo, {{1, 3.5}, {4, 5.5}}, 0.5, jacobi_newton(100000), true));
+  rows.push_back(run_batch(a, "fuel_nav_N100", fuel, {{2, 1.5}, {4, 3.5}}, 1.0, jacobi_newton(100000), true));
+  // Newton (one problem per device thread; on the CPU the trust-region Newton of solve()).
+  pardel::Options newton = jacobi_newton(500);
+  newton.method = pardel::Method::newton;
+  pardel::Problem fuel200 = fuel;
+  fuel200.N = 200;
+  rows.push_back(run_batch(a, "newton_zermelo_N80", zermelo, {{1, 3.5}, {4, 5.5}}, 0.5, newton, false));
+  rows.push_back(run_batch(a, "newton_fuel_N200", fuel200, {{2, 1.5}, {4, 3.5}}, 1.0, newton, false));
+  std::printf("\nbatches: Jacobi-Newton (newton_*: Newton) to the default tolerance (rtol 1e-10), random polyline "
+              "guesses; \"its\" are sweeps or Newton iterations\n");
+  std::printf("%-18s %6s %4s | %9s %9s %8s %9s | %6s %7s %9s %10s | %7s %7s %7s %9s | %8s\n", "batch", "B", "N",
               "device s", "sweeps s", "conv", "its med", "sample", "threads", "CPU s", "CPU conv", "status=",
-              "iters=", "max diff", "speed-up");
+              "iters=", "answer=", "max diff", "speed-up");
   std::fprintf(json, "  \"batches\": [\n");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const BatchRow& r = rows[i];
     const double per_problem_gpu = r.device_s / std::max(1, r.B), per_problem_cpu = r.cpu_s / std::max(1, r.sample);
     const double speedup = per_problem_cpu / per_problem_gpu;
-    std::printf("%-14s %6d %4d | %9.4f %9.4f %8ld %9ld | %6d %7d %9.3f %10ld | %7d %7d %9.2e | %8.1f\n",
+    std::printf("%-18s %6d %4d | %9.4f %9.4f %8ld %9ld | %6d %7d %9.3f %10ld | %7d %7d %7d %9.2e | %8.1f\n",
                 r.name.c_str(), r.B, r.N, r.device_s, r.sweeps_s, r.converged, r.median_it, r.sample, r.threads,
-                r.cpu_s, r.cpu_converged, r.same_status, r.same_iterations, r.max_diff, speedup);
+                r.cpu_s, r.cpu_converged, r.same_status, r.same_iterations, r.same_answer, r.max_diff, speedup);
     std::fprintf(json,
                  "    {\"name\": \"%s\", \"B\": %d, \"N\": %d, \"device_seconds\": %.6g, \"sweeps_seconds\": %.6g, "
                  "\"host_seconds\": %.6g, \"converged\": %ld, \"sweeps_run\": %ld, \"iterations_min\": %ld, "
                  "\"iterations_median\": %ld, \"iterations_max\": %ld, \"cpu_sample\": %d, \"cpu_threads\": %d, "
                  "\"cpu_seconds\": %.6g, \"cpu_converged\": %ld, \"same_status\": %d, \"same_iterations\": %d, "
-                 "\"max_diff\": %.3g, \"speedup_per_problem\": %.4g}%s\n",
+                 "\"same_answer\": %d, \"max_diff\": %.3g, \"speedup_per_problem\": %.4g}%s\n",
                  r.name.c_str(), r.B, r.N, r.device_s, r.sweeps_s, r.host_s, r.converged, r.sweeps, r.min_it,
                  r.median_it, r.max_it, r.sample, r.threads, r.cpu_s, r.cpu_converged, r.same_status,
-                 r.same_iterations, r.max_diff, speedup, i + 1 < rows.size() ? "," : "");
+                 r.same_iterations, r.same_answer, r.max_diff, speedup, i + 1 < rows.size() ? "," : "");
   }
   std::fprintf(json, "  ]%s\n", a.batches_only ? "\n}" : ",");
   if (a.batches_only) {
