@@ -91,6 +91,8 @@ struct State {
   double lambda;          ///< the Levenberg-Marquardt shift to start from (0: none yet)
   double shift;           ///< the shift of the last accepted step (0: the full Newton step)
   int shifted;            ///< the accepted steps that were shifted
+  double rho;             ///< the last accepted step's ratio of actual to predicted decrease
+  int refused;            ///< the trial steps refused in the last iteration
 };
 
 /**
@@ -258,6 +260,8 @@ PARDEL_HD inline void start(int N, const double* t, const double* h, const doubl
   ns.lambda = 0;
   ns.shift = 0;
   ns.shifted = 0;
+  ns.rho = 0;
+  ns.refused = 0;
   bs::Stats<D> st;
   bs::clear(st);
   ns.action = evaluate<Kernel, D>(N, t, h, p, a, 0, st);
@@ -320,6 +324,8 @@ PARDEL_HD inline void iterate(int N, const double* t, const double* h, const dou
       ns.lambda *= 1.0 / 3;
     }
     ns.shift = lambda;
+    ns.rho = rho;
+    ns.refused = attempt;
     ns.current = there;
     ns.action = action;
     if (st.residual < ns.best_residual) ns.best_residual = st.residual;
