@@ -350,24 +350,36 @@ PARDEL_HD inline void advance(int N, const double* t, const double* h, const dou
 }
 
 /**
- * The host path: B problems of N intervals each, solved one after another (q: B (N+1) D values,
- * the guesses with their boundary values in, the answers out; t, h shared; p: B x np params;
- * work: values_per_problem<D>(N) doubles). The device solver runs the same functions with one
- * thread per problem (batch_device.cuh).
+ * The host path: B problems of N intervals each (q: B (N+1) D values, the guesses with their
+ * boundary values in, the answers out; t, h shared; p: B x np params), laid out and advanced as
+ * the device solver does it with one thread per problem (batch_device.cuh): the batch's arrays
+ * interleaved in `work` (B values_per_problem<D>(N) doubles, element i of problem b at i B + b),
+ * each problem started, then advanced `check_every` iterations at a time until none runs.
+ * Returns the rounds of check_every iterations.
  */
 template <class Kernel, int D>
-void host_newton(int B, int N, double* q, const double* t, const double* h, const double* p, int np,
-                 const bs::Settings& set, double* work, State<D>* state) {
+long host_newton(int B, int N, double* q, const double* t, const double* h, const double* p, int np,
+                 const bs::Settings& set, int check_every, double* work, State<D>* state) {
   const long n = (static_cast<long>(N) + 1) * D;
   for (int b = 0; b < B; ++b) {
-    const Arrays<D> a = arrays<D>(work, N, 1, 0);
-    double* qb = q + b * n;
-    for (long i = 0; i < n; ++i) a.x[0][i] = qb[i];
-    const double* pb = p + static_cast<long>(b) * np;
-    start<Kernel, D>(N, t, h, pb, set, a, state[b]);
-    while (state[b].s.status == bs::running) advance<Kernel, D>(N, t, h, pb, set, a, state[b], 1);
-    for (long i = 0; i < n; ++i) qb[i] = a.x[state[b].current][i];
+    const Arrays<D> a = arrays<D>(work, N, B, b);
+    for (long i = 0; i < n; ++i) a.x[0][i] = q[b * n + i];
+    start<Kernel, D>(N, t, h, p + static_cast<long>(b) * np, set, a, state[b]);
   }
+  long rounds = 0;
+  for (bool running = true; running; ++rounds) {
+    running = false;
+    for (int b = 0; b < B; ++b) {
+      if (state[b].s.status != bs::running) continue;
+      advance<Kernel, D>(N, t, h, p + static_cast<long>(b) * np, set, arrays<D>(work, N, B, b), state[b], check_every);
+      running = running || state[b].s.status == bs::running;
+    }
+  }
+  for (int b = 0; b < B; ++b) {
+    const Arrays<D> a = arrays<D>(work, N, B, b);
+    for (long i = 0; i < n; ++i) q[b * n + i] = a.x[state[b].current][i];
+  }
+  return rounds;
 }
 
 }  // namespace pardel::batch_newton

@@ -10,7 +10,7 @@
 // the runtime tests) is registered beside the bundled ones and solved the same way. What the device
 // refuses, and that registration, are checked without a device; the comparisons skip, saying why,
 // where there is none. Newton on the device (one problem per thread) against its host path
-// (batch_newton.hpp's host_newton, the same functions in a plain loop: the same statuses and
+// (batch_newton.hpp's host_newton, the same functions in plain loops: the same statuses and
 // answers) and against solve_batch's trust-region Newton (both converge, to minima).
 #include <gtest/gtest.h>
 
@@ -284,7 +284,7 @@ int compare_newton(const pardel::Problem& base, const std::vector<pardel::BatchP
   constexpr int D = 2;
   const std::size_t per = static_cast<std::size_t>(N + 1) * D;
   std::vector<double> q(B * per), p(static_cast<std::size_t>(B) * np), t(N + 1), h(N, base.T / N),
-      work(static_cast<std::size_t>(bn::values_per_problem<D>(N)));
+      work(static_cast<std::size_t>(B * bn::values_per_problem<D>(N)));
   for (int b = 0; b < B; ++b) {
     std::copy(batch[b].guess.q.begin(), batch[b].guess.q.end(), q.begin() + b * per);
     for (int i = 0; i < np; ++i) p[b * np + i] = base.model->param_defaults[i];
@@ -295,7 +295,8 @@ int compare_newton(const pardel::Problem& base, const std::vector<pardel::BatchP
   set.rtol = options.rtol;
   set.max_iterations = options.max_iterations;
   std::vector<bn::State<D>> host(B);
-  bn::host_newton<Kernel, D>(B, N, q.data(), t.data(), h.data(), p.data(), np, set, work.data(), host.data());
+  bn::host_newton<Kernel, D>(B, N, q.data(), t.data(), h.data(), p.data(), np, set, settings.check_every, work.data(),
+                             host.data());
   int same_as_cpu = 0;
   for (int b = 0; b < B; ++b) {
     const pardel::Summary& g = gpu.entries[b].summary;

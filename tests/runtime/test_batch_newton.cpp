@@ -1,7 +1,8 @@
 /**
  * @file test_batch_newton.cpp
  * The host path of the device Newton solver (runtime/cuda/batch_newton.hpp: one problem's Newton
- * iteration, run here in a plain loop by host_newton). Its block LDL^T direction against a dense
+ * iteration, run here by host_newton in plain loops over the batch's interleaved arrays, as the
+ * device runs it with one thread per problem). Its block LDL^T direction against a dense
  * solve of the same shifted block-tridiagonal matrix (and its s^T H s); its converged answers against solve() with
  * method newton (the CPU's trust-region Newton) on test models no bundled example resembles: a
  * channel with a logarithmic barrier (dimension 2, params), a hardening spring (dimension 1), a
@@ -142,11 +143,11 @@ std::vector<bn::State<D>> compare(const pardel::Problem& base, const std::vector
     std::copy(guesses[b].q.begin(), guesses[b].q.end(), q.begin() + b * per);
     std::copy(params[b].begin(), params[b].end(), p.begin() + static_cast<long>(b) * np);
   }
-  std::vector<double> t(N + 1), h(N, base.T / N), work(static_cast<std::size_t>(bn::values_per_problem<D>(N)));
+  std::vector<double> t(N + 1), h(N, base.T / N), work(static_cast<std::size_t>(B * bn::values_per_problem<D>(N)));
   for (int k = 0; k <= N; ++k) t[k] = base.t0 + base.T * k / N;
   t[N] = base.t0 + base.T;
   std::vector<bn::State<D>> state(B);
-  bn::host_newton<Kernel, D>(B, N, q.data(), t.data(), h.data(), p.data(), np, settings_of(options), work.data(),
+  bn::host_newton<Kernel, D>(B, N, q.data(), t.data(), h.data(), p.data(), np, settings_of(options), 3, work.data(),
                              state.data());
   for (int b = 0; b < B; ++b) {
     pardel::Problem problem = base;
@@ -278,11 +279,11 @@ TEST(BatchNewtonHostPath, StopsAsTheCpuSolverDoes) {
   std::vector<double> q(2 * per), p = {0, 0, 0.1, 0, 0, 0.1}, t(N + 1), h(N, 1.0 / N);
   for (int b = 0; b < 2; ++b) std::copy(guesses[b].q.begin(), guesses[b].q.end(), q.begin() + b * per);
   for (int k = 0; k <= N; ++k) t[k] = static_cast<double>(k) / N;
-  std::vector<double> work(static_cast<std::size_t>(bn::values_per_problem<2>(N)));
+  std::vector<double> work(static_cast<std::size_t>(2 * bn::values_per_problem<2>(N)));
   pardel::Options o = newton_options();
   o.max_iterations = 1;
   std::vector<bn::State<2>> state(2);
-  bn::host_newton<Channel, 2>(2, N, q.data(), t.data(), h.data(), p.data(), 3, settings_of(o), work.data(),
+  bn::host_newton<Channel, 2>(2, N, q.data(), t.data(), h.data(), p.data(), 3, settings_of(o), 1, work.data(),
                               state.data());
   EXPECT_EQ(state[0].s.status, bs::max_iterations);  // one step is not enough from a wiggly guess
   EXPECT_EQ(state[0].s.iterations, 1);
