@@ -168,6 +168,61 @@ struct Buffers {
   }
 };
 
+/** The events of a batch: start, iterations begin, iterations end, copies back done; destroyed on
+ *  every path. */
+struct Events {
+  cudaEvent_t e[4];
+  Events() {
+    for (cudaEvent_t& x : e) cudaEventCreate(&x);
+  }
+  ~Events() {
+    for (cudaEvent_t x : e) cudaEventDestroy(x);
+  }
+  /** The upload, iteration and download times into `result` (after e[3] was recorded). */
+  void times(DeviceBatchResult& result) {
+    cudaEventSynchronize(e[3]);
+    float ms[3] = {0, 0, 0};
+    for (int i = 0; i < 3; ++i) cudaEventElapsedTime(&ms[i], e[i], e[i + 1]);
+    result.upload = ms[0] * 1e-3;
+    result.sweeps = ms[1] * 1e-3;
+    result.download = ms[2] * 1e-3;
+  }
+};
+
+/** The batch's guesses (into q: B (N+1) D values), grid, params and invalid flags to the device,
+ *  and the count of problems to run (into *running and *running_on_device). */
+template <int D>
+cudaError_t upload(const DeviceBatch& in, double* q, double* t, double* h, double* p, int* invalid,
+                   int* running_on_device, int* running) {
+  const std::size_t nodes = static_cast<std::size_t>(in.N) + 1;
+  *running = 0;
+  for (int b = 0; b < in.B; ++b) *running += in.invalid[b] ? 0 : 1;
+  cudaError_t err = cudaMemcpy(q, in.q, sizeof(double) * static_cast<std::size_t>(in.B) * nodes * D,
+                               cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(t, in.t, sizeof(double) * nodes, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(h, in.h, sizeof(double) * in.N, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess && in.np > 0)
+    err = cudaMemcpy(p, in.p, sizeof(double) * static_cast<std::size_t>(in.B) * in.np, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(invalid, in.invalid, sizeof(int) * in.B, cudaMemcpyHostToDevice);
+  if (err == cudaSuccess) err = cudaMemcpy(running_on_device, running, sizeof(int), cudaMemcpyHostToDevice);
+  return err;
+}
+
+/** A problem's record as the host reads it. */
+template <int D>
+void read_record(const bs::ProblemState<D>& s, ProblemRecord& r) {
+  r.status = s.status;
+  r.iterations = s.iterations;
+  r.node = s.node;
+  r.unresolved = s.unresolved;
+  r.residual = s.residual;
+  r.scale = s.scale;
+  r.target = s.target;
+  r.r_initial = s.r_initial;
+  r.comp_residual.assign(s.comp_residual, s.comp_residual + D);
+  r.comp_target.assign(s.comp_target, s.comp_target + D);
+}
+
 /** The launch loop for one model and discretization (a DeviceRunner, device_registry.hpp). */
 template <class Kernel, int D>
 std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
@@ -185,26 +240,11 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   auto* stats = buf.get<bs::Stats<D>>(static_cast<std::size_t>(B), err);
   int* flags = buf.get<int>(2 * static_cast<std::size_t>(B) + 1, err);  // invalid[B], the running count, arrived[B]
   if (err != cudaSuccess) return std::string("device allocation failed: ") + cudaGetErrorString(err);
-  struct Events {  // start, sweeps begin, sweeps end, copies back done; destroyed on every path
-    cudaEvent_t e[4];
-    Events() {
-      for (cudaEvent_t& x : e) cudaEventCreate(&x);
-    }
-    ~Events() {
-      for (cudaEvent_t x : e) cudaEventDestroy(x);
-    }
-  } events;
+  Events events;
   cudaEvent_t &e0 = events.e[0], &e1 = events.e[1], &e2 = events.e[2], &e3 = events.e[3];
   cudaEventRecord(e0);
   int running = 0;
-  for (int b = 0; b < B; ++b) running += in.invalid[b] ? 0 : 1;
-  err = cudaMemcpy(q0, in.q, sizeof(double) * values, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(t, in.t, sizeof(double) * nodes, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(h, in.h, sizeof(double) * N, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess && in.np > 0)
-    err = cudaMemcpy(p, in.p, sizeof(double) * static_cast<std::size_t>(B) * in.np, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(flags, in.invalid, sizeof(int) * B, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(flags + B, &running, sizeof(int), cudaMemcpyHostToDevice);
+  err = upload<D>(in, q0, t, h, p, flags, flags + B, &running);
   if (err != cudaSuccess) return std::string("copy to the device failed: ") + cudaGetErrorString(err);
   const int per_problem = blocks_per_problem<Kernel, D>(B, nodes, in.blocks_per_problem);
   const long blocks = static_cast<long>(per_problem) * B;
@@ -242,28 +282,13 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   if (err == cudaSuccess) err = cudaDeviceSynchronize();
   if (err != cudaSuccess) return std::string("copy from the device failed: ") + cudaGetErrorString(err);
   cudaEventRecord(e3);
-  cudaEventSynchronize(e3);
-  float ms[3] = {0, 0, 0};
-  cudaEventElapsedTime(&ms[0], e0, e1);
-  cudaEventElapsedTime(&ms[1], e1, e2);
-  cudaEventElapsedTime(&ms[2], e2, e3);
-  result.upload = ms[0] * 1e-3;
-  result.sweeps = ms[1] * 1e-3;
-  result.download = ms[2] * 1e-3;
+  events.times(result);
   result.sweeps_run = it;
   for (int b = 0; b < B; ++b) {
     const bs::ProblemState<D>& s = host_state[static_cast<std::size_t>(b)];
     ProblemRecord& r = result.records[static_cast<std::size_t>(b)];
-    r.status = s.status;
-    r.iterations = s.status == bs::running ? it : s.iterations;
-    r.node = s.node;
-    r.unresolved = s.unresolved;
-    r.residual = s.residual;
-    r.scale = s.scale;
-    r.target = s.target;
-    r.r_initial = s.r_initial;
-    r.comp_residual.assign(s.comp_residual, s.comp_residual + D);
-    r.comp_target.assign(s.comp_target, s.comp_target + D);
+    read_record(s, r);
+    if (s.status == bs::running) r.iterations = it;
   }
   return "";
 }
@@ -345,26 +370,11 @@ std::string run_newton_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   auto* state = buf.get<bn::State<D>>(static_cast<std::size_t>(B), err);
   int* flags = buf.get<int>(static_cast<std::size_t>(B) + 1, err);  // invalid[B], the running count
   if (err != cudaSuccess) return std::string("device allocation failed: ") + cudaGetErrorString(err);
-  struct Events {
-    cudaEvent_t e[4];
-    Events() {
-      for (cudaEvent_t& x : e) cudaEventCreate(&x);
-    }
-    ~Events() {
-      for (cudaEvent_t x : e) cudaEventDestroy(x);
-    }
-  } events;
+  Events events;
   cudaEvent_t &e0 = events.e[0], &e1 = events.e[1], &e2 = events.e[2], &e3 = events.e[3];
   cudaEventRecord(e0);
   int running = 0;
-  for (int b = 0; b < B; ++b) running += in.invalid[b] ? 0 : 1;
-  err = cudaMemcpy(q, in.q, sizeof(double) * values, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(t, in.t, sizeof(double) * nodes, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(h, in.h, sizeof(double) * N, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess && in.np > 0)
-    err = cudaMemcpy(p, in.p, sizeof(double) * static_cast<std::size_t>(B) * in.np, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(flags, in.invalid, sizeof(int) * B, cudaMemcpyHostToDevice);
-  if (err == cudaSuccess) err = cudaMemcpy(flags + B, &running, sizeof(int), cudaMemcpyHostToDevice);
+  err = upload<D>(in, q, t, h, p, flags, flags + B, &running);
   if (err != cudaSuccess) return std::string("copy to the device failed: ") + cudaGetErrorString(err);
   const unsigned per_value = static_cast<unsigned>((values + 255) / 256);
   const unsigned per_problem = static_cast<unsigned>((B + kNewtonBlock - 1) / kNewtonBlock);
@@ -388,30 +398,14 @@ std::string run_newton_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   if (err == cudaSuccess) err = cudaMemcpy(result.q, q, sizeof(double) * values, cudaMemcpyDeviceToHost);
   if (err != cudaSuccess) return std::string("copy from the device failed: ") + cudaGetErrorString(err);
   cudaEventRecord(e3);
-  cudaEventSynchronize(e3);
-  float ms[3] = {0, 0, 0};
-  cudaEventElapsedTime(&ms[0], e0, e1);
-  cudaEventElapsedTime(&ms[1], e1, e2);
-  cudaEventElapsedTime(&ms[2], e2, e3);
-  result.upload = ms[0] * 1e-3;
-  result.sweeps = ms[1] * 1e-3;
-  result.download = ms[2] * 1e-3;
+  events.times(result);
   long longest = 0;
   for (int b = 0; b < B; ++b) {
     const bn::State<D>& ns = host_state[static_cast<std::size_t>(b)];
     const bs::ProblemState<D>& s = ns.s;
     ProblemRecord& r = result.records[static_cast<std::size_t>(b)];
-    r.status = s.status;
-    r.iterations = s.iterations;
-    r.node = s.node;
-    r.unresolved = s.unresolved;
+    read_record(s, r);
     r.reason = ns.reason;
-    r.residual = s.residual;
-    r.scale = s.scale;
-    r.target = s.target;
-    r.r_initial = s.r_initial;
-    r.comp_residual.assign(s.comp_residual, s.comp_residual + D);
-    r.comp_target.assign(s.comp_target, s.comp_target + D);
     if (s.status != bs::not_started && s.iterations > longest) longest = s.iterations;
   }
   result.sweeps_run = longest;

@@ -5,23 +5,24 @@
  * one thread per problem, and that host_newton() below runs in a plain loop (the host path,
  * compiled by any C++ compiler and tested on every build).
  *
- * Each iteration solves for the Newton step by block LDL^T over the interior nodes (each pivot
- * Cholesky-factored, so that success certifies the Hessian positive definite) and globalizes it
- * the cheap way, by Levenberg-Marquardt on the discrete action: the full Newton step of a positive
- * definite Hessian is tried first; refused, or where the Hessian is not positive definite, the
- * step of H + lambda M (M the CPU solver's shift metric, lambda remembered between iterations and
- * at least 1e-6 of the largest diagonal entry) is tried, lambda growing 2-, 4-, 8-fold ... on each
- * refusal. A step is accepted when the action falls by at least 1e-4 of the decrease its quadratic
- * model predicts or when the DEL residual falls below 0.9 of the best one so far (the CPU solver's
- * constants, runtime/src/constants.hpp); after an accepted shifted step with ratio rho of actual
- * to predicted decrease, the next iteration starts from lambda max(1/3, 1 - (2 rho - 1)^3)
- * (Nielsen's update), after a full Newton step from a third of the remembered one. Each trial point is
- * evaluated (the model's full kernel once per interval: action, residual and Hessian, streamed
- * interval by interval) into the second of two sets of arrays, which becomes the iterate's when
- * the step is accepted, so that a refusal costs no evaluation of the iterate again. A problem
- * for which 40 growing shifts give no acceptable step stops as stalled. The stopping rules
- * after each accepted step are the sweeps' (batch_sweep::decide: the CPU solver's residual,
- * relative and per-component tests).
+ * Each iteration follows the CPU solver's trust-region Newton (runtime/src/trust_region.hpp, its
+ * constants in runtime/src/constants.hpp): the full Newton step of a positive definite Hessian
+ * first, whatever the radius; then steps of the trust-region subproblem (|s|_M <= delta, M the
+ * CPU solver's shift metric) at a shrinking radius; acceptance by the ratio of actual to predicted
+ * decrease of the action, by a lower residual where the predicted decrease is at the action's
+ * round-off, or for a Newton step by a residual below 0.9 of the best; the CPU solver's radius
+ * updates; and near a solution its watchdog (a refused Newton step taken anyway, four more Newton
+ * steps to bring the action below the reference point's, or back there). Only the subproblem is
+ * solved more simply: the shift by bisection on log lambda to within 10 % of the radius (the CPU
+ * solver: Newton on the secular equation), and no step along negative curvature where the
+ * Hessian is indefinite at the boundary (the hard case) or to escape a saddle, so that the device
+ * finds minima only. The Newton system is solved by block LDL^T over the interior nodes, each pivot
+ * Cholesky-factored so that success certifies H + lambda M positive definite; the model's full
+ * kernel is evaluated once per interval per trial (action, residual and Hessian, streamed interval
+ * by interval) into the second of two sets of arrays, which becomes the iterate's when the step is
+ * accepted, so that a refusal costs no evaluation of the iterate again. The stopping rules after
+ * each accepted step are the sweeps' (batch_sweep::decide: the CPU solver's residual, relative and
+ * per-component tests).
  *
  * A problem's arrays are Views with a stride: on the host a problem's values are contiguous
  * (stride 1); on the device the batch's problems are interleaved (stride B, element i of problem b
@@ -52,13 +53,13 @@ struct View {
  *  block D12 of the interval to its right; then the step and the elimination's S_k^-1 B_k. */
 template <int D>
 struct Arrays {
-  View x[2], r[2], A[2], B[2], step, C;
+  View x[2], r[2], A[2], B[2], step, C, ref;  ///< ref: the watchdog's reference point
 };
 
-/** Values per problem: (N + 1)(5 D + 5 D^2). */
+/** Values per problem: (N + 1)(6 D + 5 D^2). */
 template <int D>
 PARDEL_HD inline long values_per_problem(int N) {
-  return (static_cast<long>(N) + 1) * (5 * D + 5 * D * D);
+  return (static_cast<long>(N) + 1) * (6 * D + 5 * D * D);
 }
 
 /** Problem b's arrays in `base`, which holds `stride` problems' values interleaved (stride 1: one
@@ -67,17 +68,19 @@ template <int D>
 PARDEL_HD inline Arrays<D> arrays(double* base, int N, long stride, long b) {
   const long n1 = static_cast<long>(N) + 1, v = n1 * D, m = n1 * D * D;
   Arrays<D> a;
-  const long offsets[10] = {0, v, 2 * v, 3 * v, 4 * v, 5 * v, 5 * v + m, 5 * v + 2 * m, 5 * v + 3 * m, 5 * v + 4 * m};
-  View* views[10] = {&a.x[0], &a.x[1], &a.r[0], &a.r[1], &a.step, &a.A[0], &a.A[1], &a.B[0], &a.B[1], &a.C};
-  for (int i = 0; i < 10; ++i) *views[i] = View{base + offsets[i] * stride + b, stride};
+  const long offsets[11] = {0,         v,         2 * v,     3 * v,     4 * v,    5 * v,
+                            6 * v,     6 * v + m, 6 * v + 2 * m, 6 * v + 3 * m, 6 * v + 4 * m};
+  View* views[11] = {&a.x[0], &a.x[1], &a.r[0], &a.r[1], &a.step, &a.ref, &a.A[0], &a.A[1], &a.B[0], &a.B[1], &a.C};
+  for (int i = 0; i < 11; ++i) *views[i] = View{base + offsets[i] * stride + b, stride};
   return a;
 }
 
 /** Why a problem stopped as stalled or non-finite, beyond the sweeps' reasons. */
 enum Reason : int {
   none = 0,
-  no_descent = 1,      ///< stalled: no step, the shift grown 40 times, was acceptable
-  no_definite_shift = 2  ///< non_finite: no shift made the Hessian positive definite (it is not finite)
+  no_descent = 1,      ///< stalled: no step, down to a vanishing radius, was acceptable
+  no_definite_shift = 2,  ///< non_finite: no shift made the Hessian positive definite (it is not finite)
+  domain_edge = 3         ///< non_finite: trial steps down to a vanishing radius reach non-finite values
 };
 
 /** One problem's record between iterations. */
@@ -88,7 +91,12 @@ struct State {
   int reason;             ///< a Reason
   double action;          ///< the discrete action at the iterate
   double best_residual;   ///< the smallest DEL residual of the accepted iterates
-  double lambda;          ///< the Levenberg-Marquardt shift to start from (0: none yet)
+  double lambda;          ///< the last shift taken, where the next subproblem's search starts
+  double delta;           ///< the trust radius in the shift's metric (0: not set yet)
+  int wd_active;          ///< the watchdog: Newton steps are being taken past a refused one
+  int wd_failed;          ///< the last watchdog was reverted: this iteration solves the subproblem
+  int wd_steps;           ///< Newton steps taken under the watchdog
+  double wd_action, wd_pred, wd_norm;  ///< at the reference point: action, predicted decrease, step size
   double shift;           ///< the shift of the last accepted step (0: the full Newton step)
   int shifted;            ///< the accepted steps that were shifted
   double rho;             ///< the last accepted step's ratio of actual to predicted decrease
@@ -258,6 +266,9 @@ PARDEL_HD inline void start(int N, const double* t, const double* h, const doubl
   ns.current = 0;
   ns.reason = none;
   ns.lambda = 0;
+  ns.delta = 0;
+  ns.wd_active = ns.wd_failed = ns.wd_steps = 0;
+  ns.wd_action = ns.wd_pred = ns.wd_norm = 0;
   ns.shift = 0;
   ns.shifted = 0;
   ns.rho = 0;
@@ -270,10 +281,86 @@ PARDEL_HD inline void start(int N, const double* t, const double* h, const doubl
   bs::decide(ns.s, st, 0, set);
 }
 
+/** |v|_M over the interior nodes (v taken as zero at nodes 0 and N): sqrt(v^T M v), M the
+ *  kinetic form (difference = 1) or the identity. */
+PARDEL_HD inline double metric_norm(int N, int D, const View& v, int difference) {
+  double sum = 0;
+  for (long i = D; i < static_cast<long>(N) * D; ++i) {
+    const double d = difference && i >= 2L * D ? v[i] - v[i - D] : v[i];
+    sum += d * d;
+  }
+  if (difference)
+    for (long i = (static_cast<long>(N) - 1) * D; i < static_cast<long>(N) * D; ++i) sum += v[i] * v[i];
+  return sqrt(sum);
+}
+
+/**
+ * The step of the trust-region subproblem at radius delta (|s|_M <= delta) into a.step: the shift
+ * lambda of H + lambda M whose step has |s|_M within 10 % of delta, by bisection on log lambda
+ * from the last shift (grown 4-fold until bracketed); a step still longer than delta is cut back
+ * to it (still a descent direction of the model). Returns its norm, 0 where no positive definite
+ * shift was found; *lambda is the shift taken.
+ */
+template <int D>
+PARDEL_HD inline double radius_step(int N, int difference, double delta, double largest, const Arrays<D>& a, int here,
+                                    double* lambda) {
+  const double tiny = 1e-14 * largest;
+  double lo = 0, hi = INFINITY, best = -1, best_norm = 0, l = bs::larger(*lambda, tiny);
+  bool step_is_best = false;  // a.step holds the step of `best`
+  for (int it = 0; it < 40; ++it) {
+    step_is_best = false;
+    if (!direction<D>(N, l, difference, a, here)) {
+      lo = l;
+    } else {
+      const double norm = metric_norm(N, D, a.step, difference);
+      best = l;
+      best_norm = norm;
+      step_is_best = true;
+      if (fabs(norm - delta) <= 0.1 * delta) break;
+      if (norm > delta) {
+        lo = l;
+      } else {
+        hi = l;
+        if (hi <= tiny) break;  // inside the radius at the smallest shift
+      }
+    }
+    if (isfinite(hi) && hi - lo <= 1e-9 * hi) break;
+    l = isfinite(hi) ? (lo > 0 ? sqrt(lo * hi) : 0.5 * hi) : 4 * l;
+  }
+  if (best < 0) return 0;
+  if (!step_is_best) {
+    if (!direction<D>(N, best, difference, a, here)) return 0;
+    best_norm = metric_norm(N, D, a.step, difference);
+  }
+  *lambda = best;
+  if (best_norm > 1.1 * delta) {
+    const double c = delta / best_norm;
+    for (long i = D; i < static_cast<long>(N) * D; ++i) a.step[i] *= c;
+    best_norm = delta;
+  }
+  return best_norm;
+}
+
+/** The iterate becomes the point in set `to`, already evaluated (`st`, `action`), and is decided
+ *  on as iteration iterations + 1. */
+template <int D>
+PARDEL_HD inline void take(State<D>& ns, int to, double action, const bs::Stats<D>& st, const bs::Settings& set) {
+  ns.current = to;
+  ns.action = action;
+  if (st.residual < ns.best_residual) ns.best_residual = st.residual;
+  bs::decide(ns.s, st, ns.s.iterations + 1, set);
+}
+
 /**
  * One Newton iteration of a running problem whose evaluation at the iterate is in set
- * ns.current: the full Newton step if the Hessian is positive definite, then shifted steps until
- * one is accepted, which becomes the iterate and is decided on.
+ * ns.current, by the rules of the CPU solver's trust-region Newton (runtime/src/trust_region.hpp),
+ * which differ here only in how the subproblem is solved (radius_step, with no step along
+ * negative curvature): the full Newton step of a positive definite Hessian first, whatever the
+ * radius; then trust-region steps at a shrinking radius; acceptance by the ratio of actual to
+ * predicted decrease of the action, by a decrease of the residual where the predicted decrease is
+ * at the action's round-off, or for a Newton step by a residual below 0.9 of the best; near a
+ * solution a refused Newton step taken anyway under the watchdog (four more Newton steps must
+ * bring the action below the reference point's, or the iteration returns there).
  */
 template <class Kernel, int D>
 PARDEL_HD inline void iterate(int N, const double* t, const double* h, const double* p, const bs::Settings& set,
@@ -284,58 +371,139 @@ PARDEL_HD inline void iterate(int N, const double* t, const double* h, const dou
   for (int k = 1; k <= N - 1; ++k)
     for (int i = 0; i < D; ++i)
       largest = bs::larger(largest, fabs(a.A[here][static_cast<long>(k) * D * D + i * D + i]));
+  if (!(largest > 0) || !isfinite(largest)) largest = 1;
   const View q = a.x[here], trial = a.x[there], r = a.r[here];
   const long n = (static_cast<long>(N) + 1) * D;
   for (int i = 0; i < D; ++i) {
     trial[i] = q[i];
     trial[n - D + i] = q[n - D + i];
   }
-  const bool newton = direction<D>(N, 0, set.difference, a, here);
-  bool definite = newton;
-  double lambda = 0, grow = 2;
-  for (int attempt = 0; attempt <= 40; ++attempt) {
-    if (!newton || attempt > 0) {
-      if (!(largest > 0) || !isfinite(largest)) break;
-      if (lambda == 0) {
-        lambda = bs::larger(ns.lambda, 1e-6 * largest);
-      } else {
-        lambda *= grow;
-        grow *= 2;
-      }
-      if (!direction<D>(N, lambda, set.difference, a, here)) continue;  // not yet positive definite
+  const double F = ns.action, r0 = ns.s.residual;
+  if (r0 < ns.best_residual) ns.best_residual = r0;
+  bool newton = !ns.wd_failed && direction<D>(N, 0, set.difference, a, here);
+  ns.wd_failed = 0;
+  if (ns.wd_active && (ns.wd_steps >= kWatchdogSteps || !newton)) {
+    // The watchdog found no decrease: back to its reference point, whose next step is solved
+    // within a radius below the refused Newton step.
+    ns.wd_active = 0;
+    ns.wd_failed = 1;
+    for (long i = 0; i < n; ++i) trial[i] = a.ref[i];
+    ns.delta = bs::larger(0, ns.delta < 0.5 * ns.wd_norm ? ns.delta : 0.5 * ns.wd_norm);
+    bs::Stats<D> st;
+    bs::clear(st);
+    const double action = evaluate<Kernel, D>(N, t, h, p, a, there, st);
+    take(ns, there, action, st, set);
+    return;
+  }
+  bool definite = newton, all_nonfinite = true;  // every trial so far reached a non-finite value
+  int nonfinite_trials = 0, nonfinite_node = -1;
+  for (int attempt = 0; attempt < 60; ++attempt) {
+    double lambda = 0, norm = 0;
+    const bool is_newton = newton;
+    if (newton) {
+      newton = false;  // tried once per iteration
+      norm = metric_norm(N, D, a.step, set.difference);
+      if (ns.delta <= 0) ns.delta = norm;
+    } else if (ns.delta <= 0) {
+      // An indefinite Hessian at the first step: the first positive definite shift, growing
+      // 4-fold from 1e-6 of the largest diagonal entry, sets the radius.
+      lambda = bs::larger(ns.lambda, 1e-6 * largest);
+      bool ok = false;
+      for (int i = 0; i < 60 && !(ok = direction<D>(N, lambda, set.difference, a, here)); ++i) lambda *= 4;
+      if (!ok) break;
+      norm = ns.delta = metric_norm(N, D, a.step, set.difference);
+      definite = true;
+    } else {
+      lambda = ns.lambda;
+      norm = radius_step<D>(N, set.difference, ns.delta, largest, a, here, &lambda);
+      if (!(norm > 0)) break;
       definite = true;
     }
     double slope = 0;  // r . step
     for (long i = D; i < n - D; ++i) slope += r[i] * a.step[i];
-    const double predicted = slope + 0.5 * curvature<D>(N, a, here);  // negative: the model's decrease
+    const double pred = -(slope + 0.5 * curvature<D>(N, a, here));  // the model's decrease
     for (long i = D; i < n - D; ++i) trial[i] = q[i] + a.step[i];
     bs::Stats<D> st;
     bs::clear(st);
-    const double action = evaluate<Kernel, D>(N, t, h, p, a, there, st);
-    if (st.bad_residual >= 0 || st.bad_value >= 0 || !isfinite(action)) continue;
-    const double rho = predicted < 0 ? (action - ns.action) / predicted : 0;
-    if (!(rho >= kAcceptRatio) && !(st.residual <= kResidualAccept * ns.best_residual)) continue;
-    if (lambda > 0) {
-      const double c = 2 * rho - 1;  // Nielsen's update
-      const double f = 1 - c * c * c;
-      ns.lambda = lambda * (f > 1.0 / 3 ? f : 1.0 / 3);
-      ++ns.shifted;
-    } else {
-      ns.lambda *= 1.0 / 3;
+    const double Fn = evaluate<Kernel, D>(N, t, h, p, a, there, st);
+    const bool finite = st.bad_residual < 0 && st.bad_value < 0 && isfinite(Fn);
+    // The CPU solver's judgement (trust_region.hpp, judge()).
+    bool accepted = false, by_residual = false;
+    double rho = 0;
+    if (finite) {
+      const double ared = F - Fn, roundoff = 1e-13 * (1 + fabs(F));
+      if (!(pred > roundoff)) {
+        accepted = (st.residual < r0) && (ared > -roundoff);
+        rho = accepted ? 1 : 0;
+      } else {
+        rho = ared / pred;
+        if (rho >= kAcceptRatio) {
+          accepted = true;
+        } else if (is_newton && st.residual <= kResidualAccept * ns.best_residual) {
+          accepted = by_residual = true;
+        }
+      }
     }
-    ns.shift = lambda;
-    ns.rho = rho;
-    ns.refused = attempt;
-    ns.current = there;
-    ns.action = action;
-    if (st.residual < ns.best_residual) ns.best_residual = st.residual;
-    bs::decide(ns.s, st, ns.s.iterations + 1, set);
-    return;
+    if (is_newton && finite && ns.wd_active) {
+      // Newton steps are taken as they come until the action falls below the reference point's by
+      // a fraction of what was predicted there, or the budget is spent.
+      ++ns.wd_steps;
+      if (Fn < ns.wd_action - 1e-4 * ns.wd_pred) {
+        ns.wd_active = 0;
+        accepted = true;
+      } else if (ns.wd_steps < kWatchdogSteps) {
+        accepted = true;
+      }
+    } else if (is_newton && finite && !accepted && !ns.wd_active && r0 <= kWatchdogResidual * ns.s.scale) {
+      // A full Newton step that the action refuses (a curved valley): taken anyway, with the
+      // present point kept as the reference to return to.
+      ns.wd_active = 1;
+      ns.wd_steps = 0;
+      ns.wd_action = F;
+      ns.wd_pred = pred;
+      ns.wd_norm = norm;
+      for (long i = 0; i < n; ++i) a.ref[i] = q[i];
+      accepted = true;
+      rho = 1;
+    }
+    if (accepted) {
+      if (rho < kShrinkRatio && !by_residual)
+        ns.delta = 0.5 * norm;
+      else if (rho > kExpandRatio && norm >= kBoundaryShare * ns.delta)
+        ns.delta = bs::larger(ns.delta, 2 * norm);
+      else if (by_residual || is_newton)
+        ns.delta = bs::larger(ns.delta, norm);
+      if (lambda > 0) {
+        ns.lambda = lambda;
+        ++ns.shifted;
+      }
+      ns.shift = lambda;
+      ns.rho = rho;
+      ns.refused = attempt;
+      take(ns, there, Fn, st, set);
+      return;
+    }
+    if (!finite) {
+      if (nonfinite_trials++ == 0) nonfinite_node = st.bad_residual >= 0 ? st.bad_residual : st.bad_value;
+    } else {
+      all_nonfinite = false;
+    }
+    if (is_newton && norm > ns.delta) continue;  // the full step beyond the radius: now within it
+    ns.delta = 0.25 * (ns.delta < norm ? ns.delta : norm);
+    if (!(ns.delta > 1e-15 * bs::larger(1.0, metric_norm(N, D, q, set.difference)))) break;
   }
-  // The iterate stays in set `here`; its record (residual, tests) is the last decision's.
+  // The iterate stays in set `here`; its record (residual, tests) is the last decision's. As the CPU
+  // solver decides: steps down to a vanishing one that reach non-finite values (all of them, or some
+  // while the residual is above its round-off level) mean the model's domain ends next to the
+  // iterate; otherwise the iteration stalled.
+  const double eps = 2.220446049250313e-16;
   if (!definite) {
     ns.s.status = bs::non_finite;
     ns.reason = no_definite_shift;
+  } else if (nonfinite_trials > 0 && (all_nonfinite || r0 > 10 * 16 * eps * ns.s.scale)) {
+    ns.s.status = bs::non_finite;
+    ns.reason = domain_edge;
+    ns.s.node = nonfinite_node;
   } else {
     ns.s.status = bs::stalled;
     ns.reason = no_descent;

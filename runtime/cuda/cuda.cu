@@ -18,6 +18,7 @@
 #include "batch_newton.hpp"
 #include "device_registry.hpp"
 #include "engine.hpp"
+#include "trust_region.hpp"
 #include "pardel/cuda.hpp"
 
 namespace pardel {
@@ -153,16 +154,8 @@ std::string record_message(const cuda_detail::ProblemRecord& r, const Options& o
                     static_cast<double>(options.max_iterations), r.residual, r.target) +
              (r.residual <= r.target ? unresolved : std::string());
     case bs::stalled:
-      if (r.reason == batch_newton::no_descent)
-        return format("newton stalled in iteration %.0f: no step of the Newton system, its shift grown 40 times, "
-                      "decreased the action or cut the DEL residual below 0.9 of its best; the DEL residual "
-                      "%.3g is ",
-                      static_cast<double>(r.iterations + 1), r.residual) +
-               (detail::at_round_off(r.residual, 16 * 2.220446049250313e-16 * r.scale)
-                    ? std::string("at the round-off level of this problem and the tolerance cannot be reached in "
-                                  "double precision")
-                    : std::string("far above the round-off level of this problem: the action's derivatives disagree "
-                                  "with its values here (a model that is not smooth at this iterate)")) +
+      if (r.reason == batch_newton::no_descent)  // the CPU solver's words for the same stop
+        return detail::newton_stalled(r.iterations + 1, r.residual, 16 * 2.220446049250313e-16 * r.scale).message +
                unresolved;
       return format("stalled: the DEL residual %.3g is at the round-off level %.3g of this problem and no component "
                     "has come 1%% closer to its own target in 200 iterations",
@@ -180,6 +173,12 @@ std::string record_message(const cuda_detail::ProblemRecord& r, const Options& o
         return format("newton: no shift made the Hessian of the action positive definite in iteration %.0f (its "
                       "entries are not finite); the last finite iterate is returned",
                       static_cast<double>(r.iterations + 1));
+      if (r.reason == batch_newton::domain_edge)
+        return "newton: in iteration " + std::to_string(r.iterations + 1) +
+               " trial steps, down to a vanishing radius, give either no decrease of the action or a non-finite DEL "
+               "residual or action" +
+               (r.node >= 0 ? " (first at node " + std::to_string(r.node) + ")" : std::string()) +
+               "; the last finite iterate is returned";
       return r.node >= 0 ? "non-finite DEL residual, value or singular diagonal block at node " +
                                std::to_string(r.node) + format(" (iteration %.0f); the last finite iterate is returned",
                                                                static_cast<double>(r.iterations))
