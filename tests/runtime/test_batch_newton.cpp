@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "barrier_channel.hpp"
+#include "batch_test_support.hpp"
 #include "batch_newton.hpp"
 #include "double_swing.hpp"
 #include "hardening_spring.hpp"
@@ -24,6 +25,9 @@
 #include "pardel/pardel.hpp"
 
 namespace {
+
+using batch_test::termination_of;
+using batch_test::wiggly_guesses;
 
 namespace bn = pardel::batch_newton;
 namespace bs = pardel::batch_sweep;
@@ -99,16 +103,6 @@ TEST(BatchNewtonHostPath, DirectionIsTheDenseSolve) {
   }
 }
 
-pardel::Termination termination_of(int status) {
-  switch (status) {
-    case bs::converged: return pardel::Termination::converged;
-    case bs::max_iterations: return pardel::Termination::max_iterations;
-    case bs::diverged: return pardel::Termination::diverged;
-    case bs::stalled: return pardel::Termination::stalled;
-    default: return pardel::Termination::non_finite;
-  }
-}
-
 bs::Settings settings_of(const pardel::Options& options) {
   bs::Settings set;
   set.tol = options.tol;
@@ -173,28 +167,6 @@ std::vector<bn::State<D>> compare(const pardel::Problem& base, const std::vector
     EXPECT_EQ(pardel::assess_point(problem, mine, 1).kind, pardel::PointKind::minimum);
   }
   return state;
-}
-
-/** Random wiggly guesses between random end points (the boundary values at nodes 0 and N). */
-std::vector<pardel::Trajectory> wiggly_guesses(const pardel::Problem& base, int B, double spread, double amplitude,
-                                               unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<pardel::Trajectory> out;
-  const int D = base.model->dim;
-  for (int b = 0; b < B; ++b) {
-    pardel::Problem p = base;
-    for (int i = 0; i < D; ++i) {
-      p.q0[i] += spread * u(rng);
-      p.qN[i] += spread * u(rng);
-    }
-    pardel::Trajectory tr = pardel::linear_guess(p);
-    const double phase = 3 * u(rng), a = amplitude * u(rng);
-    for (int k = 1; k < p.N; ++k)
-      for (int i = 0; i < D; ++i) tr.q[k * D + i] += a * std::sin(M_PI * k / p.N) * std::cos(phase + i);
-    out.push_back(tr);
-  }
-  return out;
 }
 
 TEST(BatchNewtonHostPath, ChannelConvergesToTheCpuAnswerInFewIterations) {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "barrier_channel.hpp"
+#include "batch_test_support.hpp"
 #include "batch_sweep.hpp"
 #include "double_swing.hpp"
 #include "hardening_spring.hpp"
@@ -21,6 +22,9 @@
 #include "pardel/pardel.hpp"
 
 namespace {
+
+using batch_test::termination_of;
+using batch_test::wiggly_guesses;
 
 namespace bs = pardel::batch_sweep;
 
@@ -36,16 +40,6 @@ PARDEL_SWEEP_OF(Spring, hardening_spring_trapezoid_sweep)
 PARDEL_SWEEP_OF(Swing, double_swing_midpoint_sweep)
 PARDEL_SWEEP_OF(Accel, min_accel3_trapezoid_alpha_1_sweep)
 #undef PARDEL_SWEEP_OF
-
-pardel::Termination termination_of(int status) {
-  switch (status) {
-    case bs::converged: return pardel::Termination::converged;
-    case bs::max_iterations: return pardel::Termination::max_iterations;
-    case bs::diverged: return pardel::Termination::diverged;
-    case bs::stalled: return pardel::Termination::stalled;
-    default: return pardel::Termination::non_finite;
-  }
-}
 
 /** Each problem (a guess holding its boundary values, params) by solve() and by host_sweeps. */
 template <class Kernel, int D>
@@ -101,28 +95,6 @@ pardel::Options jacobi_newton_options(long max_iterations) {
   o.iterative_refinement = pardel::Refinement::off;
   o.max_iterations = max_iterations;
   return o;
-}
-
-/** Random wiggly guesses between random end points (the boundary values at nodes 0 and N). */
-std::vector<pardel::Trajectory> wiggly_guesses(const pardel::Problem& base, int B, double spread, double amplitude,
-                                               unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<pardel::Trajectory> out;
-  const int D = base.model->dim;
-  for (int b = 0; b < B; ++b) {
-    pardel::Problem p = base;
-    for (int i = 0; i < D; ++i) {
-      p.q0[i] += spread * u(rng);
-      p.qN[i] += spread * u(rng);
-    }
-    pardel::Trajectory tr = pardel::linear_guess(p);
-    const double phase = 3 * u(rng), a = amplitude * u(rng);
-    for (int k = 1; k < p.N; ++k)
-      for (int i = 0; i < D; ++i) tr.q[k * D + i] += a * std::sin(M_PI * k / p.N) * std::cos(phase + i);
-    out.push_back(tr);
-  }
-  return out;
 }
 
 TEST(BatchSweepHostPath, ChannelIteratesAfterFewSweepsAndConvergedAnswers) {

@@ -1,0 +1,55 @@
+/**
+ * @file batch_test_support.hpp
+ * What the tests of the device solvers' host paths (test_batch_sweep.cpp, test_batch_newton.cpp)
+ * share: a device status as a pardel::Termination, and random wiggly guesses between random end
+ * points.
+ */
+#ifndef PARDEL_TESTS_BATCH_TEST_SUPPORT_HPP
+#define PARDEL_TESTS_BATCH_TEST_SUPPORT_HPP
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "batch_sweep.hpp"
+#include "pardel/pardel.hpp"
+
+namespace batch_test {
+
+/** A batch_sweep::Status as the CPU solver's termination. */
+inline pardel::Termination termination_of(int status) {
+  namespace bs = pardel::batch_sweep;
+  switch (status) {
+    case bs::converged: return pardel::Termination::converged;
+    case bs::max_iterations: return pardel::Termination::max_iterations;
+    case bs::diverged: return pardel::Termination::diverged;
+    case bs::stalled: return pardel::Termination::stalled;
+    default: return pardel::Termination::non_finite;
+  }
+}
+
+/** Random wiggly guesses between random end points (the boundary values at nodes 0 and N). */
+inline std::vector<pardel::Trajectory> wiggly_guesses(const pardel::Problem& base, int B, double spread,
+                                                      double amplitude, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<pardel::Trajectory> out;
+  const int D = base.model->dim;
+  for (int b = 0; b < B; ++b) {
+    pardel::Problem p = base;
+    for (int i = 0; i < D; ++i) {
+      p.q0[i] += spread * u(rng);
+      p.qN[i] += spread * u(rng);
+    }
+    pardel::Trajectory tr = pardel::linear_guess(p);
+    const double phase = 3 * u(rng), a = amplitude * u(rng);
+    for (int k = 1; k < p.N; ++k)
+      for (int i = 0; i < D; ++i) tr.q[k * D + i] += a * std::sin(M_PI * k / p.N) * std::cos(phase + i);
+    out.push_back(tr);
+  }
+  return out;
+}
+
+}  // namespace batch_test
+
+#endif  // PARDEL_TESTS_BATCH_TEST_SUPPORT_HPP
