@@ -1,20 +1,34 @@
 /**
  * @file batch_test_support.hpp
  * What the tests of the device solvers' host paths (test_batch_sweep.cpp, test_batch_newton.cpp)
- * share: a device status as a pardel::Termination, and random wiggly guesses between random end
- * points.
+ * share: a problem on a uniform grid, a device status as a pardel::Termination, and random wiggly
+ * guesses between random end points.
  */
 #ifndef PARDEL_TESTS_BATCH_TEST_SUPPORT_HPP
 #define PARDEL_TESTS_BATCH_TEST_SUPPORT_HPP
 
 #include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "batch_sweep.hpp"
 #include "pardel/pardel.hpp"
 
 namespace batch_test {
+
+/** A problem of model m's first discretization on a uniform grid from t = 0. */
+inline pardel::Problem problem_of(const pardel_model& m, double T, int N, std::vector<double> q0,
+                                  std::vector<double> qN) {
+  pardel::Problem p;
+  p.model = &m;
+  p.discretization = &m.discretizations[0];
+  p.T = T;
+  p.N = N;
+  p.q0 = std::move(q0);
+  p.qN = std::move(qN);
+  return p;
+}
 
 /** A batch_sweep::Status as the CPU solver's termination. */
 inline pardel::Termination termination_of(int status) {

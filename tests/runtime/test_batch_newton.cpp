@@ -26,6 +26,7 @@
 
 namespace {
 
+using batch_test::problem_of;
 using batch_test::termination_of;
 using batch_test::wiggly_guesses;
 
@@ -170,13 +171,7 @@ std::vector<bn::State<D>> compare(const pardel::Problem& base, const std::vector
 }
 
 TEST(BatchNewtonHostPath, ChannelConvergesToTheCpuAnswerInFewIterations) {
-  pardel::Problem base;
-  base.model = &barrier_channel_model;
-  base.discretization = &barrier_channel_model.discretizations[0];
-  base.T = 1.5;
-  base.N = 60;
-  base.q0 = {-0.3, 0};
-  base.qN = {0.4, 1};
+  const pardel::Problem base = problem_of(barrier_channel_model, 1.5, 60, {-0.3, 0}, {0.4, 1});
   const auto guesses = wiggly_guesses(base, 6, 0.2, 0.3, 7);
   std::vector<std::vector<double>> params;
   for (int b = 0; b < 6; ++b) params.push_back({0.3 - 0.1 * b, -0.5 + 0.2 * b, 0.02 * b});
@@ -185,13 +180,7 @@ TEST(BatchNewtonHostPath, ChannelConvergesToTheCpuAnswerInFewIterations) {
 }
 
 TEST(BatchNewtonHostPath, HardeningSpringWithATolerance) {
-  pardel::Problem base;
-  base.model = &hardening_spring_model;
-  base.discretization = &hardening_spring_model.discretizations[0];
-  base.T = 1;
-  base.N = 80;
-  base.q0 = {0.2};
-  base.qN = {-0.4};
+  const pardel::Problem base = problem_of(hardening_spring_model, 1, 80, {0.2}, {-0.4});
   const auto guesses = wiggly_guesses(base, 5, 0.3, 0.5, 11);
   pardel::Options o = newton_options();
   o.tol = 1e-11;
@@ -199,13 +188,7 @@ TEST(BatchNewtonHostPath, HardeningSpringWithATolerance) {
 }
 
 TEST(BatchNewtonHostPath, DoubleSwingFromAGuessWhereTheHessianIsIndefinite) {
-  pardel::Problem base;
-  base.model = &double_swing_model;
-  base.discretization = &double_swing_model.discretizations[0];
-  base.T = 1.6;
-  base.N = 40;
-  base.q0 = {0.3, -0.2};
-  base.qN = {-0.1, 0.4};
+  const pardel::Problem base = problem_of(double_swing_model, 1.6, 40, {0.3, -0.2}, {-0.1, 0.4});
   auto guesses = wiggly_guesses(base, 3, 0.2, 0.2, 3);
   std::vector<std::vector<double>> params = {{9.81}, {9.81}, {12.0}};
   // The straight guess's Hessian has a negative eigenvalue (long arcs of a swing): Newton's first
@@ -225,25 +208,13 @@ TEST(BatchNewtonHostPath, DoubleSwingFromAGuessWhereTheHessianIsIndefinite) {
 }
 
 TEST(BatchNewtonHostPath, OrderTwoInSpace) {
-  pardel::Problem base;
-  base.model = &min_accel3_model;
-  base.discretization = &min_accel3_model.discretizations[0];
-  base.T = 2;
-  base.N = 30;
-  base.q0 = {0, 0, 0, 1, 0, 0};
-  base.qN = {1, 1, -1, 0, 1, 0};
+  const pardel::Problem base = problem_of(min_accel3_model, 2, 30, {0, 0, 0, 1, 0, 0}, {1, 1, -1, 0, 1, 0});
   const auto guesses = wiggly_guesses(base, 3, 0.3, 0.4, 5);
   compare<Accel, 6>(base, guesses, std::vector<std::vector<double>>(3), newton_options(), 1e-8);
 }
 
 TEST(BatchNewtonHostPath, StopsAsTheCpuSolverDoes) {
-  pardel::Problem base;
-  base.model = &barrier_channel_model;
-  base.discretization = &barrier_channel_model.discretizations[0];
-  base.T = 1;
-  base.N = 12;
-  base.q0 = {0, 0};
-  base.qN = {0.5, 0};
+  const pardel::Problem base = problem_of(barrier_channel_model, 1, 12, {0, 0}, {0.5, 0});
   auto guesses = wiggly_guesses(base, 2, 0.0, 0.3, 1);
   guesses[1].q[6 * 2] = 1.0;  // a node on the wall x = 1: the barrier's derivatives divide by 1 - x^2 = 0
   const int N = base.N;

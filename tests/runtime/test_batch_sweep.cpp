@@ -23,6 +23,7 @@
 
 namespace {
 
+using batch_test::problem_of;
 using batch_test::termination_of;
 using batch_test::wiggly_guesses;
 
@@ -98,13 +99,7 @@ pardel::Options jacobi_newton_options(long max_iterations) {
 }
 
 TEST(BatchSweepHostPath, ChannelIteratesAfterFewSweepsAndConvergedAnswers) {
-  pardel::Problem base;
-  base.model = &barrier_channel_model;
-  base.discretization = &barrier_channel_model.discretizations[0];
-  base.T = 1.5;
-  base.N = 24;
-  base.q0 = {-0.3, 0};
-  base.qN = {0.4, 1};
+  const pardel::Problem base = problem_of(barrier_channel_model, 1.5, 24, {-0.3, 0}, {0.4, 1});
   const auto guesses = wiggly_guesses(base, 6, 0.2, 0.3, 7);
   std::vector<std::vector<double>> params;
   for (int b = 0; b < 6; ++b) params.push_back({0.3 - 0.1 * b, -0.5 + 0.2 * b, 0.02 * b});
@@ -117,13 +112,7 @@ TEST(BatchSweepHostPath, ChannelIteratesAfterFewSweepsAndConvergedAnswers) {
 }
 
 TEST(BatchSweepHostPath, NonlinearJacobiOnAHardeningSpring) {
-  pardel::Problem base;
-  base.model = &hardening_spring_model;
-  base.discretization = &hardening_spring_model.discretizations[0];
-  base.T = 1;
-  base.N = 30;
-  base.q0 = {0.2};
-  base.qN = {-0.4};
+  const pardel::Problem base = problem_of(hardening_spring_model, 1, 30, {0.2}, {-0.4});
   const auto guesses = wiggly_guesses(base, 5, 0.3, 0.5, 11);
   pardel::Options o = jacobi_newton_options(50000);
   o.method = pardel::Method::jacobi;
@@ -131,13 +120,7 @@ TEST(BatchSweepHostPath, NonlinearJacobiOnAHardeningSpring) {
 }
 
 TEST(BatchSweepHostPath, DoubleSwingMidpointWithATolerance) {
-  pardel::Problem base;
-  base.model = &double_swing_model;
-  base.discretization = &double_swing_model.discretizations[0];
-  base.T = 0.8;
-  base.N = 20;
-  base.q0 = {0.3, -0.2};
-  base.qN = {-0.1, 0.4};
+  const pardel::Problem base = problem_of(double_swing_model, 0.8, 20, {0.3, -0.2}, {-0.1, 0.4});
   const auto guesses = wiggly_guesses(base, 4, 0.2, 0.2, 3);
   std::vector<std::vector<double>> params = {{9.81}, {1.0}, {4.0}, {0.5}};
   pardel::Options o = jacobi_newton_options(40000);
@@ -146,25 +129,13 @@ TEST(BatchSweepHostPath, DoubleSwingMidpointWithATolerance) {
 }
 
 TEST(BatchSweepHostPath, OrderTwoInSpaceUsesThePivotedSolve) {
-  pardel::Problem base;
-  base.model = &min_accel3_model;
-  base.discretization = &min_accel3_model.discretizations[0];
-  base.T = 2;
-  base.N = 16;
-  base.q0 = {0, 0, 0, 1, 0, 0};
-  base.qN = {1, 1, -1, 0, 1, 0};
+  const pardel::Problem base = problem_of(min_accel3_model, 2, 16, {0, 0, 0, 1, 0, 0}, {1, 1, -1, 0, 1, 0});
   const auto guesses = wiggly_guesses(base, 3, 0.3, 0.4, 5);
   compare<Accel, 6>(base, guesses, std::vector<std::vector<double>>(3), jacobi_newton_options(6), 1e-12);
 }
 
 TEST(BatchSweepHostPath, OnTheWallIsNonFinite) {
-  pardel::Problem base;
-  base.model = &barrier_channel_model;
-  base.discretization = &barrier_channel_model.discretizations[0];
-  base.T = 1;
-  base.N = 12;
-  base.q0 = {0, 0};
-  base.qN = {0.5, 0};
+  const pardel::Problem base = problem_of(barrier_channel_model, 1, 12, {0, 0}, {0.5, 0});
   auto guesses = wiggly_guesses(base, 2, 0.0, 0.0, 1);
   guesses[1].q[6 * 2] = 1.0;  // a node on the wall x = 1: the barrier's derivatives divide by 1 - x^2 = 0
   std::vector<std::vector<double>> params = {{0, 0, 0.1}, {0, 0, 0.1}};
