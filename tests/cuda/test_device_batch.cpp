@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "batch_newton.hpp"
+#include "batch_test_support.hpp"
 #include "fuel_nav.hpp"
 #include "batch_entries.hpp"
 #include "pardel/cuda.hpp"
@@ -36,16 +37,7 @@ extern "C" const pardel_model pendulum_model, harmonic_model, bratu_model;
 
 namespace {
 
-pardel::Problem problem_of(const pardel_model& m, double T, int N, std::vector<double> q0, std::vector<double> qN) {
-  pardel::Problem p;
-  p.model = &m;
-  p.discretization = &m.discretizations[0];
-  p.T = T;
-  p.N = N;
-  p.q0 = std::move(q0);
-  p.qN = std::move(qN);
-  return p;
-}
+using batch_test::problem_of;
 
 pardel::Options options_of(pardel::Method method, long max_iterations) {
   pardel::Options o;

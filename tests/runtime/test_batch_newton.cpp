@@ -133,22 +133,14 @@ std::vector<bn::State<D>> compare(const pardel::Problem& base, const std::vector
   const int B = static_cast<int>(guesses.size()), N = base.N;
   const int np = base.model->nparams;
   const std::size_t per = static_cast<std::size_t>(N + 1) * D;
-  std::vector<double> q(B * per), p(static_cast<std::size_t>(B) * np);
-  for (int b = 0; b < B; ++b) {
-    std::copy(guesses[b].q.begin(), guesses[b].q.end(), q.begin() + b * per);
-    std::copy(params[b].begin(), params[b].end(), p.begin() + static_cast<long>(b) * np);
-  }
-  std::vector<double> t(N + 1), h(N, base.T / N), work(static_cast<std::size_t>(B * bn::values_per_problem<D>(N)));
-  for (int k = 0; k <= N; ++k) t[k] = base.t0 + base.T * k / N;
-  t[N] = base.t0 + base.T;
+  batch_test::FlatBatch f = batch_test::flatten(base, guesses, params);
+  std::vector<double>& q = f.q;
+  std::vector<double> work(static_cast<std::size_t>(B * bn::values_per_problem<D>(N)));
   std::vector<bn::State<D>> state(B);
-  bn::host_newton<Kernel, D>(B, N, q.data(), t.data(), h.data(), p.data(), np, settings_of(options), 3, work.data(),
-                             state.data());
+  bn::host_newton<Kernel, D>(B, N, q.data(), f.t.data(), f.h.data(), f.p.data(), np, settings_of(options), 3,
+                             work.data(), state.data());
   for (int b = 0; b < B; ++b) {
-    pardel::Problem problem = base;
-    problem.params = params[b];
-    problem.q0.assign(guesses[b].q.begin(), guesses[b].q.begin() + D);
-    problem.qN.assign(guesses[b].q.end() - D, guesses[b].q.end());
+    const pardel::Problem problem = batch_test::entry_of(base, guesses[b], params[b]);
     pardel::Trajectory tr = guesses[b];
     const pardel::Summary s = pardel::solve(problem, options, tr);
     SCOPED_TRACE("problem " + std::to_string(b) + ": " + s.message);

@@ -49,14 +49,10 @@ void compare(const pardel::Problem& base, const std::vector<pardel::Trajectory>&
   const int B = static_cast<int>(guesses.size()), N = base.N;
   const int np = base.model->nparams;
   const std::size_t per = static_cast<std::size_t>(N + 1) * D;
-  std::vector<double> q0(B * per), q1(B * per), p(static_cast<std::size_t>(B) * np);
-  for (int b = 0; b < B; ++b) {
-    std::copy(guesses[b].q.begin(), guesses[b].q.end(), q0.begin() + b * per);
-    std::copy(params[b].begin(), params[b].end(), p.begin() + static_cast<long>(b) * np);
-  }
-  std::vector<double> t(N + 1), h(N, base.T / N);
-  for (int k = 0; k <= N; ++k) t[k] = base.t0 + base.T * k / N;
-  t[N] = base.t0 + base.T;
+  batch_test::FlatBatch f = batch_test::flatten(base, guesses, params);
+  std::vector<double>& q0 = f.q;  // the guesses, then the iterates of even sweeps
+  std::vector<double> q1(B * per);
+  const std::vector<double>&p = f.p, &t = f.t, &h = f.h;
   bs::Settings set;
   set.keep = 1 - options.damping;
   set.steps = options.newton_substeps;
@@ -68,10 +64,7 @@ void compare(const pardel::Problem& base, const std::vector<pardel::Trajectory>&
   std::vector<bs::ProblemState<D>> state(B);
   bs::host_sweeps<Kernel, D>(B, N, q0.data(), q1.data(), t.data(), h.data(), p.data(), np, set, state.data());
   for (int b = 0; b < B; ++b) {
-    pardel::Problem problem = base;
-    problem.params = params[b];
-    problem.q0.assign(guesses[b].q.begin(), guesses[b].q.begin() + D);
-    problem.qN.assign(guesses[b].q.end() - D, guesses[b].q.end());
+    const pardel::Problem problem = batch_test::entry_of(base, guesses[b], params[b]);
     pardel::Trajectory tr = guesses[b];
     const pardel::Summary s = pardel::solve(problem, options, tr);
     SCOPED_TRACE("problem " + std::to_string(b) + ": " + s.message);
