@@ -15,6 +15,7 @@
 #include <map>
 #include <thread>
 
+#include "exit_codes.hpp"
 #include "pardel/app/sweep.hpp"
 #include "pardel/mpi_session.hpp"
 #include "pardel_cli/config.hpp"
@@ -33,7 +34,8 @@ namespace {
 
 const char* const kSweepExitCodesHelp =
     "Exit codes: 0 at least one variant converged (sweep.json counts the failures), 1 internal error\n"
-    "(e.g. an output file cannot be written), 2 invalid input (bad sweep file, scene or option),\n"
+    "(e.g. an output file cannot be written), 2 invalid input (bad sweep file, scene or option, or\n"
+    "every variant refused as invalid input),\n"
     "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the variants done), 8 no variant converged.";
 
 std::atomic<bool> g_sweep_interrupted{false};
@@ -129,11 +131,12 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
                         "sweep.png");
       }
       if (!args_.quiet) print_sweep_report(sweep, results, solutions, info, out_dir);
-      // Variants that could not be solved (refused by the memory estimate, an exception): each
-      // reason once on stderr, with how many variants it stopped and the first of them.
+      // Variants that could not be solved (refused by the memory estimate or as invalid input, an
+      // exception): each reason once on stderr, with how many variants it stopped and the first.
       std::map<std::string, std::pair<int, int>> errors;  // message -> (count, first variant)
+      const std::string invalid = to_string(Termination::invalid_input);
       for (const VariantResult& r : results) {
-        if (r.status != "error") continue;
+        if (r.status != "error" && r.status != invalid) continue;
         const auto it = errors.try_emplace(r.message, 0, r.id).first;
         ++it->second.first;
       }
@@ -150,6 +153,14 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
         std::fprintf(stderr, "pardel sweep: interrupted; %s holds the variants done (%zu of %zu; %zu not started)\n",
                      out_dir.c_str(), results.size(), total, total - std::min(results.size(), total));
         code = kSweepExitInterrupted;
+      } else if (!results.empty() && std::all_of(results.begin(), results.end(), [&invalid](const VariantResult& r) {
+                   return r.status == invalid;
+                 })) {
+        // Every variant refused as invalid input (an option the scene's solve refuses): the
+        // sweep's input is what is wrong, as for `pardel solve`.
+        std::fprintf(stderr, "pardel sweep: every variant is invalid input (see above and %s/variants.csv)\n",
+                     out_dir.c_str());
+        code = kExitUsage;
       } else if (solutions.empty()) {
         std::fprintf(stderr, "pardel sweep: no variant converged (see %s/variants.csv)\n", out_dir.c_str());
         code = kSweepExitNoSolution;

@@ -179,9 +179,32 @@ void read_sets(const SweepReader& r, const toml::table& root, const std::vector<
         r.fail(*array->get(i), fmt::format("set[{}] holds a line break; an override is KEY=VALUE on one line", i));
       }
       sweep.sets.push_back(item);
+      sweep.set_origins.push_back(fmt::format("{}: error: set[{}]", r.where(*array->get(i)), i));
     }
   }
   sweep.sets.insert(sweep.sets.end(), command_line_sets.begin(), command_line_sets.end());
+  sweep.set_origins.resize(sweep.sets.size());
+}
+
+/** An override of a varied key would be replaced by every variant's value unseen (and its value
+ *  never checked): refused, naming both. */
+void check_sets_against_axes(const Sweep& sweep) {
+  auto trimmed = [](std::string text) {
+    const auto first = text.find_first_not_of(" \t");
+    const auto last = text.find_last_not_of(" \t");
+    return first == std::string::npos ? std::string() : text.substr(first, last - first + 1);
+  };
+  for (std::size_t i = 0; i < sweep.sets.size(); ++i) {
+    const std::string key = trimmed(sweep.sets[i].substr(0, sweep.sets[i].find('=')));
+    for (const VaryAxis& axis : sweep.axes) {
+      if (axis.key != key) continue;
+      const std::string what = sweep.set_origins[i].empty()
+                                   ? fmt::format("--set {}: error:", sweep.sets[i])
+                                   : fmt::format("{} = \"{}\":", sweep.set_origins[i], sweep.sets[i]);
+      throw SceneError(fmt::format("{} the sweep varies {} ({}): each variant's value would replace this override",
+                                   what, key, axis.where));
+    }
+  }
 }
 
 /** [[vary]]: the varied keys, each once. */
@@ -228,8 +251,17 @@ void load_configurations(const std::string& source_name, const ModelResolver& re
     try {
       scene = load_scene(sweep.scene_path, overrides, resolve, model_names);
     } catch (const SceneError& error) {
-      // A bad varied value: say which; errors of the base scene or of `set` speak for themselves.
+      // A bad varied value, or a bad entry of the sweep file's `set`: say which, where; errors of
+      // the base scene or of the command line's --set speak for themselves.
       const std::string what = error.what();
+      for (std::size_t i = 0; i < sweep.sets.size(); ++i) {
+        const std::string prefix = "--set " + sweep.sets[i] + ": ";
+        if (!sweep.set_origins[i].empty() && what.rfind(prefix, 0) == 0) {
+          std::string reason = what.substr(prefix.size());
+          if (reason.rfind("error: ", 0) == 0) reason = reason.substr(7);
+          throw SceneError(fmt::format("{} = \"{}\": {}", sweep.set_origins[i], sweep.sets[i], reason));
+        }
+      }
       for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
         if (what.find("--set " + sweep.axes[a].key + "=") != std::string::npos) {
           throw SceneError(fmt::format("{}: error: vary {} = {}: {}", sweep.axes[a].where, sweep.axes[a].key,
@@ -395,6 +427,7 @@ Sweep parse_sweep(std::string_view text, const std::string& source_name,
   read_scene_key(r, root, source_name, sweep);
   read_sets(r, root, command_line_sets, sweep);
   read_axes(r, root, sweep);
+  check_sets_against_axes(sweep);
   load_configurations(source_name, resolve, model_names, sweep);
   const pardel_model& model = *sweep.configurations.front().model;
   const int ncoords = model.ncoords;

@@ -166,7 +166,8 @@ void write_sweep_outputs(const Sweep& sweep, const std::vector<VariantResult>& r
                        r.iterations, format_double(r.residual), format_double(r.action), format_double(r.cost),
                        r.converged() ? csv_cell(certificate_verdict(r)) : "",
                        i < solution_of.size() && solution_of[i] > 0 ? std::to_string(solution_of[i]) : "",
-                       r.status == "error" ? csv_cell(r.message) : "", format_double(r.seconds));
+                       r.status == "error" || r.status == "invalid_input" ? csv_cell(r.message) : "",
+                       format_double(r.seconds));
     return next < results.size();
   });
 

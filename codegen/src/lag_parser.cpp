@@ -6,6 +6,7 @@
  */
 #include "pardel_codegen/lag_parser.hpp"
 
+#include <algorithm>
 #include <sstream>
 #include <string_view>
 
@@ -94,19 +95,53 @@ bool LagModel::time_dependent() const {
   return lagrangian.has(time) || (has_clock && clock.has(time));
 }
 
+namespace {
+
+/** Whether text is well-formed UTF-8 (a file that is not text shows its bytes as '?'). */
+bool valid_utf8(const std::string& text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    const int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : -1;
+    if (extra < 0 || i + static_cast<std::size_t>(extra) >= text.size() + (extra == 0 ? 1 : 0)) return false;
+    for (int k = 1; k <= extra; ++k)
+      if ((static_cast<unsigned char>(text[i + static_cast<std::size_t>(k)]) >> 6) != 0x2) return false;
+    i += static_cast<std::size_t>(extra) + 1;
+  }
+  return true;
+}
+
+}  // namespace
+
 std::string lag_diagnostic(const std::string& filename, const std::string& source_line, int line, int col,
                            const std::string& message) {
   std::ostringstream out;
   out << filename << ':' << line << ':' << col << ": error: " << message << '\n';
-  std::string shown;
-  std::string caret;
-  for (std::size_t i = 0; i < source_line.size(); ++i) {
-    unsigned char c = static_cast<unsigned char>(source_line[i]);
-    char s = (c == '\t') ? '\t' : (c < 0x20 || c == 0x7f) ? '?' : static_cast<char>(c);
-    shown += s;
-    if (static_cast<int>(i) + 1 < col) caret += (c == '\t') ? '\t' : ' ';
+  // A long line is shown as a window of kShown bytes around the column, cut between characters
+  // and marked "..." where cut; control bytes, and every byte >= 0x80 of a line that is not UTF-8
+  // (a binary file named as a model), as '?'.
+  constexpr std::size_t kShown = 160;
+  const std::size_t at = col > 0 ? static_cast<std::size_t>(col - 1) : 0;
+  std::size_t begin = 0, end = source_line.size();
+  if (end > kShown) {
+    begin = at > kShown / 2 ? std::min(at - kShown / 2, end - kShown) : 0;
+    end = std::min(end, begin + kShown);
+    auto continuation = [&](std::size_t i) {
+      return i < source_line.size() && (static_cast<unsigned char>(source_line[i]) >> 6) == 0x2;
+    };
+    while (begin > 0 && continuation(begin)) --begin;
+    while (end < source_line.size() && continuation(end)) ++end;
   }
-  while (static_cast<int>(caret.size()) + 1 < col) caret += ' ';
+  const bool utf8 = valid_utf8(source_line);
+  std::string shown = begin > 0 ? "..." : "";
+  std::string caret = begin > 0 ? "   " : "";
+  for (std::size_t i = begin; i < end; ++i) {
+    const unsigned char c = static_cast<unsigned char>(source_line[i]);
+    const char s = (c == '\t') ? '\t' : (c < 0x20 || c == 0x7f || (c >= 0x80 && !utf8)) ? '?' : static_cast<char>(c);
+    shown += s;
+    if (i < at) caret += (c == '\t') ? '\t' : ' ';
+  }
+  if (end < source_line.size()) shown += "...";
+  while (caret.size() + begin - (begin > 0 ? 3 : 0) < at && caret.size() < kShown + 3) caret += ' ';
   out << "  " << shown << '\n' << "  " << caret << '^';
   return out.str();
 }

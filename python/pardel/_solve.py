@@ -214,6 +214,10 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
     """solve_batch's work (unannotated: it rebinds its arguments to their checked forms)."""
     where = "pardel.solve_batch"
     _check_model(where, "model", model)
+    for name in ("on_iteration", "checkpoint"):
+        if name in options:
+            raise TypeError("%s: %s is pardel.solve's; a batch takes none (each problem's solve runs "
+                            "inside the batch, which Ctrl-C stops)" % (where, name))
     if q0 is None or qN is None:
         raise TypeError("%s: missing argument %s" % (where, "q0" if q0 is None else "qN"))
     sizes = {}
@@ -259,6 +263,7 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
     else:
         base_params = None
     arguments = _solve_arguments(m, q0[0], qN[0], T, N, None, None, dict(options, params=base_params, threads=threads), where)
+    _one_guess(where, guess is not None, arguments)
     scene = Scene(_core_call(where, _pardel.scene_from_arguments, os.fsencode(m.spec), arguments, m._handle, where))
     if guess is not None:
         guess = batch_of(guess, 2)
@@ -299,7 +304,14 @@ def _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options, where="p
     _guess_arrays(guess, where)
     _check_callback(where, "on_iteration", on_iteration)
     arguments.update(_checked_options(where, options))
+    _one_guess(where, guess is not None, arguments)
     return arguments
+
+
+def _one_guess(where, guess_given, arguments):
+    """A guess array and the polyline option both say where to start: refused, not one chosen."""
+    if guess_given and arguments.get("polyline") is not None:
+        raise PardelError("%s: give guess or polyline, not both (each is a starting trajectory)" % where)
 
 
 def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int] = None,

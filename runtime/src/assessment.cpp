@@ -521,6 +521,7 @@ bool classify_indefinite(PointAssessment& out) {
     out.note = format("a saddle of the action: the Hessian has %.0f negative eigenvalue(s) (index %.0f)",
                       static_cast<double>(out.negative), static_cast<double>(out.negative));
     if (out.zero > 0) out.note += format(" and %.0f zero one(s)", static_cast<double>(out.zero));
+    if (out.positive <= 0 && out.zero <= 0) out.note += "; every eigenvalue is negative: a local maximum of the action";
     return true;
   }
   if (out.zero > 0) {

@@ -42,7 +42,8 @@ std::string batch_refusal(const Problem& base, const Options& options, const Opt
   at_once.threads = threads;
   const std::string refusal = memory_refusal(base, at_once, all, machine_memory());
   if (refusal.empty()) return "";
-  return "a batch of " + std::to_string(count) + " problems: " + refusal;
+  return "a batch of " + std::to_string(count) + " problems: " + refusal +
+         " (for a batch: or fewer problems per call, or fewer threads)";
 }
 
 }  // namespace

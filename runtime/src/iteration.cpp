@@ -137,9 +137,11 @@ bool Iteration::times_stop_increasing() {
     if (!(ctx_.t[static_cast<std::size_t>(k) + 1] > ctx_.t[static_cast<std::size_t>(k)])) bad = k;
   if (partition_.all(bad < 0)) return false;
   std::string where = "on an interval";
-  if (bad >= 0)
-    where = "on interval " + std::to_string(bad) +
-            format(" (t = %.6g to %.6g)", ctx_.t[static_cast<std::size_t>(bad)], ctx_.t[static_cast<std::size_t>(bad) + 1]);
+  if (bad >= 0) {
+    auto time = [](double t) { return std::isfinite(t) ? format("%.6g", t) : std::string("a value that is not finite"); };
+    where = "on interval " + std::to_string(bad) + " (t = " + time(ctx_.t[static_cast<std::size_t>(bad)]) + " to " +
+            time(ctx_.t[static_cast<std::size_t>(bad) + 1]) + ")";
+  }
   const bool start = iteration_ == 0 && level_.level_it == 0 && !resumed_level_;
   if (start) {
     finish(Termination::invalid_input,

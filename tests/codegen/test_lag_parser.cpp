@@ -62,11 +62,22 @@ TEST_P(BadLagFile, ReportsTheExpectedLineColumnAndMessage) {
     const std::string head = path + ":" + std::to_string(line) + ":" + std::to_string(col) + ": error: ";
     const std::string what = e.what();
     EXPECT_EQ(what.rfind(head, 0), 0u) << what;
-    // The source line and a caret under the column follow the message.
+    // The source line (a window of it, where long) and a caret under the column follow the message.
     const std::size_t caret_line = what.rfind('\n');
     ASSERT_NE(caret_line, std::string::npos);
     EXPECT_EQ(what.back(), '^');
-    EXPECT_EQ(what.size() - caret_line - 1, static_cast<std::size_t>(2 + col)) << what;
+    std::ifstream again(path);
+    std::string source;
+    for (int l = 0; l < line; ++l) std::getline(again, source);
+    if (source.size() <= 160) {
+      EXPECT_EQ(what.size() - caret_line - 1, static_cast<std::size_t>(2 + col)) << what;
+    } else {
+      const std::size_t shown_line = what.rfind('\n', caret_line - 1);
+      const std::string shown = what.substr(shown_line + 3, caret_line - shown_line - 3);
+      const std::size_t at = what.size() - caret_line - 1 - 3;  // the caret's index in `shown`
+      ASSERT_LT(at, shown.size()) << what;
+      EXPECT_EQ(shown[at], source[static_cast<std::size_t>(col - 1)]) << what;
+    }
   }
 }
 
@@ -215,3 +226,36 @@ TEST(LagParser, EmptyFileReportsTheMissingModel) {
 }
 
 }  // namespace
+
+TEST(LagDiagnostic, ALongLineIsShownAsAWindowAroundTheColumn) {
+  // A line of 100 000 bytes: the diagnostic shows 160 bytes around column 50 000, cut at
+  // character boundaries (two-byte characters throughout) and marked "...", with the caret under
+  // the column's byte.
+  std::string line;
+  for (int i = 0; line.size() < 100000; ++i) line += "+v" + std::to_string(i) + "\xc3\xa9";
+  const std::string d = pardel_codegen::lag_diagnostic("long.lag", line, 3, 50000, "too long");
+  EXPECT_LT(d.size(), 600u) << d.size();
+  const std::size_t first = d.find('\n'), second = d.find('\n', first + 1);
+  ASSERT_NE(second, std::string::npos);
+  const std::string shown = d.substr(first + 3, second - first - 3), caret = d.substr(second + 3);
+  EXPECT_EQ(shown.substr(0, 3), "...");
+  EXPECT_EQ(shown.substr(shown.size() - 3), "...");
+  EXPECT_NE((shown.front() & 0xC0), 0x80);
+  // The caret's byte in the window is the line's byte 49 999.
+  const std::size_t caret_at = caret.size() - 1;
+  ASSERT_EQ(caret.back(), '^');
+  const std::size_t window_start = line.find(shown.substr(3, 40));
+  ASSERT_NE(window_start, std::string::npos);
+  EXPECT_EQ(window_start + (caret_at - 3), 49999u);
+}
+
+TEST(LagDiagnostic, BytesOfAFileThatIsNotTextAreShownAsQuestionMarks) {
+  const std::string line = std::string("\x7f" "ELF\x02\x01\x01", 7) + std::string("\x90\xff\xfe", 3) + "x";
+  const std::string d = pardel_codegen::lag_diagnostic("/bin/ls", line, 1, 1, "unexpected byte 0x7f");
+  const std::string shown = d.substr(d.find('\n') + 3, d.find('\n', d.find('\n') + 1) - d.find('\n') - 3);
+  EXPECT_EQ(shown, "?ELF??????x");
+  // UTF-8 text is shown as it is.
+  const std::string text = "L = \xce\xbb*x";
+  const std::string t = pardel_codegen::lag_diagnostic("u.lag", text, 1, 5, "unknown");
+  EXPECT_NE(t.find(text), std::string::npos);
+}

@@ -150,3 +150,26 @@ def test_a_batch_too_large_for_the_machine_is_refused_before_solving():
     # 1000 trajectories of 50 million nodes: 1.2 TB for the results alone.
     with pytest.raises(pardel.PardelError, match=r"a batch of 1000 problems: grid.N = 50000000 needs an estimated"):
         pardel.solve_batch(MODEL, q0=np.zeros((1000, 2)), qN=[0.5, 0.5], T=T, N=50000000)
+
+
+def test_a_refused_problem_reports_no_residual_action_or_cost():
+    # A mass of zero makes the Lagrangian degenerate for that problem alone: invalid_input, with
+    # NaN (None in its summary) where nothing was computed, never zeros that read as a solution.
+    lag = "model springy\ncoords x\nparam m = 1\nL = 1/2*m*x'^2 - 1/2*x^2\n"
+    b = pardel.solve_batch(lag, q0=[0], qN=[1], T=1.0, N=20, params={"m": np.array([1.0, 0.0, 2.0])})
+    assert list(b.status) == ["converged", "invalid_input", "converged"]
+    assert np.isnan(b.residual[1]) and np.isnan(b.action[1]) and np.isnan(b.cost[1])
+    assert np.all(np.isfinite(b.residual[[0, 2]]))
+    summary = b[1].summary
+    assert summary["residual"] is None and summary["action"] is None and summary["cost"]["value"] is None
+
+
+def test_a_batch_refuses_what_it_does_not_take():
+    with pytest.raises(pardel.PardelError, match=r"give guess or polyline, not both"):
+        pardel.solve_batch(MODEL, q0=[0, 0], qN=[0.2, 0.1], T=T, N=N, guess=np.zeros((3, 2)),
+                           polyline=[[0, 0], [0.1, 0.5], [0.2, 0.1]])
+    with pytest.raises(TypeError, match=r"on_iteration is pardel.solve's; a batch takes none"):
+        pardel.solve_batch(MODEL, q0=[0, 0], qN=[0.2, 0.1], T=T, N=N, on_iteration=lambda *a: True)
+    with pytest.raises(pardel.PardelError, match=r"give guess or polyline, not both"):
+        pardel.solve(MODEL, q0=[0, 0], qN=[0.2, 0.1], T=T, N=N, guess=np.zeros((3, 2)),
+                     polyline=[[0, 0], [0.1, 0.5], [0.2, 0.1]])

@@ -184,6 +184,46 @@ TEST(SweepCommand, NoConvergedVariantExitsWithEight) {
   EXPECT_TRUE(summary["best"].is_null());
 }
 
+TEST(SweepCommand, EveryVariantInvalidExitsWithTwoAndSaysWhy) {
+  // A mass of zero makes the model degenerate: each variant is refused as invalid input, the
+  // reason on stderr and in variants.csv's error column, no residual or action, and exit 2.
+  const TempDir dir("invalid");
+  std::ofstream(dir / "spring.lag") << "model zero_mass_spring\ncoords x\nparam m = 1\nL = 1/2*m*x'^2 - 1/2*x^2\n";
+  std::ofstream(dir / "spring.toml") << "model = \"spring.lag\"\n[grid]\nT = 1.0\nN = 20\n[boundary]\nq0 = [0.0]\n"
+                                     << "qN = [1.0]\n";
+  const std::string sweep = dir / "zero.toml";
+  std::ofstream(sweep) << "scene = \"spring.toml\"\nset = [\"params.m=0\"]\n[random_guesses]\ncount = 2\nspread = 0.5\n";
+  const Result r = run(pardel("sweep '" + sweep + "' --out '" + dir / "out" + "' --quiet --no-plot"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("pardel sweep: 2 variants not solved (first: variant 0): "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("every variant is invalid input"), std::string::npos) << r.err;
+  const std::vector<std::string> rows = lines(slurp(dir / "out/variants.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    EXPECT_NE(rows[i].find(",invalid_input,0,nan,nan,nan,"), std::string::npos) << rows[i];
+    EXPECT_NE(rows[i].find("is degenerate"), std::string::npos) << rows[i];
+  }
+}
+
+TEST(SweepCommand, OverridesOfVariedKeysAndBadSetEntriesAreRefusedWithTheirPlace) {
+  const TempDir dir("sets");
+  const std::string scene = std::string(PARDEL_SCENES_DIR) + "/zermelo_1.toml";
+  const std::string varied = dir / "varied.toml";
+  std::ofstream(varied) << "scene = \"" << scene << "\"\n[[vary]]\nkey = \"grid.N\"\nvalues = [40, 60]\n";
+  // --set of a varied key: each variant's value would replace it unseen (and it was never checked).
+  Result r = run(pardel("sweep '" + varied + "' --out '" + dir / "out" + "' --quiet --set grid.N=abc"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "--set grid.N=abc: error: the sweep varies grid.N (" + varied +
+                       ":2:1): each variant's value would replace this override\n");
+  // The sweep file's own set: its entry's place in the file.
+  const std::string bad = dir / "bad_set.toml";
+  std::ofstream(bad) << "scene = \"" << scene << "\"\nset = [\"solver.method=newton\", \"grid.NN=3\"]\n";
+  r = run(pardel("sweep '" + bad + "' --out '" + dir / "out" + "' --quiet"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err.rfind(bad + ":2:32: error: set[1] = \"grid.NN=3\": unknown key 'grid.NN'", 0), 0u) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(SweepCommand, SigtermStopsTheSweepAndKeepsWhatWasDone) {
   // Jacobi-Newton needs some 24 000 sweeps on this scene (0.6 s a variant on the development
   // machine): ten variants take far longer than the two seconds before the signal.

@@ -398,16 +398,18 @@ struct Summary {
   long iterations = 0;
   int N = 0;
   int threads = 1;
-  double residual = 0;
-  double action = 0;
-  double final_time = 0;  ///< t_N (the travel time under free_final_time)
+  // What a solve computes is NaN until it does: a refused problem (invalid_input) reports no
+  // residual, action or time rather than zeros that read as a perfect answer.
+  double residual = std::numeric_limits<double>::quiet_NaN();
+  double action = std::numeric_limits<double>::quiet_NaN();
+  double final_time = std::numeric_limits<double>::quiet_NaN();  ///< t_N (the travel time under free_final_time)
   double wall_seconds = 0;
   /** Wall time of the point assessment at the end of the solve (the factorization it needed, where
    *  the method held none, and its Lanczos runs, with the eigenvector estimates on the nested
    *  levels that start them), included in wall_seconds; 0 where nothing was assessed. */
   double assessment_seconds = 0;
-  double residual_floor = 0;  ///< round-off level of the residual at the returned iterate
-  double tolerance = 0;       ///< the residual that counted as converged (Options::rtol or tol)
+  double residual_floor = std::numeric_limits<double>::quiet_NaN();  ///< round-off level of the residual at the returned iterate
+  double tolerance = std::numeric_limits<double>::quiet_NaN();       ///< the residual that counted as converged (Options::rtol or tol)
   PointAssessment point;      ///< what the returned trajectory is (minimum, saddle, degenerate)
   /** The estimated error of the coordinates at the nodes (Options::error_estimate): Richardson's
    *  estimate of the discretization error, max over the common nodes of the two grids and over the

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -57,6 +58,9 @@ struct Sweep {
   std::string path;          ///< the sweep file
   std::string scene_path;    ///< the base scene (resolved against the sweep file's folder)
   std::vector<std::string> sets;  ///< overrides of the base scene for every variant (file, then command line)
+  /** Per override, where the sweep file holds it ("FILE:LINE:COL: error: set[i]"); empty for the
+   *  command line's. */
+  std::vector<std::string> set_origins;
   std::vector<VaryAxis> axes;
   std::vector<Scene> configurations;  ///< one per combination of axis values (last axis fastest)
   std::vector<std::vector<std::string>> configuration_values;  ///< the axis values of each configuration
@@ -110,9 +114,9 @@ struct VariantResult {
   std::string status;   ///< to_string(Termination), or "error" when the solve threw
   std::string message;
   long iterations = 0;
-  double residual = 0;
-  double action = 0;
-  double cost = 0;      ///< physical_cost(...).value
+  double residual = std::numeric_limits<double>::quiet_NaN();  ///< NaN where not computed (not solved)
+  double action = std::numeric_limits<double>::quiet_NaN();
+  double cost = std::numeric_limits<double>::quiet_NaN();      ///< physical_cost(...).value
   double seconds = 0;
   bool hessian_positive_definite = false;
   long inertia_negative = 0;
