@@ -2,8 +2,8 @@
  * @file batch_newton.hpp
  * The single-source core of the batched Newton solver: one problem's Newton iteration on the
  * whole DEL system, as PARDEL_HD functions that the device solver (batch_device.cuh) runs with
- * one thread per problem, and that host_newton() below runs in a plain loop (the host path,
- * compiled by any C++ compiler and tested on every build).
+ * one thread per problem, and that host_newton() below runs in plain loops over the same layout
+ * (the host path, compiled by any C++ compiler and tested on every build).
  *
  * Each iteration follows the CPU solver's trust-region Newton (runtime/src/trust_region.hpp, its
  * constants in runtime/src/constants.hpp): the full Newton step of a positive definite Hessian
@@ -24,9 +24,9 @@
  * each accepted step are the sweeps' (batch_sweep::decide: the CPU solver's residual, relative and
  * per-component tests).
  *
- * A problem's arrays are Views with a stride: on the host a problem's values are contiguous
- * (stride 1); on the device the batch's problems are interleaved (stride B, element i of problem b
- * at i B + b), so that the threads of a warp, one problem each, read consecutive addresses.
+ * A problem's arrays are Views with a stride: a batch's problems interleaved (stride B, element i
+ * of problem b at i B + b), so that the threads of a warp, one problem each, read consecutive
+ * addresses (the device, and host_newton), or one problem's values contiguous (stride 1).
  */
 #ifndef PARDEL_CUDA_BATCH_NEWTON_HPP
 #define PARDEL_CUDA_BATCH_NEWTON_HPP
@@ -106,8 +106,9 @@ struct State {
 /**
  * Evaluates the problem at set `which`'s values: the action (returned), and at each interior node
  * the DEL residual (r), the diagonal Hessian block (A) and the coupling block to the next interior
- * node (B) of that set, with the residual's sizes folded into `st` as the sweeps fold them (and the largest |x|,
- * the first node whose value is not finite). `Kernel::full` is the model's full kernel.
+ * node (B) of that set, with the residual's sizes folded into `st` as the sweeps fold them (and
+ * the largest |x|, the first node whose value is not finite). `Kernel::full` is the model's full
+ * kernel.
  */
 template <class Kernel, int D>
 PARDEL_HD inline double evaluate(int N, const double* t, const double* h, const double* p, const Arrays<D>& a,
