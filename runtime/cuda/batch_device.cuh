@@ -293,7 +293,6 @@ std::string run_batch(const DeviceBatch& in, DeviceBatchResult& result) {
   return "";
 }
 
-
 namespace bn = pardel::batch_newton;
 
 constexpr int kNewtonBlock = 64;
@@ -319,6 +318,7 @@ __global__ void newton_start_kernel(int B, int N, double* work, const double* __
     bs::start(state[b].s);
     state[b].s.status = bs::not_started;
     state[b].current = 0;
+    state[b].reason = bn::none;
     return;
   }
   bn::State<D> ns;
