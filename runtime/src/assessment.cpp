@@ -570,6 +570,10 @@ bool newton_correction(Context& ctx, std::vector<double>& delta) {
   bool solved = false;
   with_hessian(ctx, [&](auto& H) {
     if (!H.factor_ldlt() && !H.factor_indefinite()) return;
+    // The DEL residual at ctx.q, evaluated here: a method may end without writing ctx.res (the
+    // fused Jacobi sweeps keep only its norm), and a stale or zero res would make the correction,
+    // and the error estimate from it, zero.
+    if (compute_residual(ctx) >= 0) return;
     H.newton_correction(ctx, delta);
     solved = true;
   });

@@ -22,9 +22,10 @@ class LevelEigenvectors;
 void assess(Context& ctx, PointAssessment& out);
 
 /** Into delta (the unknowns of nodes 1..N-1, node after node), the Newton correction -H^-1 r at
- *  ctx.q, H the unshifted Hessian there (evaluating the full kernel if needed) factored by block
- *  LDL^T, or where that fails by the indefinite factorization; false where neither can (a
- *  singular H, a non-finite second derivative). */
+ *  ctx.q: r the DEL residual evaluated there (ctx.res and the residual fields rewritten), H the
+ *  unshifted Hessian there (evaluating the full kernel if needed) factored by block LDL^T, or where
+ *  that fails by the indefinite factorization; false where neither can (a singular H, a
+ *  non-finite second derivative or residual). */
 bool newton_correction(Context& ctx, std::vector<double>& delta);
 
 /** Whether a solve that ended with `termination` has its point assessed: only a converged one.

@@ -234,18 +234,23 @@ TEST(ErrorEstimate, TheSolvesOwnErrorIsInTheEstimate) {
   // galerkin_gauss(s=3, 4) on x'' = 6x^2 (a = 1) at the default rtol: on these grids the
   // discretization error is near or below what the tolerance leaves. solve_error (the Newton
   // correction at the answer) is checked against the distance to the discrete solution itself (a
-  // solve at rtol 1e-15, converged at its round-off level), and the estimate, which includes it,
-  // against the true error at the common nodes.
+  // solve by Newton at rtol 1e-15, converged at its round-off level), and the estimate, which
+  // includes it, against the true error at the common nodes. Every method's answer is checked:
+  // the Jacobi methods end without the Newton system of their own, their correction is made at
+  // the answer after the solve.
   int compared = 0;
+  for (pardel::Method method : {pardel::Method::newton, pardel::Method::jacobi, pardel::Method::jacobi_newton})
   for (int stages : {3, 4}) {
     for (int N : {8, 16, 32}) {
+      SCOPED_TRACE(pardel::to_string(method));
       const pardel::Problem p = pole_problem(stages, N, 1.0);
       pardel::Options o;
-      o.method = pardel::Method::newton;
+      o.method = method;
       pardel::Trajectory tr = pardel::linear_guess(p);
       const pardel::Summary s = pardel::solve(p, o, tr);
       ASSERT_TRUE(s.converged()) << s.brief_report();
       pardel::Options exact_o = o;
+      exact_o.method = pardel::Method::newton;
       exact_o.rtol = 1e-15;
       exact_o.error_estimate = false;
       pardel::Trajectory discrete = tr;
@@ -257,8 +262,8 @@ TEST(ErrorEstimate, TheSolvesOwnErrorIsInTheEstimate) {
         distance = std::max(distance, std::fabs(tr.node(k)[0] - discrete.node(k)[0]));
         if (k % 2 == 0) truth = std::max(truth, std::fabs(tr.node(k)[0] - pole_exact(tr.t[static_cast<std::size_t>(k)], 1.0)));
       }
-      std::printf("s = %d N = %2d: solve error %.3e, distance to the discrete solution %.3e; estimate %.3e, true "
-                  "%.3e\n", stages, N, s.solve_error, distance, s.error_estimate, truth);
+      std::printf("%s s = %d N = %2d: solve error %.3e, distance to the discrete solution %.3e; estimate %.3e, true "
+                  "%.3e\n", pardel::to_string(method), stages, N, s.solve_error, distance, s.error_estimate, truth);
       ASSERT_TRUE(std::isfinite(s.solve_error));
       ASSERT_EQ(s.solve_error_by_coordinate.size(), 1u);
       EXPECT_NE(s.error_note.find("with the solve's own error"), std::string::npos) << s.error_note;
