@@ -277,7 +277,7 @@ int run_check(const CheckArgs& args) {
     } catch (const std::runtime_error& error) {
       throw UsageError(fmt::format("--trajectory: {}", error.what()));
     }
-    const std::string mismatch = boundary_mismatch(scene.problem, trajectory, *scene.model);
+    const std::string mismatch = problem_mismatch(scene.problem, trajectory, *scene.model);
     if (!mismatch.empty()) throw UsageError(fmt::format("--trajectory {}: {}", args.trajectory, mismatch));
     scene.problem.N = trajectory.N;
   }

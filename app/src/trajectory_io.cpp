@@ -329,20 +329,74 @@ void remove_stale_temporaries(const std::string& path) {
   }
 }
 
-std::string boundary_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model) {
+namespace {
+
+/** Whether two values agree to 1e-9 of the larger, or of 1. */
+bool agree(double a, double b) { return std::fabs(a - b) <= 1e-9 * std::max({1.0, std::fabs(a), std::fabs(b)}); }
+
+}  // namespace
+
+std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model) {
   const std::size_t d = static_cast<std::size_t>(trajectory.dim);
   if (trajectory.N < 1 || problem.q0.size() != d || problem.qN.size() != d || trajectory.q.size() < 2 * d) return "";
   const std::vector<std::string> names = state_column_names(model);
+  const auto name = [&names](std::size_t a) { return a < names.size() ? names[a] : std::to_string(a); };
+  const auto node = [&](int k) { return trajectory.q.data() + static_cast<std::size_t>(k) * d; };
   for (int end = 0; end < 2; ++end) {
-    const double* node = trajectory.q.data() + (end == 0 ? 0 : static_cast<std::size_t>(trajectory.N) * d);
+    const double* at = node(end == 0 ? 0 : trajectory.N);
     const std::vector<double>& boundary = end == 0 ? problem.q0 : problem.qN;
     for (std::size_t a = 0; a < d; ++a) {
-      const double given = node[a], wanted = boundary[a];
-      if (std::fabs(given - wanted) <= 1e-9 * std::max({1.0, std::fabs(given), std::fabs(wanted)})) continue;
-      const std::string name = a < names.size() ? names[a] : std::to_string(a);
+      if (agree(at[a], boundary[a])) continue;
       return fmt::format("node {} has {} = {}, the scene's boundary.{} has {} = {}: the trajectory is a path of "
                          "another boundary-value problem",
-                         end == 0 ? 0 : trajectory.N, name, given, end == 0 ? "q0" : "qN", name, wanted);
+                         end == 0 ? 0 : trajectory.N, name(a), at[a], end == 0 ? "q0" : "qN", name(a), boundary[a]);
+    }
+  }
+  // Node times: the scene's grid at this N; under a clock (whose placement the solve updates only
+  // every so many steps) t0 first, increasing, and t0 + T last under fixed_total_time.
+  const std::size_t n1 = static_cast<std::size_t>(trajectory.N) + 1;
+  if (trajectory.t.size() == n1) {
+    const auto other_times = [&](std::size_t k, double wanted, const std::string& why) {
+      return fmt::format("node {} has t = {}, the scene places it at t = {} ({}): the trajectory lies on other node "
+                         "times",
+                         k, trajectory.t[k], wanted, why);
+    };
+    if (problem.clock == ClockMode::none) {
+      if (!problem.times.empty() && problem.times.size() != n1)
+        return fmt::format("the trajectory has N = {} intervals, the scene's grid.times gives {}", trajectory.N,
+                           problem.times.size() - 1);
+      const std::vector<double> times = grid_times(problem, trajectory.N);
+      for (std::size_t k = 0; k < n1 && k < times.size(); ++k)
+        if (!agree(trajectory.t[k], times[k]))
+          return other_times(k, times[k],
+                             problem.times.empty()
+                                 ? fmt::format("grid.t0 = {}, grid.T = {}, N = {}", problem.t0, problem.T, trajectory.N)
+                                 : std::string("grid.times"));
+    } else {
+      if (!agree(trajectory.t[0], problem.t0)) return other_times(0, problem.t0, "grid.t0");
+      if (problem.clock == ClockMode::fixed_total_time && !agree(trajectory.t[n1 - 1], problem.t0 + problem.T))
+        return other_times(n1 - 1, problem.t0 + problem.T, "grid.t0 + grid.T under the fixed_total_time clock");
+      for (std::size_t k = 1; k < n1; ++k)
+        if (!(trajectory.t[k] > trajectory.t[k - 1]))
+          return fmt::format("node {} has t = {}, not after node {}'s t = {}: a clock's node times increase", k,
+                             trajectory.t[k], k - 1, trajectory.t[k - 1]);
+    }
+  }
+  // Knots: each on a node, the node's coordinates the knot's.
+  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
+    const Knot& knot = problem.knots[a];
+    int k = -1;
+    for (int j = 1; j < trajectory.N && k < 0 && trajectory.t.size() == n1; ++j)
+      if (agree(trajectory.t[static_cast<std::size_t>(j)], knot.t)) k = j;
+    if (k < 0)
+      return fmt::format("the scene's knot {} at t = {} is on no interior node of the trajectory (N = {}): the "
+                         "trajectory is a path of another problem",
+                         a, knot.t, trajectory.N);
+    for (std::size_t i = 0; i < knot.q.size() && i < d; ++i) {
+      if (agree(node(k)[i], knot.q[i])) continue;
+      return fmt::format("node {} (t = {}) has {} = {}, the scene's knot {} has {} = {}: the trajectory misses the "
+                         "knot",
+                         k, trajectory.t[static_cast<std::size_t>(k)], name(i), node(k)[i], a, name(i), knot.q[i]);
     }
   }
   return "";

@@ -29,7 +29,7 @@ py::object check_scene(Scene scene, const py::object& q, const py::object& t) {
   Trajectory trajectory = initial_trajectory(scene, q, t);
   if (!q.is_none()) {
     scene.problem.N = trajectory.N;
-    const std::string mismatch = app::boundary_mismatch(scene.problem, trajectory, *scene.model);
+    const std::string mismatch = app::problem_mismatch(scene.problem, trajectory, *scene.model);
     if (!mismatch.empty()) throw InputError("q: " + mismatch);
   }
   Certificate certificate;

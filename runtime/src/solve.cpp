@@ -545,28 +545,31 @@ Summary solve(const Problem& problem, const Options& requested, Trajectory& traj
 }
 
 double residual_norm(const Problem& problem, const Trajectory& trajectory) {
-  std::string error;
-  if (!validate(problem, trajectory, &error) || trajectory.N != problem.N)
-    return std::numeric_limits<double>::quiet_NaN();
   Context ctx;
-  detail::setup_context(problem, trajectory.N, 1, ctx);
-  ctx.q = trajectory.q;
-  if (!detail::apply_constraints(problem, ctx, &error)) return std::numeric_limits<double>::quiet_NaN();
-  ctx.q = trajectory.q;  // the trajectory as given, knots included
-  detail::take_times(problem, trajectory, ctx);
+  std::string error;
+  if (!detail::context_at(problem, trajectory, 1, ctx, &error)) return std::numeric_limits<double>::quiet_NaN();
   detail::eval_grad(ctx, ctx.q);
   if (detail::compute_residual(ctx) >= 0) return std::numeric_limits<double>::quiet_NaN();
   return ctx.residual;
 }
 
-double discrete_action(const Problem& problem, const Trajectory& trajectory) {
+std::vector<double> grid_times(const Problem& problem, int N) {
+  Problem on_its_grid = problem;
+  on_its_grid.N = N;
   std::string error;
-  if (!validate(problem, trajectory, &error) || trajectory.N != problem.N)
-    return std::numeric_limits<double>::quiet_NaN();
+  if (problem.clock != ClockMode::none || N < 1 || !problem.model || !problem.discretization ||
+      !validate(on_its_grid, linear_guess(on_its_grid), &error))
+    return {};
+  detail::Grid grid;
+  detail::setup_grid(on_its_grid, N, 1, grid);
+  return grid.t;
+}
+
+double discrete_action(const Problem& problem, const Trajectory& trajectory) {
   Context ctx;
-  detail::setup_context(problem, trajectory.N, 1, ctx);
-  detail::take_times(problem, trajectory, ctx);
-  return detail::action_at(ctx, trajectory.q);
+  std::string error;
+  if (!detail::context_at(problem, trajectory, 1, ctx, &error)) return std::numeric_limits<double>::quiet_NaN();
+  return detail::action_at(ctx, ctx.q);
 }
 
 }  // namespace pardel

@@ -73,6 +73,19 @@ def test_check_takes_the_trajectory_on_its_own_nodes_and_ends(tmp_path, spring_l
         pardel.check(scene, other)
 
 
+def test_check_refuses_a_path_on_other_node_times(tmp_path, spring_lag):
+    # The same spring problem on [0.5, 2.5] instead of [0, 2]: a Result carries its node times,
+    # and they are not the scene's (the model is autonomous, so its residual alone would not tell).
+    scene_path, _ = write_scene(tmp_path, spring_lag)
+    scene = pardel.load_scene(scene_path)
+    assert pardel.check(scene, pardel.solve_scene(scene))["residual"] < 1e-8
+    later = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=2.0, N=30, t0=0.5, discretization="midpoint",
+                         params={"a": 1.2})
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.check: q: node 0 has t = 0\.5, the scene places it at "
+                                                 r"t = 0 \(grid\.t0 = 0, grid\.T = 2, N = 30\)"):
+        pardel.check(scene, later)
+
+
 def spring_jacobi_gap(omega, T, N):
     """1 - rho of block Jacobi for the midpoint rule of L = x'^2/2 - omega^2 x^2/2 on N intervals,
     both ends fixed: H is tridiagonal Toeplitz, diagonal 2 (1/h - h w^2/4), off-diagonal

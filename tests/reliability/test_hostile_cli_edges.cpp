@@ -273,6 +273,39 @@ TEST_F(HostileCliEdges, CheckOfATrajectoryOfAnotherProblemIsRefused) {
       << other.output;
 }
 
+TEST_F(HostileCliEdges, CheckOfATrajectoryOnOtherTimesOrOffAKnotIsRefused) {
+  // A solution of min_jerk (knots at t = 1 and t = 3, N = 40 on [0, 4]) checked against scenes
+  // that differ only in their node times or knots: refused with the node, not a residual and
+  // certificate of a problem the scene does not pose.
+  const fs::path out = dir_ / "solved";
+  const std::string scene = kScenes + "/min_jerk.toml";
+  const Outcome solved = pardel({"solve", scene, "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(solved.status, 0) << solved.output;
+  const std::string csv = (out / "trajectory.csv").string();
+  const Outcome same = pardel({"check", scene, "--trajectory", csv});
+  EXPECT_EQ(same.status, 0) << same.output;
+  struct Case {
+    std::vector<std::string> sets;
+    const char* message;
+  };
+  const Case cases[] = {
+      {{"grid.t0=1", "knots=[]"}, "node 0 has t = 0, the scene places it at t = 1 (grid.t0 = 1, grid.T = 4, N = 40): the "
+                      "trajectory lies on other node times"},
+      {{"grid.T=8", "knots=[]"}, "node 1 has t = 0.1, the scene places it at t = 0.2"},
+      {{"knots=[{t = 2, q = [2, 0, 0]}]"}, "node 20 (t = 2) has y = "},
+      // The scene's own grid (N = 3) has the knot on a node; the trajectory's (N = 40) does not.
+      {{"grid.N=3", "knots=[{t = 1.3333333333333333, q = [1, 2, 1]}]"},
+       "the scene's knot 0 at t = 1.3333333333333333 is on no interior node of the trajectory (N = 40)"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"check", scene, "--trajectory", csv};
+    for (const std::string& set : c.sets) args.insert(args.end(), {"--set", set});
+    const Outcome o = pardel(args);
+    EXPECT_EQ(o.status, 2) << o.output;
+    EXPECT_NE(o.output.find(c.message), std::string::npos) << o.output;
+  }
+}
+
 TEST_F(HostileCliEdges, SweepSetWithALineBreakIsRefused) {
   const Outcome o = pardel({"sweep", kSweep50, "--set", "solver.tol=1e-8\ngrid.N=3", "--out",
                             (dir_ / "out").string(), "--no-plot", "--quiet"});

@@ -465,9 +465,14 @@ struct Summary {
  */
 Summary solve(const Problem& problem, const Options& options, Trajectory& trajectory);
 
-/** The infinity-norm of the DEL residual and the discrete action at a trajectory. */
+/** The infinity-norm of the DEL residual and the discrete action at a trajectory, on the grid that
+ *  certify() uses: the problem's node times (the trajectory's own under a clock); NaN for a
+ *  trajectory that does not fit the problem (validate(), another N, a knot off the grid). */
 double residual_norm(const Problem& problem, const Trajectory& trajectory);
 double discrete_action(const Problem& problem, const Trajectory& trajectory);
+/** The node times of the problem's grid at N intervals (problem.times, or uniform from t0 over T);
+ *  empty under a clock (which places the nodes during the solve) or for an invalid problem. */
+std::vector<double> grid_times(const Problem& problem, int N);
 
 /** The discrete momenta at the two ends of a trajectory (the discrete Legendre transforms). */
 struct BoundaryMomenta {

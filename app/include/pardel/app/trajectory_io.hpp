@@ -45,12 +45,14 @@ std::string trajectory_csv(const pardel_model& model, const Trajectory& trajecto
  */
 Trajectory read_trajectory_csv(const std::string& path, const pardel_model& model);
 
-/** Why `trajectory` is not a path of `problem`'s boundary-value problem: its first or last node
- *  differs from problem.q0 or problem.qN (by more than 1e-9 of the larger value, or of 1), named
- *  with the component ("node 0 has x = 5, the scene's boundary.q0 has x = 0"); "" when both ends
- *  agree. A check of a trajectory against a scene (`pardel check`, pardel.check) refuses one
- *  whose ends are another problem's. */
-std::string boundary_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model);
+/** Why `trajectory` is not a path of `problem`'s boundary-value problem, in words naming the node,
+ *  the component and the scene's key ("node 0 has x = 5, the scene's boundary.q0 has x = 0"), or ""
+ *  when it is one. Values agree to 1e-9 of the larger, or of 1. Checked: the first and last nodes
+ *  against boundary.q0 and boundary.qN; the node times against the scene's grid at N =
+ *  trajectory.N (pardel::grid_times), or under a clock t0 first, increasing, t0 + T last under
+ *  fixed_total_time; each knot on an interior node with the knot's coordinates there. A check of a trajectory
+ *  against a scene (`pardel check`, pardel.check) refuses one that is another problem's path. */
+std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model);
 
 /** Writes `content` to `path` through a temporary file in the same folder and a rename, so that
  *  readers never see a half-written file. Throws std::runtime_error naming the path on failure. */
