@@ -87,7 +87,11 @@ const pardel_model* resolve_model_spec(const std::string& spec) {
 // pardel solve / check
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted.store(true); }
+std::atomic<int> g_signal{0};  ///< the signal that set g_interrupted
+extern "C" void on_sigint(int signal) {
+  g_signal.store(signal);
+  g_interrupted.store(true);
+}
 
 /** SIGINT and SIGTERM set g_interrupted from construction until restore() (or destruction), which
  *  puts the previous handlers back. */
@@ -190,6 +194,10 @@ int run_solve_unguarded(const SolveArgs& args) {
     return !g_interrupted.load();
   };
   request.keep_going = [] { return !g_interrupted.load(); };
+  request.stopped_by = [] {
+    const int signal = g_signal.load();
+    return signal == SIGINT ? std::string("SIGINT (Ctrl-C)") : signal == SIGTERM ? std::string("SIGTERM") : std::string();
+  };
   // Ctrl-C and SIGTERM stop the solve (it ends interrupted, with a checkpoint); once it has
   // ended they have their usual effect again, also while the outputs are written.
   g_interrupted.store(false);
@@ -204,6 +212,10 @@ int run_solve_unguarded(const SolveArgs& args) {
     if (ranks > 1) extra["ranks"] = ranks;
     outputs = write_solve_outputs(scene, summary, trajectory, out_dir, extra, args.certificate == "full");
   };
+  if (root) {
+    const std::string refusal = disk_refusal(scene, out_dir);
+    if (!refusal.empty()) throw UsageError(refusal);
+  }
   Trajectory trajectory;  // empty: the scene's initial guess (or the resumed state)
   SolveRun run;
   try {

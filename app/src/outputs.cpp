@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "pardel/app/trajectory_io.hpp"
+#include "pardel/memory.hpp"
 
 namespace pardel::app {
 namespace {
@@ -275,6 +277,32 @@ void create_output_folder(const std::string& dir) {
   if (!ec) return;
   const std::string why = why_not_a_folder(dir);
   throw std::runtime_error(fmt::format("{}: cannot create output folder: {}", dir, why.empty() ? ec.message() : why));
+}
+
+std::string disk_refusal(const Scene& scene, const std::string& out_dir) {
+  namespace fs = std::filesystem;
+  if (!scene.model) return "";
+  std::error_code ec;
+  fs::path at = fs::absolute(out_dir.empty() ? fs::path(".") : fs::path(out_dir), ec);
+  if (ec) return "";
+  while (!fs::exists(at, ec) && at.has_parent_path() && at.parent_path() != at) at = at.parent_path();
+  // Where no folder can be made (a file in the way) the folder's creation says why; a file system
+  // of no capacity (/proc) reports no free space that means anything.
+  if (!fs::is_directory(at, ec)) return "";
+  const fs::space_info space = fs::space(at, ec);
+  if (ec || space.capacity == 0 || space.available == static_cast<std::uintmax_t>(-1)) return "";
+  return disk_refusal(scene, out_dir, static_cast<double>(space.available));
+}
+
+std::string disk_refusal(const Scene& scene, const std::string& out_dir, double available) {
+  if (!scene.model) return "";
+  const double columns = static_cast<double>(state_column_names(*scene.model).size() + 2);
+  const double rows = static_cast<double>(scene.problem.N) + 1;
+  const double need = 16.0 * rows * columns;
+  if (need <= available) return "";
+  return fmt::format("{}: trajectory.csv alone needs about {} ({:.0f} rows of {:.0f} columns) and the file system "
+                     "there has {} free; free space, write elsewhere (--out) or lower grid.N",
+                     out_dir, format_bytes(need), rows, columns, format_bytes(available));
 }
 
 SolveOutputs write_solve_outputs(const Scene& scene, const Summary& summary, const Trajectory& trajectory,

@@ -103,7 +103,10 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
     SolveRequest request;
     request.over_ranks = false;
     request.check_memory = sweep.memory_check;
-    if (stop) request.on_iteration = [stop](const IterationRecord&) { return !stop->load(); };
+    if (stop) {
+      request.on_iteration = [stop](const IterationRecord&) { return !stop->load(); };
+      request.stopped_by = [] { return std::string("the sweep's stop (Ctrl-C, SIGTERM or KeyboardInterrupt)"); };
+    }
     Trajectory trajectory;  // the variant's scene's guess
     Summary summary;
     try {

@@ -17,8 +17,8 @@ constexpr int kParallelMin = 512;
 
 // --- Stopping rules of a level (iteration.cpp) ---------------------------------------------------
 
-/** Re-placements of the nodes at the tolerance, in a row, before the clock's times count as
- *  unsettled. */
+/** Checks of the clock's times at the tolerance, in a row, each after a step and none lowering the
+ *  residual there by 1 %, before the times count as unsettled. */
 constexpr int kMaxPlacements = 20;
 /** A converged message warns where the round-off level sets the target above this many rtol. */
 constexpr double kRoundOffDominates = 100;

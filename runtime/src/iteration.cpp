@@ -40,8 +40,10 @@ bool Iteration::run_level(bool last) {
   resumed_level_ = false;
   const bool clocked = ctx_.clock != ClockMode::none;
   bool recheck_times = false;  // the nodes moved to the clock's times at the tolerance: check them again
-  int placements = 0;          // such moves since the last step
+  int unsettled = 0;           // such moves in a row that did not lower the residual at the clock's times
+  double best_at_clock = std::numeric_limits<double>::infinity();
   bool step_evaluated = false; // the last step's outcome left the residual and action at ctx.q set
+  times_pending_ = false;      // the times were found unsettled: a step comes before any stopping test
   if (clocked && times_stop_increasing()) return false;  // the start's times
   for (;;) {
     if (clocked && level_.since_clock >= options_.clock_update_every) {
@@ -56,7 +58,7 @@ bool Iteration::run_level(bool last) {
     if (bad >= 0) return non_finite_residual(bad);
     if (start_scale_.size() != ctx_.comp_scale.size()) start_scale_ = ctx_.comp_scale;  // the solve's first iterate
     double r = ctx_.residual;
-    if (clocked && at_target(r, target_residual()) && (level_.since_clock > 0 || recheck_times)) {
+    if (clocked && !times_pending_ && at_target(r, target_residual()) && (level_.since_clock > 0 || recheck_times)) {
       // Declare convergence only with node times consistent with this trajectory: the times the
       // clock gives at these nodes, which keep their values (moved along the trajectory, they would
       // no longer be where the clock was read).
@@ -71,7 +73,16 @@ bool Iteration::run_level(bool last) {
       if (bad >= 0 || !at_target(ctx_.residual, target_residual())) {
         // The times had not settled (the DEL residual at the clock's times is above the target):
         // back to the previous times, from which the nodes move along the trajectory to the
-        // clock's times; the times are checked again when the residual is at the target.
+        // clock's times; the method takes a step there (at the tolerance on the moved nodes a
+        // check at once would only move them again), and the times are checked again when the
+        // residual is at the target.
+        const double at_clock = bad >= 0 ? std::numeric_limits<double>::infinity() : ctx_.residual;
+        if (at_clock < 0.99 * best_at_clock) {
+          best_at_clock = at_clock;
+          unsettled = 0;
+        } else {
+          ++unsettled;
+        }
         std::swap(ctx_.t, ctx_.t_kept);
         std::swap(ctx_.hk, ctx_.hk_kept);
         ctx_.evaluated = Evaluated::nothing;
@@ -80,8 +91,10 @@ bool Iteration::run_level(bool last) {
         if (times_stop_increasing()) return false;
         bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
         if (bad >= 0) return non_finite_residual(bad);
-        if (times_unsettled(++placements)) return false;
+        if (times_unsettled(unsettled)) return false;
         recheck_times = true;
+        times_pending_ = true;
+        step_evaluated = true;
         continue;
       }
       r = ctx_.residual;
@@ -98,21 +111,24 @@ bool Iteration::run_level(bool last) {
     }
     const double target = target_residual();
     bool settled = false;
-    if (converged_at_tolerance(last, r, target, &settled) || intermediate_level_settled(last, r, target, &settled))
-      return settled;
-    // Progress is measured against the test itself, so that a component far from its own target
-    // counts as progress while the largest residual stays put.
-    const double distance = distance_to_target(r, target);
-    if (distance < 0.99 * best_residual_) {
-      best_residual_ = distance;
-      best_iteration_ = iteration_;
+    if (!times_pending_) {
+      if (converged_at_tolerance(last, r, target, &settled) || intermediate_level_settled(last, r, target, &settled))
+        return settled;
+      // Progress is measured against the test itself, so that a component far from its own target
+      // counts as progress while the largest residual stays put.
+      const double distance = distance_to_target(r, target);
+      if (distance < 0.99 * best_residual_) {
+        best_residual_ = distance;
+        best_iteration_ = iteration_;
+      }
+      if (answer_at_tolerance(last, r, target, &settled)) return settled;
+      if (last && refined_at_round_off(r, target)) continue;
     }
-    if (answer_at_tolerance(last, r, target, &settled)) return settled;
-    if (last && refined_at_round_off(r, target)) continue;
     if (stalled_at_round_off(r, target) || reached_max_iterations(r, target) || diverged(r)) return false;
     previous_comp_residual_.assign(ctx_.comp_residual.begin(), ctx_.comp_residual.end());
     StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
     if (step_failed(outcome, last, r, target, &settled)) return settled;
+    times_pending_ = false;
     std::swap(ctx_.q, ctx_.q_next);
     partition_.iterate_changed(ctx_);
     if (!outcome.next_evaluated) {
@@ -123,7 +139,6 @@ bool Iteration::run_level(bool last) {
     ++iteration_;
     ++level_.level_it;
     ++level_.since_clock;
-    placements = 0;
   }
 }
 
@@ -157,14 +172,15 @@ bool Iteration::times_stop_increasing() {
   return true;
 }
 
-/** At the tolerance under a clock, the nodes moved to the clock's times `placements` times
- *  without a step in between, and the times still do not match the trajectory. */
-bool Iteration::times_unsettled(int placements) {
-  if (placements < kMaxPlacements) return false;
+/** At the tolerance under a clock, `unsettled` checks of the clock's times in a row, each after a
+ *  step, found the residual there above the target and no lower than before. */
+bool Iteration::times_unsettled(int unsettled) {
+  if (unsettled < kMaxPlacements) return false;
   finish(Termination::stalled,
          format("stalled: the node times do not settle: at the tolerance, %.0f re-placements of the nodes at the "
-                "times of the model's clock in a row each left the DEL residual at the clock's times above the "
-                "target %.3g (the last iterate, moved to the clock's times, is returned)",
+                "times of the model's clock in a row, each after a step, left the DEL residual at the clock's "
+                "times above the target %.3g and lowered it by less than 1%% (the last iterate, moved to the "
+                "clock's times, is returned)",
                 static_cast<double>(kMaxPlacements), target_residual()));
   return true;
 }
@@ -285,8 +301,9 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
   StepOutcome outcome = step;
   *settled = false;
   if (!partition_.agree_on_outcome(outcome)) {
-    // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer.
-    if (outcome.failure == Termination::stalled && at_target(r, target)) {
+    // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer
+    // (not where the times at the tolerance were found unsettled: r is not at the clock's times).
+    if (outcome.failure == Termination::stalled && at_target(r, target) && !times_pending_) {
       *settled = !last;
       if (last) finish(Termination::converged, converged_message(r, target));
       return true;

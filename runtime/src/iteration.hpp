@@ -102,7 +102,7 @@ class Iteration {
   bool answer_at_tolerance(bool last, double r, double target, bool* settled);
   bool stalled_at_round_off(double r, double target);
   bool refined_at_round_off(double r, double target);
-  bool times_unsettled(int placements);
+  bool times_unsettled(int unsettled);
   bool times_stop_increasing();
   bool reached_max_iterations(double r, double target);
   bool diverged(double r);
@@ -138,6 +138,7 @@ class Iteration {
   std::chrono::steady_clock::time_point start_;
   LevelCounters level_;
   bool resumed_level_ = false;
+  bool times_pending_ = false;  ///< under a clock: the times at the tolerance were unsettled, no step since
   long iteration_ = 0, next_record_ = 0;
   /** Per component: the size of its terms at the solve's first iterate (detail::component_target). */
   std::vector<double> start_scale_;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "pardel/app/outputs.hpp"
+#include "pardel/app/trajectory_io.hpp"
 
 namespace {
 
@@ -204,6 +205,22 @@ TEST(Outputs, SummaryHasTheErrorEstimateOrNullWithItsReason) {
   EXPECT_TRUE(n["error"]["observed_order"].is_null());
   EXPECT_FALSE(n["error"]["reliable"].get<bool>());
   EXPECT_EQ(n["error"]["note"].get<std::string>(), "not estimated: the solve ended max_iterations");
+}
+
+TEST(Outputs, DiskRefusalComparesTrajectoryCsvWithTheFreeSpace) {
+  // zermelo: k, t, x, y and two velocity columns; 16 bytes a value, (N + 1) rows.
+  Scene scene = scene_for("zermelo");
+  scene.problem.N = 999;
+  const double columns = static_cast<double>(pardel::app::state_column_names(*scene.model).size() + 2);
+  const double need = 16.0 * 1000 * columns;
+  EXPECT_EQ(pardel::app::disk_refusal(scene, "out/z", need), "");
+  const std::string refused = pardel::app::disk_refusal(scene, "out/z", need - 1);
+  EXPECT_NE(refused.find("out/z: trajectory.csv alone needs about"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("(1000 rows of"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("lower grid.N"), std::string::npos) << refused;
+  // On this machine's file system a scene of this size fits (a folder not yet made is checked on
+  // its first existing ancestor).
+  EXPECT_EQ(pardel::app::disk_refusal(scene, ::testing::TempDir() + "/not/yet/made"), "");
 }
 
 }  // namespace

@@ -162,6 +162,9 @@ TEST_F(CheckpointCli, SigtermWritesACheckpointAndResumeReachesTheSameTrajectory)
   ASSERT_TRUE(fs::exists(out / "checkpoint.json"));
   EXPECT_TRUE(fs::exists(out / "trajectory.csv"));
   EXPECT_TRUE(fs::exists(out / "summary.json"));
+  // The message names what stopped the solve (the runtime knows only that on_iteration did).
+  EXPECT_NE(read_text(out / "summary.json").find("interrupted by SIGTERM at iteration"), std::string::npos)
+      << read_text(out / "summary.json");
   for (const auto& entry : fs::directory_iterator(out))
     EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
   const Checkpoint c = pardel::app::read_checkpoint(out.string());

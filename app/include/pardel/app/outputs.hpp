@@ -73,6 +73,16 @@ std::string scene_model_source(const Scene& scene);
  */
 void create_output_folder(const std::string& dir);
 
+/** Why the outputs of a solve of `scene` would not fit on the file system of `out_dir` (its first
+ *  existing ancestor), or "": trajectory.csv takes about 16 bytes a value or more ((N + 1) rows of
+ *  the state's columns with k and t), refused where that alone exceeds the free space, so that a
+ *  long solve is not run for outputs that cannot be written. "" where the free space is unknown
+ *  (a file system of no capacity, such as /proc) or the ancestor is no folder (whose creation
+ *  fails with its own reason). */
+std::string disk_refusal(const Scene& scene, const std::string& out_dir);
+/** The same against `available` bytes free. */
+std::string disk_refusal(const Scene& scene, const std::string& out_dir, double available);
+
 /** What a finished solve wrote. */
 struct SolveOutputs {
   bool have_trajectory = false;  ///< the returned trajectory lies on the problem's grid

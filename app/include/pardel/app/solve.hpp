@@ -74,6 +74,9 @@ struct SolveRequest {
   std::function<bool(const IterationRecord&)> on_iteration;
   /** Polled where no iteration is recorded (Options::keep_going); false stops the solve. */
   std::function<bool()> keep_going;
+  /** What stopped an interrupted solve, in words ("SIGINT (Ctrl-C)"), for its message in place of
+   *  the runtime's "on_iteration"; "" (or unset) keeps the runtime's words. */
+  std::function<std::string()> stopped_by;
   /** Called after a solve that did not end invalid_input, with its summary and trajectory,
    *  before the checkpoint is updated (a front end writes its outputs there: the checkpoint comes
    *  last, so that a process killed in between leaves complete outputs and the previous state). */
