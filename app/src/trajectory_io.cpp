@@ -336,7 +336,8 @@ bool agree(double a, double b) { return std::fabs(a - b) <= 1e-9 * std::max({1.0
 
 }  // namespace
 
-std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model) {
+std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model,
+                             bool own_grid) {
   const std::size_t d = static_cast<std::size_t>(trajectory.dim);
   if (trajectory.N < 1 || problem.q0.size() != d || problem.qN.size() != d || trajectory.q.size() < 2 * d) return "";
   const std::vector<std::string> names = state_column_names(model);
@@ -352,8 +353,9 @@ std::string problem_mismatch(const Problem& problem, const Trajectory& trajector
                          end == 0 ? 0 : trajectory.N, name(a), at[a], end == 0 ? "q0" : "qN", name(a), boundary[a]);
     }
   }
-  // Node times: the scene's grid at this N; under a clock (whose placement the solve updates only
-  // every so many steps) t0 first, increasing, and t0 + T last under fixed_total_time.
+  // Node times: the scene's grid at this N; on a grid of the path's own (an adaptive scene's) or
+  // under a clock (whose placement the solve updates only every so many steps) t0 first,
+  // increasing, and t0 + T last except under free_final_time.
   const std::size_t n1 = static_cast<std::size_t>(trajectory.N) + 1;
   if (trajectory.t.size() == n1) {
     const auto other_times = [&](std::size_t k, double wanted, const std::string& why) {
@@ -361,7 +363,7 @@ std::string problem_mismatch(const Problem& problem, const Trajectory& trajector
                          "times",
                          k, trajectory.t[k], wanted, why);
     };
-    if (problem.clock == ClockMode::none) {
+    if (problem.clock == ClockMode::none && !own_grid) {
       if (!problem.times.empty() && problem.times.size() != n1)
         return fmt::format("the trajectory has N = {} intervals, the scene's grid.times gives {}", trajectory.N,
                            problem.times.size() - 1);
@@ -374,11 +376,13 @@ std::string problem_mismatch(const Problem& problem, const Trajectory& trajector
                                  : std::string("grid.times"));
     } else {
       if (!agree(trajectory.t[0], problem.t0)) return other_times(0, problem.t0, "grid.t0");
-      if (problem.clock == ClockMode::fixed_total_time && !agree(trajectory.t[n1 - 1], problem.t0 + problem.T))
-        return other_times(n1 - 1, problem.t0 + problem.T, "grid.t0 + grid.T under the fixed_total_time clock");
+      if (problem.clock != ClockMode::free_final_time && !agree(trajectory.t[n1 - 1], problem.t0 + problem.T))
+        return other_times(n1 - 1, problem.t0 + problem.T,
+                           problem.clock == ClockMode::none ? "grid.t0 + grid.T"
+                                                            : "grid.t0 + grid.T under the fixed_total_time clock");
       for (std::size_t k = 1; k < n1; ++k)
         if (!(trajectory.t[k] > trajectory.t[k - 1]))
-          return fmt::format("node {} has t = {}, not after node {}'s t = {}: a clock's node times increase", k,
+          return fmt::format("node {} has t = {}, not after node {}'s t = {}: node times increase", k,
                              trajectory.t[k], k - 1, trajectory.t[k - 1]);
     }
   }

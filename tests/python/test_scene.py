@@ -86,6 +86,19 @@ def test_check_refuses_a_path_on_other_node_times(tmp_path, spring_lag):
         pardel.check(scene, later)
 
 
+def test_check_of_an_adaptive_solution_takes_its_own_nodes(tmp_path, spring_lag):
+    # grid.accuracy chooses a grid: the Result is checked on its node times (the solve's residual);
+    # its array alone, without the times, is refused rather than taken on a uniform grid.
+    scene_path, _ = write_scene(tmp_path, spring_lag)
+    scene = pardel.load_scene(scene_path, ["grid.accuracy=1e-7"])
+    r = pardel.solve_scene(scene)
+    assert r.status == "converged"
+    assert not np.allclose(np.diff(r.t), np.diff(r.t)[0])  # a non-uniform grid
+    assert pardel.check(scene, r)["residual"] == pytest.approx(r.residual, rel=1e-6)
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.check: q: the scene chooses its grid"):
+        pardel.check(scene, r.q)
+
+
 def spring_jacobi_gap(omega, T, N):
     """1 - rho of block Jacobi for the midpoint rule of L = x'^2/2 - omega^2 x^2/2 on N intervals,
     both ends fixed: H is tridiagonal Toeplitz, diagonal 2 (1/h - h w^2/4), off-diagonal

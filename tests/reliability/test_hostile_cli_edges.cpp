@@ -306,6 +306,30 @@ TEST_F(HostileCliEdges, CheckOfATrajectoryOnOtherTimesOrOffAKnotIsRefused) {
   }
 }
 
+TEST_F(HostileCliEdges, CheckOfAnAdaptiveSolutionTakesItsOwnNodes) {
+  // An adaptive scene (grid.accuracy) chooses a non-uniform grid: its solution is checked on its own
+  // node times (the residual the solve reported), and a path on other times is still refused.
+  const fs::path scene = dir_ / "adaptive.toml";
+  write_text(scene, "model = \"pendulum\"\ndiscretization = \"midpoint\"\n[grid]\nT = 2.0\naccuracy = 1e-6\n"
+                    "[boundary]\nq0 = [0]\nqN = [1]\n");
+  const fs::path out = dir_ / "adaptive";
+  const Outcome solved = pardel({"solve", scene.string(), "--out", out.string(), "--no-plot", "--quiet"});
+  ASSERT_EQ(solved.status, 0) << solved.output;
+  const Outcome same = pardel({"check", scene.string(), "--trajectory", (out / "trajectory.csv").string(), "--json"});
+  ASSERT_EQ(same.status, 0) << same.output;
+  const nlohmann::json checked = nlohmann::json::parse(same.output.substr(same.output.find('{')));
+  const nlohmann::json summary = nlohmann::json::parse(read_text(out / "summary.json"));
+  EXPECT_EQ(checked["N"].get<int>(), summary["N"].get<int>());
+  // The same residual up to the rounding of another kernel (on the uniform grid of that N it is
+  // many orders of magnitude larger).
+  EXPECT_NEAR(checked["residual"].get<double>(), summary["residual"].get<double>(),
+              1e-6 * summary["residual"].get<double>());
+  const Outcome later = pardel({"check", scene.string(), "--trajectory", (out / "trajectory.csv").string(), "--set",
+                                "grid.T=3"});
+  EXPECT_EQ(later.status, 2) << later.output;
+  EXPECT_NE(later.output.find("the scene places it at t = 3 (grid.t0 + grid.T)"), std::string::npos) << later.output;
+}
+
 TEST_F(HostileCliEdges, SweepSetWithALineBreakIsRefused) {
   const Outcome o = pardel({"sweep", kSweep50, "--set", "solver.tol=1e-8\ngrid.N=3", "--out",
                             (dir_ / "out").string(), "--no-plot", "--quiet"});

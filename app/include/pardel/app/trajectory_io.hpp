@@ -49,10 +49,13 @@ Trajectory read_trajectory_csv(const std::string& path, const pardel_model& mode
  *  the component and the scene's key ("node 0 has x = 5, the scene's boundary.q0 has x = 0"), or ""
  *  when it is one. Values agree to 1e-9 of the larger, or of 1. Checked: the first and last nodes
  *  against boundary.q0 and boundary.qN; the node times against the scene's grid at N =
- *  trajectory.N (pardel::grid_times), or under a clock t0 first, increasing, t0 + T last under
- *  fixed_total_time; each knot on an interior node with the knot's coordinates there. A check of a trajectory
- *  against a scene (`pardel check`, pardel.check) refuses one that is another problem's path. */
-std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model);
+ *  trajectory.N (pardel::grid_times), or, with `own_grid` (a scene whose solve chooses its grid:
+ *  grid.accuracy) or under a clock, t0 first, increasing, t0 + T last except under
+ *  free_final_time; each knot on an interior node with the knot's coordinates there. A check of a
+ *  trajectory against a scene (`pardel check`, pardel.check) refuses one that is another problem's
+ *  path. */
+std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model,
+                             bool own_grid = false);
 
 /** Writes `content` to `path` through a temporary file in the same folder and a rename, so that
  *  readers never see a half-written file. Throws std::runtime_error naming the path on failure. */
