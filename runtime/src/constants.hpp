@@ -18,8 +18,10 @@ constexpr int kParallelMin = 512;
 // --- Stopping rules of a level (iteration.cpp) ---------------------------------------------------
 
 /** Checks of the clock's times at the tolerance, in a row, each after a step and none lowering the
- *  residual there by 1 %, before the times count as unsettled. */
+ *  residual there by 1 %, and iterations since it last did (the window of the other stall rules),
+ *  before the times count as unsettled. */
 constexpr int kMaxPlacements = 20;
+constexpr long kUnsettledIterations = 200;
 /** A converged message warns where the round-off level sets the target above this many rtol. */
 constexpr double kRoundOffDominates = 100;
 /** An iterate whose largest |q| passes this has exploded (`diverged`): far above any coordinate a

@@ -42,6 +42,7 @@ bool Iteration::run_level(bool last) {
   bool recheck_times = false;  // the nodes moved to the clock's times at the tolerance: check them again
   int unsettled = 0;           // such moves in a row that did not lower the residual at the clock's times
   double best_at_clock = std::numeric_limits<double>::infinity();
+  long best_at_clock_iteration = iteration_;
   bool step_evaluated = false; // the last step's outcome left the residual and action at ctx.q set
   times_pending_ = false;      // the times were found unsettled: a step comes before any stopping test
   if (clocked && times_stop_increasing()) return false;  // the start's times
@@ -79,6 +80,7 @@ bool Iteration::run_level(bool last) {
         const double at_clock = bad >= 0 ? std::numeric_limits<double>::infinity() : ctx_.residual;
         if (at_clock < 0.99 * best_at_clock) {
           best_at_clock = at_clock;
+          best_at_clock_iteration = iteration_;
           unsettled = 0;
         } else {
           ++unsettled;
@@ -91,7 +93,7 @@ bool Iteration::run_level(bool last) {
         if (times_stop_increasing()) return false;
         bad = partition_.agree_on_residual(ctx_, method_.evaluate(ctx_));
         if (bad >= 0) return non_finite_residual(bad);
-        if (times_unsettled(unsettled)) return false;
+        if (times_unsettled(unsettled, iteration_ - best_at_clock_iteration)) return false;
         recheck_times = true;
         times_pending_ = true;
         step_evaluated = true;
@@ -173,15 +175,15 @@ bool Iteration::times_stop_increasing() {
 }
 
 /** At the tolerance under a clock, `unsettled` checks of the clock's times in a row, each after a
- *  step, found the residual there above the target and no lower than before. */
-bool Iteration::times_unsettled(int unsettled) {
-  if (unsettled < kMaxPlacements) return false;
+ *  step, found the residual there above the target and not 1 % lower than its best, which is
+ *  `since_best` iterations old. */
+bool Iteration::times_unsettled(int unsettled, long since_best) {
+  if (unsettled < kMaxPlacements || since_best < kUnsettledIterations) return false;
   finish(Termination::stalled,
-         format("stalled: the node times do not settle: at the tolerance, %.0f re-placements of the nodes at the "
-                "times of the model's clock in a row, each after a step, left the DEL residual at the clock's "
-                "times above the target %.3g and lowered it by less than 1%% (the last iterate, moved to the "
-                "clock's times, is returned)",
-                static_cast<double>(kMaxPlacements), target_residual()));
+         format("stalled: the node times do not settle: at the tolerance, the DEL residual at the times of the "
+                "model's clock stayed above the target %.3g and came no 1%% lower in %.0f iterations and %.0f "
+                "re-placements of the nodes there (the last iterate, moved to the clock's times, is returned)",
+                target_residual(), static_cast<double>(since_best), static_cast<double>(unsettled)));
   return true;
 }
 

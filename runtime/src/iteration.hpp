@@ -102,7 +102,7 @@ class Iteration {
   bool answer_at_tolerance(bool last, double r, double target, bool* settled);
   bool stalled_at_round_off(double r, double target);
   bool refined_at_round_off(double r, double target);
-  bool times_unsettled(int unsettled);
+  bool times_unsettled(int unsettled, long since_best);
   bool times_stop_increasing();
   bool reached_max_iterations(double r, double target);
   bool diverged(double r);
