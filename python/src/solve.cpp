@@ -64,6 +64,8 @@ py::dict run_solve(const Scene& scene, Trajectory trajectory, const py::object& 
 
   std::unique_ptr<py::error_already_set> pending;
   bool stopped_by_callback = false;
+  bool by_ctrl_c = false;  // a signal raised KeyboardInterrupt: the message names it, not on_iteration
+  request.stopped_by = [&by_ctrl_c] { return by_ctrl_c ? std::string("Ctrl-C (KeyboardInterrupt)") : std::string(); };
   auto last_check = std::chrono::steady_clock::now();
   request.on_iteration = [&](const IterationRecord& record) {
     const auto now = std::chrono::steady_clock::now();
@@ -71,6 +73,7 @@ py::dict run_solve(const Scene& scene, Trajectory trajectory, const py::object& 
     last_check = now;
     py::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() != 0) {
+      by_ctrl_c = PyErr_ExceptionMatches(PyExc_KeyboardInterrupt) != 0;
       pending = std::make_unique<py::error_already_set>();
       return false;
     }
@@ -99,6 +102,7 @@ py::dict run_solve(const Scene& scene, Trajectory trajectory, const py::object& 
     last_check = now;
     py::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() == 0) return true;
+    by_ctrl_c = PyErr_ExceptionMatches(PyExc_KeyboardInterrupt) != 0;
     pending = std::make_unique<py::error_already_set>();
     return false;
   };
