@@ -116,7 +116,8 @@ py::array_t<double> vector(const std::vector<double>& values);
 py::object json_value(const nlohmann::ordered_json& value);
 
 /** The initial trajectory: the scene's guess, or `guess` resampled to the scene's N. */
-Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t);
+Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t,
+                              const char* name = "guess");
 
 /** What pardel.Result is made of: summary.json's dictionary and the arrays. */
 py::dict result_dict(const Scene& scene, const Summary& summary, const Trajectory& trajectory, bool stopped_by_callback);

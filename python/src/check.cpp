@@ -26,7 +26,7 @@ py::object check_scene(Scene scene, const py::object& q, const py::object& t) {
     const auto rows = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(q);
     if (rows && rows.ndim() == 2 && rows.shape(0) >= 2) scene.problem.N = static_cast<int>(rows.shape(0) - 1);
   }
-  Trajectory trajectory = initial_trajectory(scene, q, t);
+  Trajectory trajectory = initial_trajectory(scene, q, t, "q");
   if (!q.is_none()) {
     scene.problem.N = trajectory.N;
     const bool own_grid = scene.options.accuracy > 0;  // an adaptive scene: the path's nodes are its grid

@@ -70,15 +70,17 @@ py::object json_value(const nlohmann::ordered_json& value) {
 }
 
 /** The initial trajectory: the scene's guess, or `guess` ((M+1) x dim rows, resampled to the
- *  scene's N when M differs; node times `guess_t` when given, else uniform). */
-Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t) {
+ *  scene's N when M differs; node times `guess_t` when given, else uniform); `name` is the
+ *  argument's name in the messages. */
+Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const py::object& guess_t,
+                              const char* name) {
   if (guess.is_none()) return app::make_initial_guess(scene);
   const Problem& problem = scene.problem;
   const int dim = scene.model->dim;
   const auto q = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(guess);
-  if (!q) throw InputError("guess: a 2-D array of numbers was expected");
+  if (!q) throw InputError(fmt::format("{}: a 2-D array of numbers was expected", name));
   if (q.ndim() != 2 || q.shape(1) != dim || q.shape(0) < 2)
-    throw InputError(fmt::format("guess: shape ({}) given; expected (N+1, {}) (model {} has dim {}: {})",
+    throw InputError(fmt::format("{}: shape ({}) given; expected (N+1, {}) (model {} has dim {}: {})", name,
                                  fmt::join(std::vector<py::ssize_t>(q.shape(), q.shape() + q.ndim()), ", "), dim,
                                  scene.model->name, dim, scene.model->order == 1 ? "its coords" : "coords, then derivatives"));
   Trajectory from;
@@ -89,7 +91,7 @@ Trajectory initial_trajectory(const Scene& scene, const py::object& guess, const
   if (!guess_t.is_none()) {
     const auto t = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(guess_t);
     if (!t || t.ndim() != 1 || t.shape(0) != from.N + 1)
-      throw InputError(fmt::format("guess_t: {} node times were expected", from.N + 1));
+      throw InputError(fmt::format("{}'s node times: {} were expected", name, from.N + 1));
     from.t.assign(t.data(), t.data() + t.size());
   } else {
     for (int k = 0; k <= from.N; ++k) from.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / from.N;

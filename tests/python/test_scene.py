@@ -99,6 +99,13 @@ def test_check_of_an_adaptive_solution_takes_its_own_nodes(tmp_path, spring_lag)
         pardel.check(scene, r.q)
 
 
+def test_check_names_its_argument_q(tmp_path, spring_lag):
+    scene_path, _ = write_scene(tmp_path, spring_lag)
+    scene = pardel.load_scene(scene_path)
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.check: q: shape \(51, 3\) given; expected \(N\+1, 2\)"):
+        pardel.check(scene, np.zeros((51, 3)))
+
+
 def spring_jacobi_gap(omega, T, N):
     """1 - rho of block Jacobi for the midpoint rule of L = x'^2/2 - omega^2 x^2/2 on N intervals,
     both ends fixed: H is tridiagonal Toeplitz, diagonal 2 (1/h - h w^2/4), off-diagonal

@@ -81,6 +81,9 @@ TEST(Clock, FixedTotalTimeStepsFollowTheClockAndSumToT) {
   for (int k = 0; k < p.N; ++k)
     EXPECT_NEAR(traj.t[k + 1] - traj.t[k], p.T * clock_value(p, traj, k) / total, 1e-12) << "interval " << k;
   EXPECT_LE(pardel::residual_norm(p, traj), 1e-10);
+  // No error estimate: two grids' common nodes lie at other times under this clock.
+  EXPECT_TRUE(std::isnan(s.error_estimate)) << s.error_note;
+  EXPECT_NE(s.error_note.find("not estimated: under the fixed_total_time clock"), std::string::npos) << s.error_note;
   // The steps are not uniform: the solution moves away from x = 0.
   EXPECT_GT(traj.t[p.N] - traj.t[p.N - 1], 1.2 * (traj.t[1] - traj.t[0]));
 }
