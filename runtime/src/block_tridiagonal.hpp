@@ -402,8 +402,38 @@ class BlockTridiagonal {
    * above the rule's threshold is taken as it is; any other is split by the eigendecomposition of
    * its scaled form, and its eigenvalues that count as zero are left out of the elimination (a
    * pseudo-inverse). Overwrites the LDL^T factorization (factor_ldlt() must be called again).
+   * Haynsworth's sum holds for invertible pivots: where a pivot counts as zero, H may still be
+   * regular (H = [[0, -3], [-3, 0]] has the pivots 0 and 0 and the eigenvalues 3 and -3), so such
+   * a count is decided by the counts of H~ + sigma I and H~ - sigma I, sigma ten times the rule's
+   * threshold: an eigenvalue farther than sigma from zero keeps its sign in both, one within it
+   * is positive in the first and negative in the second, so the positive count of the second,
+   * the negative count of the first and the rest as zero are H's. Where a pivot of either counts
+   * as zero too, the first count stands.
    */
-  Inertia inertia() { return eliminate(false); }
+  Inertia inertia() {
+    const Inertia in = eliminate(false);
+    if (in.zero == 0) return in;
+    const double sigma = 10 * zero_threshold(jacobi_scaling());
+    const std::vector<double> J = scaling_;
+    const std::vector<Mat> unshifted = diag_;
+    Inertia at[2];
+    for (int side = 0; side < 2; ++side) {
+      for (int i = 0; i < n_; ++i)
+        for (int a = 0; a < d_; ++a) {
+          const double j = J[static_cast<std::size_t>(i) * static_cast<std::size_t>(d_) + static_cast<std::size_t>(a)];
+          diag_[static_cast<std::size_t>(i)](a, a) += (side == 0 ? sigma : -sigma) / (j * j);
+        }
+      at[side] = eliminate(false);
+      diag_ = unshifted;
+    }
+    jacobi_scaling();
+    if (at[0].zero != 0 || at[1].zero != 0) return in;
+    Inertia decided;
+    decided.positive = at[1].positive;
+    decided.negative = at[0].negative;
+    decided.zero = in.positive + in.negative + in.zero - decided.positive - decided.negative;
+    return decided;
+  }
 
   /**
    * Block LDL^T of H as assembled when it may be indefinite: the elimination of inertia(), each

@@ -263,3 +263,50 @@ TEST(BlockTridiagonal, IndefiniteFactorizationRefusesASingularMatrix) {
 }
 
 }  // namespace
+
+/** The inertia of H against a dense eigendecomposition of it (eigenvalues within 1e-9 of its
+ *  largest count as zero: those of the matrices below are 0 or at least 0.3 of it). */
+template <int D>
+void expect_dense_inertia(const Context& ctx) {
+  const Eigen::MatrixXd H = dense_hessian(ctx);
+  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
+  const double zero = 1e-9 * ev.cwiseAbs().maxCoeff();
+  long positive = 0, negative = 0, zeros = 0;
+  for (Eigen::Index i = 0; i < ev.size(); ++i) (ev(i) > zero ? positive : ev(i) < -zero ? negative : zeros)++;
+  BlockTridiagonal<D> T;
+  T.resize(ctx.N, ctx.dim);
+  T.assemble(ctx, 0.0);
+  const auto in = T.inertia();
+  EXPECT_EQ(in.positive, positive) << "N = " << ctx.N << ", d = " << ctx.dim;
+  EXPECT_EQ(in.negative, negative) << "N = " << ctx.N << ", d = " << ctx.dim;
+  EXPECT_EQ(in.zero, zeros) << "N = " << ctx.N << ", d = " << ctx.dim;
+}
+
+TEST(BlockTridiagonal, ZeroPivotsOfARegularMatrixAreNotZeroEigenvalues) {
+  // Every diagonal entry zero (the midpoint rule of x'' = -w^2 x at h w = 2): the elimination's
+  // pivots are 0, yet H = 3 tridiag(-1, 0, -1) has the eigenvalues -6 cos(k pi / N), zero only
+  // for N even (k = N/2). Its inertia counted pivot by pivot was every eigenvalue zero.
+  for (int N : {3, 4, 5, 6, 9, 10, 33}) {
+    Context ctx = random_context(N, 1, 0.0, 3u);
+    for (int k = 0; k < N; ++k) {
+      ctx.D11[k] = 0.0;
+      ctx.D22[k] = 0.0;
+      ctx.D12[k] = -3.0;
+    }
+    expect_dense_inertia<1>(ctx);
+    expect_dense_inertia<Eigen::Dynamic>(ctx);
+  }
+  // Two coordinates, one of them with zero diagonal blocks and coupled to the other.
+  for (int N : {4, 7}) {
+    Context ctx = random_context(N, 2, 0.0, 4u);
+    for (int k = 0; k < N; ++k) {
+      double* A = ctx.D11.data() + 4 * k;
+      double* B = ctx.D22.data() + 4 * k;
+      double* C = ctx.D12.data() + 4 * k;
+      A[0] = 0, A[1] = 0.5, A[2] = 0.5, A[3] = 2;
+      B[0] = 0, B[1] = 0, B[2] = 0, B[3] = 2;
+      C[0] = -3, C[1] = 0, C[2] = 0, C[3] = -1;
+    }
+    expect_dense_inertia<2>(ctx);
+  }
+}
