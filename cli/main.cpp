@@ -289,11 +289,8 @@ int run_check(const CheckArgs& args) {
     } catch (const std::runtime_error& error) {
       throw UsageError(fmt::format("--trajectory: {}", error.what()));
     }
-    const bool own_grid = scene.options.accuracy > 0;  // an adaptive scene: the path's nodes are its grid
-    const std::string mismatch = problem_mismatch(scene.problem, trajectory, *scene.model, own_grid);
+    const std::string mismatch = fit_to_path(scene, trajectory);
     if (!mismatch.empty()) throw UsageError(fmt::format("--trajectory {}: {}", args.trajectory, mismatch));
-    scene.problem.N = trajectory.N;
-    if (own_grid && scene.problem.clock == ClockMode::none) scene.problem.times = trajectory.t;
   }
   const Certificate certificate = certify(scene.problem, trajectory, scene.options.threads);
   const double residual = residual_norm(scene.problem, trajectory);

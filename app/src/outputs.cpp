@@ -281,7 +281,6 @@ void create_output_folder(const std::string& dir) {
 
 std::string disk_refusal(const Scene& scene, const std::string& out_dir) {
   namespace fs = std::filesystem;
-  if (!scene.model) return "";
   std::error_code ec;
   fs::path at = fs::absolute(out_dir.empty() ? fs::path(".") : fs::path(out_dir), ec);
   if (ec) return "";

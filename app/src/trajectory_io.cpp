@@ -334,8 +334,7 @@ namespace {
 /** Whether two values agree to 1e-9 of the larger, or of 1. */
 bool agree(double a, double b) { return std::fabs(a - b) <= 1e-9 * std::max({1.0, std::fabs(a), std::fabs(b)}); }
 
-}  // namespace
-
+/** fit_to_path's reason; `own_grid`: the scene's solve chooses its grid. */
 std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model,
                              bool own_grid) {
   const std::size_t d = static_cast<std::size_t>(trajectory.dim);
@@ -403,6 +402,17 @@ std::string problem_mismatch(const Problem& problem, const Trajectory& trajector
                          k, trajectory.t[static_cast<std::size_t>(k)], name(i), node(k)[i], a, name(i), knot.q[i]);
     }
   }
+  return "";
+}
+
+}  // namespace
+
+std::string fit_to_path(Scene& scene, const Trajectory& trajectory) {
+  const bool own_grid = scene.options.accuracy > 0;  // an adaptive scene: the path's nodes are its grid
+  std::string mismatch = problem_mismatch(scene.problem, trajectory, *scene.model, own_grid);
+  if (!mismatch.empty()) return mismatch;
+  scene.problem.N = trajectory.N;
+  if (own_grid && scene.problem.clock == ClockMode::none) scene.problem.times = trajectory.t;
   return "";
 }
 

@@ -28,14 +28,11 @@ py::object check_scene(Scene scene, const py::object& q, const py::object& t) {
   }
   Trajectory trajectory = initial_trajectory(scene, q, t, "q");
   if (!q.is_none()) {
-    scene.problem.N = trajectory.N;
-    const bool own_grid = scene.options.accuracy > 0;  // an adaptive scene: the path's nodes are its grid
-    if (own_grid && t.is_none())
+    if (scene.options.accuracy > 0 && t.is_none())
       throw InputError("q: the scene chooses its grid (grid.accuracy), so a path is checked on its own node times: "
                        "give the Result, not its array q");
-    const std::string mismatch = app::problem_mismatch(scene.problem, trajectory, *scene.model, own_grid);
+    const std::string mismatch = app::fit_to_path(scene, trajectory);
     if (!mismatch.empty()) throw InputError("q: " + mismatch);
-    if (own_grid && scene.problem.clock == ClockMode::none) scene.problem.times = trajectory.t;
   }
   Certificate certificate;
   double residual = 0, action = 0;

@@ -426,7 +426,6 @@ class BlockTridiagonal {
       at[side] = eliminate(false);
       diag_ = unshifted;
     }
-    jacobi_scaling();
     if (at[0].zero != 0 || at[1].zero != 0) return in;
     Inertia decided;
     decided.positive = at[1].positive;

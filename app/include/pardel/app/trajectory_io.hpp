@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "pardel/app/scene.hpp"
 #include "pardel/pardel.hpp"
 
 namespace pardel::app {
@@ -45,17 +46,16 @@ std::string trajectory_csv(const pardel_model& model, const Trajectory& trajecto
  */
 Trajectory read_trajectory_csv(const std::string& path, const pardel_model& model);
 
-/** Why `trajectory` is not a path of `problem`'s boundary-value problem, in words naming the node,
+/** Why `trajectory` is not a path of `scene`'s boundary-value problem, in words naming the node,
  *  the component and the scene's key ("node 0 has x = 5, the scene's boundary.q0 has x = 0"), or ""
- *  when it is one. Values agree to 1e-9 of the larger, or of 1. Checked: the first and last nodes
- *  against boundary.q0 and boundary.qN; the node times against the scene's grid at N =
- *  trajectory.N (pardel::grid_times), or, with `own_grid` (a scene whose solve chooses its grid:
- *  grid.accuracy) or under a clock, t0 first, increasing, t0 + T last except under
- *  free_final_time; each knot on an interior node with the knot's coordinates there. A check of a
- *  trajectory against a scene (`pardel check`, pardel.check) refuses one that is another problem's
- *  path. */
-std::string problem_mismatch(const Problem& problem, const Trajectory& trajectory, const pardel_model& model,
-                             bool own_grid = false);
+ *  when it is one, and then the scene's problem fitted to it for a check at it (`pardel check
+ *  --trajectory`, pardel.check): problem.N its N and, where the scene's solve chooses its grid
+ *  (grid.accuracy, no clock), problem.times its node times. Values agree to 1e-9 of the larger, or
+ *  of 1. Checked: the first and last nodes against boundary.q0 and boundary.qN; the node times
+ *  against the scene's grid at N = trajectory.N (pardel::grid_times), or, in a scene with
+ *  grid.accuracy or under a clock, t0 first, increasing, t0 + T last except under free_final_time;
+ *  each knot on an interior node with the knot's coordinates there. */
+std::string fit_to_path(Scene& scene, const Trajectory& trajectory);
 
 /** Writes `content` to `path` through a temporary file in the same folder and a rename, so that
  *  readers never see a half-written file. Throws std::runtime_error naming the path on failure. */
