@@ -298,7 +298,8 @@ void read_solver(const SceneReader& r, const toml::table& root, Scene& scene) {
   }
 }
 
-/** [[knots]]: interior points the path must pass, each on a grid node. */
+/** [[knots]]: interior points the path must pass, each on a grid node (under grid.accuracy
+ *  anywhere inside: the adaptive solve's first grid has nodes there). */
 void read_knots(const SceneReader& r, const toml::table& root, Scene& scene) {
   const pardel_model& model = *scene.model;
   Problem& problem = scene.problem;
@@ -328,14 +329,27 @@ void read_knots(const SceneReader& r, const toml::table& root, Scene& scene) {
                      fmt::format("model {} has coords {}", model.name, coords_text));
       const double position = (*t - problem.t0) / h;
       const toml::node& t_node = *knot->get("t");
-      if (!(position > 0.5 && position < problem.N - 0.5)) {
+      const double tol = 1e-9 * std::max(1.0, std::abs(problem.T));
+      const bool inside = scene.options.accuracy > 0 ? *t > problem.t0 + tol && *t < problem.t0 + problem.T - tol
+                                                     : position > 0.5 && position < problem.N - 0.5;
+      if (!inside) {
         r.fail(t_node, name + ".t",
                fmt::format("{}.t = {} must lie strictly inside the grid ({}, {}); the ends are set by [boundary]", name,
                            *t, problem.t0, problem.t0 + problem.T));
       }
+      if (scene.options.accuracy > 0) {
+        // An adaptive solve's first grid puts the knots on nodes (docs/solvers.md, "Adaptive grids").
+        for (const Knot& other : problem.knots) {
+          if (std::abs(*t - other.t) <= tol)
+            r.fail(t_node, name + ".t", fmt::format("{}.t = {}: another knot is already at t = {}", name, *t, other.t));
+        }
+        k.t = *t;
+        problem.knots.push_back(std::move(k));
+        continue;
+      }
       const long node_index = std::lround(position);
       const double node_time = problem.t0 + node_index * h;
-      if (std::abs(*t - node_time) > 1e-9 * std::max(1.0, std::abs(problem.T))) {
+      if (std::abs(*t - node_time) > tol) {
         const long below = static_cast<long>(std::floor(position));
         r.fail(t_node, name + ".t",
                fmt::format("{}.t = {} is not on a grid node (h = T/N = {}); nearest nodes: t = {} (k = {}) and "

@@ -6,7 +6,7 @@
  * the request: a larger grid while the estimate is above the requested accuracy (or not confirmed
  * by a third grid level), and after a grid that met it with room a smaller one, until one misses
  * it; the previous solution, interpolated onto the new grid, starts the next solve. Knots stay on
- * nodes that are multiples of 4. docs/solvers.md, "Adaptive grids".
+ * nodes that are multiples of 4, from the first grid on. docs/solvers.md, "Adaptive grids".
  */
 #include "adaptive.hpp"
 
@@ -299,6 +299,39 @@ std::vector<int> fixed_nodes(const Problem& problem) {
   return nodes;
 }
 
+/**
+ * The first grid of an adaptive solve whose knots are not all on nodes of the uniform grid of N
+ * that are multiples of kMultiple: each stretch between the ends and the knots split uniformly
+ * into a multiple of kMultiple intervals (at least kMultiple) in proportion to its length, N
+ * rounded up to a multiple of kMultiple. Empty where the uniform grid serves, where the problem
+ * gives its own times, or where a knot is outside the interval or shares its time with another
+ * (those are reported by the solve, naming the knot).
+ */
+std::vector<double> first_grid(const Problem& problem) {
+  if (problem.knots.empty() || !problem.times.empty() || !(problem.T > 0) || problem.N < 1) return {};
+  bool aligned = true;
+  for (std::size_t a = 0; a < problem.knots.size(); ++a) {
+    const int k = knot_node(problem, a, problem.N, nullptr);
+    aligned = aligned && k > 0 && k % kMultiple == 0;
+  }
+  if (aligned) return {};
+  const double t_end = problem.t0 + problem.T;
+  std::vector<double> fixed{problem.t0, t_end};
+  for (const Knot& knot : problem.knots) fixed.push_back(knot.t);
+  std::sort(fixed.begin(), fixed.end());
+  const double tol = 1e-9 * std::max(1.0, std::fabs(problem.T));
+  if (!(fixed.front() == problem.t0 && fixed.back() == t_end)) return {};
+  for (std::size_t j = 1; j < fixed.size(); ++j)
+    if (!(fixed[j] - fixed[j - 1] > tol)) return {};
+  const int spans = static_cast<int>(fixed.size()) - 1;
+  const int N = std::max(kMultiple * spans, problem.N + (kMultiple - problem.N % kMultiple) % kMultiple);
+  std::vector<int> fixed_index(fixed.size());
+  for (std::size_t j = 0; j < fixed.size(); ++j) fixed_index[j] = static_cast<int>(j);
+  std::vector<double> times = equidistribute(fixed, std::vector<double>(static_cast<std::size_t>(spans), 1.0), fixed_index, N);
+  times.back() = t_end;
+  return times;
+}
+
 /** The outcome of an adaptive solve whose last grid, N intervals, missed the request: at the
  *  largest N allowed (`at_max_N`) or after kMaxGrids grids. */
 std::string not_reached(const Summary& summary, int N, const Options& requested, bool at_max_N) {
@@ -403,6 +436,21 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
   options.accuracy = 0;
   Problem current = problem;
   Trajectory guess = trajectory;
+  std::vector<double> first;
+  if (validate(problem, trajectory, nullptr) && trajectory.N == problem.N) first = first_grid(problem);
+  if (!first.empty()) {
+    if (static_cast<long>(first.size()) - 1 > requested.accuracy_max_N)
+      return refuse("the first grid with a multiple of " + std::to_string(kMultiple) +
+                    " intervals between the ends and each knot has N = " + std::to_string(first.size() - 1) +
+                    ", above accuracy_max_N = " + std::to_string(requested.accuracy_max_N));
+    if (guess.t.size() != static_cast<std::size_t>(guess.N) + 1) {
+      guess.t.resize(static_cast<std::size_t>(guess.N) + 1);
+      for (int k = 0; k <= guess.N; ++k) guess.t[static_cast<std::size_t>(k)] = problem.t0 + problem.T * k / guess.N;
+    }
+    guess = interpolate(guess, first);
+    current.N = static_cast<int>(first.size()) - 1;
+    current.times = std::move(first);
+  }
   std::vector<int> sizes;
   long iterations = 0;
   const double p = problem.discretization ? problem.discretization->consistency_order : 2;

@@ -83,3 +83,45 @@ def test_a_first_grid_above_the_largest_N_is_refused_at_its_key():
     # Without N the first grid is the default 16, or accuracy_max_N where that is smaller.
     r = pardel.solve(LAYER_LAG, q0=[1.0], qN=[0.0], T=1, accuracy=1e-12, accuracy_max_N=8, method="newton")
     assert r.grid_sizes[0] == 8 and r.N <= 8 and "not reached" in r.grid_note
+
+
+FORCED_LAG = """\
+# x'' = -w^2 x + cos(2 t): a driven spring, whose motion between two fixed values is known
+model driven_spring
+coords x
+param w = 1.3
+L = 1/2*x'^2 - w^2/2*x^2 + x*cos(2*t)
+discretizations galerkin_gauss(s=2)
+"""
+W = 1.3
+
+
+def driven_between(ta, xa, tb, xb, t):
+    """x = cos(2t)/(w^2 - 4) + A cos(w t) + B sin(w t) through (ta, xa) and (tb, xb)."""
+    part = lambda s: np.cos(2 * s) / (W * W - 4)
+    M = np.array([[math.cos(W * ta), math.sin(W * ta)], [math.cos(W * tb), math.sin(W * tb)]])
+    A, B = np.linalg.solve(M, [xa - part(ta), xb - part(tb)])
+    return part(t) + A * np.cos(W * t) + B * np.sin(W * t)
+
+
+def test_knots_off_the_uniform_first_grid_get_nodes_of_their_own():
+    # T = 2 and the default first grid of 16 intervals (step 0.125): neither knot is on its nodes.
+    fixed = [(0.0, 0.5), (0.7, -0.4), (1.45, 0.9), (2.0, 0.2)]
+    r = pardel.solve(FORCED_LAG, q0=[fixed[0][1]], qN=[fixed[-1][1]], T=2, knots=[(t, [x]) for t, x in fixed[1:-1]],
+                     accuracy=1e-8, method="newton", rtol=1e-13)
+    assert r.status == "converged", r.message
+    assert "reached" in r.grid_note and "not reached" not in r.grid_note, r.grid_note
+    exact_x = np.empty_like(r.t)
+    for (ta, xa), (tb, xb) in zip(fixed, fixed[1:]):
+        k = int(np.argmin(np.abs(r.t - tb)))
+        assert abs(r.t[k] - tb) <= 1e-12 and abs(r.q[k, 0] - xb) <= 1e-12  # each fixed point is a node
+        inside = (r.t >= ta) & (r.t <= tb)
+        exact_x[inside] = driven_between(ta, xa, tb, xb, r.t[inside])
+    error = np.abs(r.q[:, 0] - exact_x).max()
+    assert error <= 3e-8
+    assert error / 3 <= r.error_estimate <= 3 * error, (r.error_estimate, error)
+
+
+def test_two_knots_at_one_time_are_refused_under_an_adaptive_grid():
+    with pytest.raises(pardel.PardelError, match=r"knots\[1\]\.t = 0\.7: another knot is already at t = 0\.7"):
+        pardel.solve(FORCED_LAG, q0=[0.5], qN=[0.2], T=2, knots=[(0.7, [0.1]), (0.7, [0.3])], accuracy=1e-8)
