@@ -332,6 +332,12 @@ void read_knots(const SceneReader& r, const toml::table& root, Scene& scene) {
       const double tol = 1e-9 * std::max(1.0, std::abs(problem.T));
       const bool inside = scene.options.accuracy > 0 ? *t > problem.t0 + tol && *t < problem.t0 + problem.T - tol
                                                      : position > 0.5 && position < problem.N - 0.5;
+      if (!inside && scene.options.accuracy > 0) {
+        r.fail(t_node, name + ".t",
+               fmt::format("{}.t = {} must lie inside the grid ({}, {}), more than {:.3g} from either end; the ends "
+                           "are set by [boundary]",
+                           name, *t, problem.t0, problem.t0 + problem.T, tol));
+      }
       if (!inside) {
         r.fail(t_node, name + ".t",
                fmt::format("{}.t = {} must lie strictly inside the grid ({}, {}); the ends are set by [boundary]", name,
@@ -341,7 +347,9 @@ void read_knots(const SceneReader& r, const toml::table& root, Scene& scene) {
         // An adaptive solve's first grid puts the knots on nodes (docs/solvers.md, "Adaptive grids").
         for (const Knot& other : problem.knots) {
           if (std::abs(*t - other.t) <= tol)
-            r.fail(t_node, name + ".t", fmt::format("{}.t = {}: another knot is already at t = {}", name, *t, other.t));
+            r.fail(t_node, name + ".t",
+                   fmt::format("{}.t = {}: another knot is already at t = {}{}", name, *t, other.t,
+                               *t == other.t ? "" : fmt::format(" (within {:.3g})", tol)));
         }
         k.t = *t;
         problem.knots.push_back(std::move(k));

@@ -34,7 +34,8 @@ class Result:
     (dict by name, empty when not estimated), solve_error (the solve's own error, the largest absolute
     value of the Newton correction delta = -H^-1 r at the returned iterate over the nodes and
     coordinates, NaN where not computed), error_note (how it was made, or "not estimated: " and why),
-    extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
+    error_reliable (whether a third grid level confirmed the estimate) and error_observed_order (the
+    order it observed, NaN where none), extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
     solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
     wall_seconds, assessment_seconds (the point assessment's part of it), model (the model's name), coords (its coordinate names), stopped_by_callback
     (whether on_iteration stopped the solve), checkpoint (the folder of the checkpoint this
@@ -61,6 +62,8 @@ class Result:
     error_by_coordinate: Dict[str, float]
     solve_error: float
     error_note: str
+    error_reliable: bool
+    error_observed_order: float
     extrapolated: bool
     grid_sizes: List[int]
     grid_note: str
@@ -97,6 +100,9 @@ class Result:
         self.error_by_coordinate = dict(s["error"]["by_coordinate"])
         self.solve_error = float("nan") if s["error"].get("solve") is None else s["error"]["solve"]
         self.error_note = s["error"]["note"]
+        self.error_reliable = bool(s["error"]["reliable"])
+        order = s["error"].get("observed_order")
+        self.error_observed_order = float("nan") if order is None else float(order)
         self.extrapolated = s["error"]["extrapolated"]
         self.grid_sizes = list(s["grid"]["sizes"])
         self.grid_note = s["grid"]["note"]

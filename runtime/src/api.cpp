@@ -412,7 +412,8 @@ std::string Summary::brief_report() const {
                 action, final_time, wall_seconds * 1e3);
   std::string out = buf;
   if (std::isfinite(error_estimate)) {
-    std::snprintf(buf, sizeof buf, ", error estimate %.3e%s", error_estimate, extrapolated ? " (extrapolated path)" : "");
+    std::snprintf(buf, sizeof buf, ", error estimate %.3e%s", error_estimate,
+                  extrapolated ? " (of the discrete solution; the path returned is extrapolated from it)" : "");
     out += buf;
   } else {
     out += ", error not estimated";

@@ -125,3 +125,44 @@ def test_knots_off_the_uniform_first_grid_get_nodes_of_their_own():
 def test_two_knots_at_one_time_are_refused_under_an_adaptive_grid():
     with pytest.raises(pardel.PardelError, match=r"knots\[1\]\.t = 0\.7: another knot is already at t = 0\.7"):
         pardel.solve(FORCED_LAG, q0=[0.5], qN=[0.2], T=2, knots=[(0.7, [0.1]), (0.7, [0.3])], accuracy=1e-8)
+
+
+FAST_FORCING_LAG = """\
+# x'' + x = cos(w t): a spring driven far above its own frequency
+model fast_forcing
+coords x
+param w = 33
+L = 1/2*x'^2 - 1/2*x^2 + x*cos(w*t)
+discretizations galerkin_gauss(s=2) galerkin_lobatto(s=2)
+"""
+
+
+def fast_forcing_exact(t, w, T, xN):
+    """A cos t + B sin t + cos(w t) / (1 - w^2) with x(0) = 0 and x(T) = xN."""
+    part = lambda s: np.cos(w * s) / (1 - w * w)
+    A = -part(0.0)
+    B = (xN - part(T) - A * math.cos(T)) / math.sin(T)
+    return A * np.cos(t) + B * np.sin(t) + part(t)
+
+
+def test_differences_falling_faster_than_the_order_do_not_confirm_the_estimate():
+    # w h = 4.1 on N = 16: the grids N = 16, 8 and 4 do not resolve the forcing, and the
+    # differences between them fall with order 8 where the discretization's is 4.
+    r = pardel.solve(FAST_FORCING_LAG, q0=[0.0], qN=[0.3], T=2, N=16, discretization="galerkin_gauss(s=2)",
+                     method="newton", rtol=1e-13)
+    assert r.status == "converged", r.message
+    error = np.abs(r.q[:, 0] - fast_forcing_exact(r.t, 33, 2, 0.3)).max()
+    assert error > 3 * r.error_estimate  # the estimate is far below the truth here ...
+    assert not r.error_reliable and r.error_observed_order > 5.52  # ... and it says so
+    assert "above the 4 expected" in r.error_note, r.error_note
+
+
+@pytest.mark.parametrize("discretization", ["galerkin_gauss(s=2)", "galerkin_lobatto(s=2)"])
+def test_an_adaptive_grid_reaches_the_request_in_truth_past_an_unresolved_forcing(discretization):
+    r = pardel.solve(FAST_FORCING_LAG, q0=[0.0], qN=[0.3], T=2, accuracy=1e-4, discretization=discretization,
+                     method="newton", rtol=1e-13)
+    assert r.status == "converged" and "reached" in r.grid_note and "not reached" not in r.grid_note, r.grid_note
+    assert r.error_reliable
+    error = np.abs(r.q[:, 0] - fast_forcing_exact(r.t, 33, 2, 0.3)).max()
+    assert error <= 3e-4, (error, r.grid_note)
+    assert error / 3 <= r.error_estimate <= 3 * error, (r.error_estimate, error)
