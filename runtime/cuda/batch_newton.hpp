@@ -35,6 +35,7 @@
 
 #include "batch_sweep.hpp"
 #include "constants.hpp"
+#include "cyclic_reduction.hpp"
 #include "pardel/kernel_abi.h"
 
 namespace pardel::batch_newton {
@@ -145,37 +146,16 @@ PARDEL_HD inline double evaluate(int N, const double* t, const double* h, const 
 }
 
 /** Cholesky factor of the symmetric D x D matrix S in place (lower triangle); false when a pivot is
- *  not a positive finite number. */
+ *  not a positive finite number (cyclic_reduction.hpp's, the block operations of both solvers). */
 template <int D>
 PARDEL_HD inline bool cholesky(double* S) {
-  for (int j = 0; j < D; ++j) {
-    double d = S[j * D + j];
-    for (int k = 0; k < j; ++k) d -= S[j * D + k] * S[j * D + k];
-    if (!(d > 0) || !isfinite(d)) return false;
-    const double l = sqrt(d);
-    S[j * D + j] = l;
-    for (int i = j + 1; i < D; ++i) {
-      double v = S[i * D + j];
-      for (int k = 0; k < j; ++k) v -= S[i * D + k] * S[j * D + k];
-      S[i * D + j] = v / l;
-    }
-  }
-  return true;
+  return cyclic_reduction::factor_block<D>(S, D);
 }
 
 /** y <- (L L^T)^-1 y for the factor L of cholesky(). */
 template <int D>
 PARDEL_HD inline void cholesky_solve(const double* L, double* y) {
-  for (int i = 0; i < D; ++i) {
-    double v = y[i];
-    for (int k = 0; k < i; ++k) v -= L[i * D + k] * y[k];
-    y[i] = v / L[i * D + i];
-  }
-  for (int i = D - 1; i >= 0; --i) {
-    double v = y[i];
-    for (int k = i + 1; k < D; ++k) v -= L[k * D + i] * y[k];
-    y[i] = v / L[i * D + i];
-  }
+  cyclic_reduction::solve_block<D>(L, y, 1, D);
 }
 
 /**

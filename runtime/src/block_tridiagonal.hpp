@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "constants.hpp"
+#include "cyclic_reduction.hpp"
 #include "engine.hpp"
 #include "inertia.hpp"
 
@@ -53,28 +54,15 @@ class BlockTridiagonal {
       llt_.clear();
       assign_within(factor_, n, capacity, Mat::Zero(d, d));
     }
-    levels_.clear();
+    cyclic_.clear();
   }
 
-  /** Allocates the levels of block cyclic reduction for the current size. */
+  /** Allocates the levels of block cyclic reduction for the current size (cyclic_reduction.hpp's
+   *  storage, about 2 n (3 d^2 + 2 d) doubles). */
   void reserve_cyclic_reduction() {
-    if (!levels_.empty() || n_ < 1) return;
-    const int d = d_;
-    int m = n_;
-    while (m >= 1) {
-      Level L;
-      L.n = m;
-      L.Dg.assign(static_cast<std::size_t>(m), Mat::Zero(d, d));
-      L.Lo.assign(static_cast<std::size_t>(m), Mat::Zero(d, d));
-      L.Up.assign(static_cast<std::size_t>(m), Mat::Zero(d, d));
-      L.b.assign(static_cast<std::size_t>(m), Vec::Zero(d));
-      L.x.assign(static_cast<std::size_t>(m), Vec::Zero(d));
-      emplace_factorizations(L.llt, static_cast<std::size_t>(m), d);
-      L.ok.assign(static_cast<std::size_t>(m), 1);
-      levels_.push_back(std::move(L));
-      if (m == 1) break;
-      m /= 2;
-    }
+    if (n_ < 1) return;
+    const std::size_t values = static_cast<std::size_t>(cyclic_reduction::values(n_, d_));
+    if (cyclic_.size() != values) cyclic_.assign(values, 0.0);
   }
 
   int blocks() const { return n_; }
@@ -237,105 +225,31 @@ class BlockTridiagonal {
     solve_columns<2>(bs, xs);
   }
 
-  /** Block cyclic reduction (factor and solve together); false if a pivot is not p.d. */
+  /** Block cyclic reduction (factor and solve together, cyclic_reduction.hpp's host path over
+   *  `threads`); false if a pivot is not p.d. */
   bool solve_cyclic_reduction(const double* b, double* x, int threads) {
     failed_ = -1;
     if (n_ <= 0) return true;
     reserve_cyclic_reduction();
     const int d = d_;
-    Level& L0 = levels_[0];
+    const std::size_t dz = static_cast<std::size_t>(d), dd = dz * dz;
+    const cyclic_reduction::Level L0 = cyclic_reduction::level(cyclic_.data(), n_, d, 0);
     for (int i = 0; i < n_; ++i) {
       const std::size_t ii = static_cast<std::size_t>(i);
-      L0.Dg[ii] = diag_[ii];
-      L0.Up[ii] = off_[ii];
-      if (i > 0)
-        L0.Lo[ii] = off_[ii - 1].transpose();
-      else
-        L0.Lo[ii].setZero();
-      L0.b[ii] = VecMap(b + ii * d, d);
-    }
-    // Reduction: keep the odd rows of each level.
-    for (std::size_t l = 0; l + 1 < levels_.size(); ++l) {
-      Level& A = levels_[l];
-      Level& B = levels_[l + 1];
-      const int n = A.n;
-      bool ok = true;
-#pragma omp parallel if (threads > 1 && n >= kParallelMin) num_threads(threads)
-      {
-#pragma omp for schedule(static)
-        for (int j = 0; j < n; j += 2) {
-          const std::size_t jj = static_cast<std::size_t>(j);
-          A.llt[jj].compute(A.Dg[jj]);
-          A.ok[jj] = A.llt[jj].info() == Eigen::Success && finite_positive_diag(A.llt[jj]);
+      for (int a = 0; a < d; ++a) {
+        for (int c = 0; c < d; ++c) {
+          L0.S[ii * dd + static_cast<std::size_t>(a * d + c)] = diag_[ii](a, c);
+          L0.U[ii * dd + static_cast<std::size_t>(a * d + c)] = i + 1 < n_ ? off_[ii](a, c) : 0.0;
         }
-#pragma omp single
-        {
-          for (int j = 0; j < n; j += 2)
-            if (!A.ok[static_cast<std::size_t>(j)]) ok = false;
-        }
-        if (ok) {
-#pragma omp for schedule(static)
-          for (int m = 0; m < B.n; ++m) {
-            const int i = 2 * m + 1;
-            const std::size_t ii = static_cast<std::size_t>(i);
-            const std::size_t mm = static_cast<std::size_t>(m);
-            // alpha = -Lo_i Dg_{i-1}^{-1}, beta = -Up_i Dg_{i+1}^{-1} (Dg symmetric)
-            const Mat alphaT = A.llt[ii - 1].solve(A.Lo[ii].transpose());
-            B.Dg[mm] = A.Dg[ii];
-            B.Dg[mm].noalias() -= alphaT.transpose() * A.Up[ii - 1];
-            B.b[mm] = A.b[ii];
-            B.b[mm].noalias() -= alphaT.transpose() * A.b[ii - 1];
-            if (i - 1 > 0)
-              B.Lo[mm].noalias() = -alphaT.transpose() * A.Lo[ii - 1];
-            else
-              B.Lo[mm].setZero();
-            if (i + 1 < n) {
-              const Mat betaT = A.llt[ii + 1].solve(A.Up[ii].transpose());
-              B.Dg[mm].noalias() -= betaT.transpose() * A.Lo[ii + 1];
-              B.b[mm].noalias() -= betaT.transpose() * A.b[ii + 1];
-              if (i + 2 < n)
-                B.Up[mm].noalias() = -betaT.transpose() * A.Up[ii + 1];
-              else
-                B.Up[mm].setZero();
-            } else {
-              B.Up[mm].setZero();
-            }
-          }
-        }
+        L0.b[ii * dz + static_cast<std::size_t>(a)] = b[ii * dz + static_cast<std::size_t>(a)];
       }
-      if (!ok) return false;
     }
-    // The last level has one block.
-    Level& top = levels_.back();
-    top.llt[0].compute(top.Dg[0]);
-    if (top.llt[0].info() != Eigen::Success || !finite_positive_diag(top.llt[0])) {
-      failed_ = 0;
+    int failed_level = -1;
+    if (!cyclic_reduction::solve_on_host<D>(cyclic_.data(), n_, d, threads, kParallelMin, &failed_level)) {
+      if (failed_level == cyclic_reduction::level_count(n_) - 1) failed_ = 0;
       return false;
     }
-    top.x[0] = top.llt[0].solve(top.b[0]);
-    // Back substitution: odd rows come from the level above, even rows are solved.
-    for (std::size_t l = levels_.size() - 1; l-- > 0;) {
-      Level& A = levels_[l];
-      const Level& B = levels_[l + 1];
-      const int n = A.n;
-#pragma omp parallel for if (threads > 1 && n >= kParallelMin) num_threads(threads) schedule(static)
-      for (int i = 0; i < n; ++i) {
-        const std::size_t ii = static_cast<std::size_t>(i);
-        if (i % 2 == 1) {
-          A.x[ii] = B.x[ii / 2];
-        }
-      }
-#pragma omp parallel for if (threads > 1 && n >= kParallelMin) num_threads(threads) schedule(static)
-      for (int j = 0; j < n; j += 2) {
-        const std::size_t jj = static_cast<std::size_t>(j);
-        Vec r = A.b[jj];
-        if (j > 0) r.noalias() -= A.Lo[jj] * A.x[jj - 1];
-        if (j + 1 < n) r.noalias() -= A.Up[jj] * A.x[jj + 1];
-        A.x[jj] = A.llt[jj].solve(r);
-      }
-    }
-    const Level& L = levels_[0];
-    for (int i = 0; i < n_; ++i) Eigen::Map<Vec>(x + static_cast<std::size_t>(i) * d, d) = L.x[static_cast<std::size_t>(i)];
+    std::copy(L0.x, L0.x + static_cast<std::size_t>(n_) * dz, x);
     return true;
   }
 
@@ -505,14 +419,6 @@ class BlockTridiagonal {
   }
 
  private:
-  struct Level {
-    int n = 0;
-    std::vector<Mat> Dg, Lo, Up;
-    std::vector<Vec> b, x;
-    std::vector<Eigen::LLT<Mat>> llt;
-    std::vector<unsigned char> ok;
-  };
-
   /** The elimination of inertia(); with `keep`, each pivot's (pseudo-)inverse in inverse_. */
   Inertia eliminate(bool keep) {
     Inertia in;
@@ -710,7 +616,7 @@ class BlockTridiagonal {
   std::vector<double> scaling_;       ///< the inertia's Jacobi scaling |H_aa|^{-1/2}, n*d
   bool indefinite_ = false;           ///< the last factorization was factor_indefinite()
   mutable Eigen::LLT<Mat> pivot_scratch_;
-  std::vector<Level> levels_;
+  std::vector<double> cyclic_;        ///< block cyclic reduction's levels (cyclic_reduction.hpp)
 };
 
 }  // namespace pardel::detail

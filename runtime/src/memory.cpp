@@ -55,12 +55,13 @@ BlockBytes block_bytes(int d) {
 }  // namespace
 
 /** BlockTridiagonal<D>: diag, off, W, y and the pivots' factors for N-1 blocks (resize), and with
- *  `cyclic` the cyclic-reduction levels (N-1, (N-1)/2, ..., 1 blocks: about 2(N-1) in all). */
+ *  `cyclic` the cyclic-reduction levels (N-1, (N-1)/2, ..., 1 rows: about 2(N-1) in all, each of
+ *  three d x d blocks and two vectors of d). */
 double detail::block_tridiagonal_bytes(double N, int d, bool cyclic) {
   const BlockBytes b = block_bytes(d);
   const double n = std::max(N - 1, 0.0);
   const double factors = b.fixed_size ? b.mat : b.llt;
-  const double levels = cyclic ? 2 * n * (3 * b.mat + 2 * b.vec + b.llt + 1) : 0;
+  const double levels = cyclic ? 8 * 2 * n * (3.0 * d * d + 2.0 * d) : 0;  // cyclic_reduction::values
   return n * (3 * b.mat + b.vec + factors) + levels;
 }
 

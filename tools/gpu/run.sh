@@ -36,7 +36,7 @@ started=$(date +%s)
 } | tee "$out/machine.txt"
 
 echo "== device tests"
-for t in test_cuda_device_kernels test_cuda_device_batch; do
+for t in test_cuda_device_kernels test_cuda_device_batch test_cuda_cyclic_reduction; do
   if ! timeout 150 "$bin/$t" --gtest_brief=1 >"$work/$t.log" 2>&1; then
     status=1
     echo "$t FAILED"
