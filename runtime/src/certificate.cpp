@@ -359,13 +359,23 @@ Certificate certify(const Problem& problem, const Trajectory& trajectory, int th
         ib.push_back(d + b);
       }
     IntervalCheck& ch = checks[kk];
-    double scale_h, scale_a, scale_b;
-    restricted_eigs(Hk, idx, &ch.min_h, &scale_h);
-    restricted_eigs(Hk, ia, &ch.min_a, &scale_a);
-    restricted_eigs(Hk, ib, &ch.min_b, &scale_b);
-    ch.psd = ch.min_h >= -detail::kCertificateRelTol * scale_h;
-    ch.a_pd = ch.min_a > detail::kCertificateRelTol * scale_h;
-    ch.b_pd = ch.min_b > detail::kCertificateRelTol * scale_h;
+    double scale;
+    restricted_eigs(Hk, idx, &ch.min_h, &scale);
+    restricted_eigs(Hk, ia, &ch.min_a, &scale);
+    restricted_eigs(Hk, ib, &ch.min_b, &scale);
+    // Decided on the Jacobi-scaled J H J (J = |H_aa|^(-1/2), a congruence: the same signs), so that
+    // coordinates in very different units (blocks diag(8e12, 8e-12)) are judged to working
+    // precision, not against the largest entry; the eigenvalues reported are H's own.
+    Eigen::VectorXd J(2 * d);
+    for (int a = 0; a < 2 * d; ++a) J(a) = detail::jacobi_scale(Hk(a, a));
+    const Eigen::MatrixXd Hs = J.asDiagonal() * Hk * J.asDiagonal();
+    double scaled_h, scaled_a, scaled_b, scale_h;
+    restricted_eigs(Hs, idx, &scaled_h, &scale_h);
+    restricted_eigs(Hs, ia, &scaled_a, &scale);
+    restricted_eigs(Hs, ib, &scaled_b, &scale);
+    ch.psd = scaled_h >= -detail::kCertificateRelTol * scale_h;
+    ch.a_pd = scaled_a > detail::kCertificateRelTol * scale_h;
+    ch.b_pd = scaled_b > detail::kCertificateRelTol * scale_h;
   }
   c.all_intervals_psd = c.all_A_pd = c.all_B_pd = true;
   for (int k = 0; k < N; ++k) {

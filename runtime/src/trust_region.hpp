@@ -48,6 +48,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -57,15 +58,33 @@
 
 namespace pardel::detail {
 
+/** The largest over the smallest |diagonal entry| of the Hessian over the free components at ctx's
+ *  evaluation (1 where there is none, or a zero). */
+inline double diagonal_spread(const Context& ctx) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim), dd = d * d;
+  double lo = std::numeric_limits<double>::infinity(), hi = 0;
+  for (int k = 1; k < ctx.N; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    if (ctx.D11.size() < (kk + 1) * dd || ctx.D22.size() < kk * dd) return 1;
+    for (std::size_t a = 0; a < d; ++a) {
+      if (!ctx.is_free[kk * d + a]) continue;
+      const double v = std::fabs(ctx.D22[(kk - 1) * dd + a * (d + 1)] + ctx.D11[kk * dd + a * (d + 1)]);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  return hi > 0 && lo > 0 && std::isfinite(hi) ? hi / lo : 1;
+}
+
 /**
  * The outcome when no trial step, down to a vanishing radius, decreased the action. A vanishing
  * trust-region step is a multiple of the negative gradient; an action that is unbounded below
  * would decrease along it, so failing here means that the gradient (the DEL residual) is at the
  * round-off level of the action.
  */
-inline StepOutcome newton_stalled(long iteration, double residual, double residual_floor) {
+inline StepOutcome newton_stalled(long iteration, double residual, double residual_floor, double diagonal_spread = 1) {
   StepOutcome out;
-  char buf[400];
+  char buf[640];
   out.failure = Termination::stalled;
   if (at_round_off(residual, residual_floor)) {
     std::snprintf(buf, sizeof buf,
@@ -79,6 +98,16 @@ inline StepOutcome newton_stalled(long iteration, double residual, double residu
                   "at a DEL residual %.3g far above its round-off level (estimate %.3g): the action's derivatives "
                   "disagree with its values here (a model that is not smooth, or not differentiable, at this iterate)",
                   iteration, residual, residual_floor);
+    if (diagonal_spread > kStallSpread) {
+      // Steps in one metric for coordinates of very different units: the decrease along the
+      // stiff coordinates is below the action's round-off while the soft ones' residual remains.
+      const std::size_t used = std::strlen(buf);
+      std::snprintf(buf + used, sizeof buf - used,
+                    ", or coordinates whose scales differ too much for steps in one metric (the Hessian's diagonal "
+                    "spans a factor %.2g: solver.newton_shift = \"identity\", or coordinates in comparable units, "
+                    "may reach the solution)",
+                    diagonal_spread);
+    }
   }
   out.message = buf;
   return out;
@@ -343,7 +372,7 @@ class TrustRegionNewton : public Method_ {
                     "; the last finite iterate is returned";
       return out;
     }
-    return newton_stalled(iteration, r0, ctx.residual_floor);
+    return newton_stalled(iteration, r0, ctx.residual_floor, diagonal_spread(ctx));
   }
 
   /** Values of save_state() before the watchdog's reference point. */

@@ -206,3 +206,49 @@ def test_check_agrees_with_the_command_line(tmp_path, spring_lag):
     text = subprocess.run([cli, "check", str(scene_path)], capture_output=True, text=True)
     assert text.returncode == 0, text.stderr
     assert text.stdout.endswith(from_python["certificate"]["report"])
+
+
+UNITS_LAG = """\
+# two free particles in units 24 decades apart: a mass of 1e12 and one of 1e-12
+model far_units
+coords x y
+param m1 = 1e12
+param m2 = 1e-12
+L = 1/2*(m1*x'^2 + m2*y'^2)
+discretizations trapezoid
+"""
+
+
+def test_the_certificate_judges_blocks_in_their_own_units(tmp_path):
+    # Each interval's Hessian is (1/h) [[m, -m], [-m, m]] per coordinate: positive semi-definite,
+    # with A_k = B_k = diag(m1, m2)/h = diag(8e12, 8e-12) positive definite.
+    (tmp_path / "far_units.lag").write_text(UNITS_LAG)
+    (tmp_path / "scene.toml").write_text(
+        'model = "far_units.lag"\ndiscretization = "trapezoid"\n[grid]\nT = 1\nN = 8\n'
+        '[boundary]\nq0 = [0, 0]\nqN = [2e-8, 3e8]\n[output]\ndir = "%s"\n' % (tmp_path / "out"))
+    scene = pardel.load_scene(str(tmp_path / "scene.toml"))
+    r = pardel.solve_scene(scene)
+    assert r.status == "converged" and r.point["kind"] == "minimum", r.message
+    c = pardel.check(scene, r)["certificate"]
+    assert c["all_intervals_psd"] and c["all_A_pd"] and c["all_B_pd"] and c["theorem_holds"], c["report"]
+    assert c["intervals_violating"] == 0
+
+
+SCALED_COSINE_LAG = """\
+# a coercive action in units 24 decades apart: L = (1e12 x'^2 + 1e-12 y'^2)/2 - cos(1e8 x + 1e-8 y)
+model scaled_cosine
+coords x y
+L = 1/2*(1e12*x'^2 + 1e-12*y'^2) - cos(1e8*x + 1e-8*y)
+discretizations trapezoid
+"""
+
+
+def test_a_stall_on_coordinates_of_far_apart_units_says_so():
+    # Newton's steps in the kinetic metric of both coordinates find no decrease of the action at
+    # a residual far above round-off; the model is smooth, and the message names the units.
+    r = pardel.solve(SCALED_COSINE_LAG, q0=[0, 0], qN=[2e-8, 3e8], T=1, N=8, method="newton")
+    assert r.status == "stalled", r.message
+    assert "the Hessian's diagonal spans a factor" in r.message and 'newton_shift = "identity"' in r.message
+    r = pardel.solve(SCALED_COSINE_LAG, q0=[0, 0], qN=[2e-8, 3e8], T=1, N=8, method="newton",
+                     newton_shift="identity")
+    assert r.status == "converged" and r.point["kind"] == "minimum", r.message
