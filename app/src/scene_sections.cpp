@@ -173,8 +173,16 @@ void read_grid(const SceneReader& r, const toml::table& root, Scene& scene) {
            fmt::format("grid.t0 + grid.T = {} + {} overflows a double", problem.t0, problem.T));
   }
   const double step = problem.T / problem.N;
-  if (!std::isnormal(step) || problem.t0 + step == problem.t0 ||
-      problem.t0 + problem.T - step == problem.t0 + problem.T) {
+  const bool separate = problem.t0 + step != problem.t0 && problem.t0 + problem.T - step != problem.t0 + problem.T;
+  if (std::isnormal(step) && !separate && grid->get("t0") &&
+      std::fabs(problem.t0) > std::fabs(problem.T)) {
+    // The step itself is fine; the node times round to one another next to so large a t0.
+    r.fail(*grid->get("t0"), "grid.t0",
+           fmt::format("grid.t0 = {} is too large for the step grid.T / grid.N = {} / {} = {}: in double precision "
+                       "t0 + step rounds to t0, so the node times cannot be told apart (shift the time origin)",
+                       problem.t0, problem.T, problem.N, step));
+  }
+  if (!std::isnormal(step) || !separate) {
     r.fail(*grid->get("T"), "grid.T",
            fmt::format("the step grid.T / grid.N = {} / {} = {} is too small to separate the node times", problem.T,
                        problem.N, step));

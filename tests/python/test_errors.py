@@ -60,3 +60,13 @@ def test_device_is_checked_and_a_refused_device_solve_names_the_device(spring_la
     # Hybrid does not run on the device (and a build or machine without CUDA refuses it too).
     with pytest.raises(pardel.PardelError, match=r"device cuda: "):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, device="cuda", method="hybrid")
+
+
+def test_a_time_origin_too_large_for_the_step_is_named(tmp_path):
+    # T / N = 0.0156 is a fine step; next to t0 = 1e308 the node times round to one another.
+    scene = tmp_path / "far.toml"
+    scene.write_text('model = "fuel_nav"\n[grid]\nt0 = 1e308\nT = 1\nN = 64\n[boundary]\nq0 = [0, 0]\nqN = [6, 5]\n')
+    with pytest.raises(pardel.SceneError, match=r"far\.toml:3:6: error: grid\.t0 = 1e\+308 is too large for the step"):
+        pardel.load_scene(scene)
+    with pytest.raises(pardel.SceneError, match=r"--set grid\.t0=1e300: error: grid\.t0 = 1e\+300 is too large"):
+        pardel.load_scene(scene, ["grid.t0=1e300"])
