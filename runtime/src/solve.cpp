@@ -318,9 +318,22 @@ bool failed_numerically(const Summary& first) {
   }
 }
 
-/** The automatic method's two attempts as one summary: the second's result and point, the
- *  iterations and history of both (the second's numbered on from the first's), the total time,
- *  and a message that says what happened to the first. */
+/** A later attempt that converged, as the summary of both: its result and point, the iterations
+ *  and history of both (its own numbered on from the first's), the total time. */
+Summary after(Summary first, Summary second) {
+  for (IterationRecord rec : second.history) {
+    rec.iteration += first.iterations;
+    rec.seconds += first.wall_seconds;
+    first.history.push_back(rec);
+  }
+  second.history = std::move(first.history);
+  second.iterations += first.iterations;
+  second.wall_seconds += first.wall_seconds;
+  return second;
+}
+
+/** The automatic method's two attempts as one summary: the second's as after() where it
+ *  converged, else the first's; the message says what happened to the first or the second. */
 Summary combined(Summary first, Summary second) {
   const std::string first_outcome = std::string(to_string(first.termination)) + ": " + first.message;
   if (second.termination != Termination::converged) {
@@ -330,17 +343,46 @@ Summary combined(Summary first, Summary second) {
     first.wall_seconds += second.wall_seconds;
     return first;
   }
-  for (IterationRecord rec : second.history) {
-    rec.iteration += first.iterations;
-    rec.seconds += first.wall_seconds;
-    first.history.push_back(rec);
+  Summary both = after(std::move(first), std::move(second));
+  both.message += " by Newton on the DEL residual (stationary-newton), after the minimizing Newton found no "
+                  "minimum of the action near the start (" + first_outcome + ")";
+  return both;
+}
+
+/** The automatic method's minimizing Newton in the kinetic metric (newton_shift = difference)
+ *  stalled far above the round-off level on the problem's own grid: no step decreased the action
+ *  even at a vanishing radius, which coordinates in units far apart cause as well as a model that
+ *  is not smooth there. It is retried from where it stopped in the identity metric, whose steps
+ *  along the stiff coordinates are not tied to the soft ones'. */
+bool retries_in_identity_metric(const Problem& problem, const Options& requested, const Summary& first,
+                                const Trajectory& trajectory) {
+  return requested.method == Method::automatic && !requested.resume_from &&
+         requested.newton_shift == NewtonShift::difference && first.termination == Termination::stalled &&
+         !detail::at_round_off(first.residual, first.residual_floor) && trajectory.N == problem.N;
+}
+
+/** `first`, or where retries_in_identity_metric() its retry: the retry's result as after() where it
+ *  converged (trajectory then the retry's), else the first's with the retry's outcome in the
+ *  message. */
+Summary with_identity_retry(const Problem& problem, const Options& requested, Summary first, Trajectory& trajectory,
+                            const OnceFlags& flags, const TopologyFactory& make) {
+  if (!retries_in_identity_metric(problem, requested, first, trajectory)) return first;
+  Options options = requested;
+  options.newton_shift = NewtonShift::identity;
+  Trajectory retry = trajectory;  // a retry that fails leaves the first attempt's iterate
+  Summary again = solve_once(problem, options, retry, flags, make);
+  if (again.termination != Termination::converged) {
+    first.message += std::string("; a retry from there in the identity metric (newton_shift = identity) ended ") +
+                     to_string(again.termination) + ": " + again.message;
+    first.wall_seconds += again.wall_seconds;
+    return first;
   }
-  second.history = std::move(first.history);
-  second.iterations += first.iterations;
-  second.wall_seconds += first.wall_seconds;
-  second.message += " by Newton on the DEL residual (stationary-newton), after the minimizing Newton found no "
-                    "minimum of the action near the start (" + first_outcome + ")";
-  return second;
+  const std::string first_outcome = std::string(to_string(first.termination)) + ": " + first.message;
+  trajectory = std::move(retry);
+  Summary both = after(std::move(first), std::move(again));
+  both.message += " in the identity metric (newton_shift = identity), retried from where the minimizing Newton in "
+                  "the kinetic metric stopped (" + first_outcome + ")";
+  return both;
 }
 
 /** The solve without the error estimate: the automatic method minimizes first; where no minimum
@@ -351,20 +393,26 @@ Summary solve_attempts(const Problem& problem, const Options& requested, Traject
                        SolvedLevels* coarser_levels, const TopologyFactory& make) {
   OnceFlags flags;
   flags.coarser_levels = coarser_levels;
-  if (!saddles_answer(problem, requested)) return solve_once(problem, requested, trajectory, flags, make);
+  if (!saddles_answer(problem, requested))
+    return with_identity_retry(problem, requested, solve_once(problem, requested, trajectory, flags, make), trajectory,
+                               flags, make);
   Options options = requested;
   options.method = Method::stationary_newton;
   const std::string refusal = make()->unsupported(problem, options);
   if (!refusal.empty()) {
     // No copy of the guess: the second attempt is not made.
-    Summary first = solve_once(problem, requested, trajectory, flags, make);
+    Summary first =
+        with_identity_retry(problem, requested, solve_once(problem, requested, trajectory, flags, make), trajectory,
+                            flags, make);
     if (failed_numerically(first))
       first.message += "; Newton on the DEL residual (stationary-newton), the automatic method's second attempt "
                        "for a model without a declared cost, was not made: " + refusal;
     return first;
   }
   const Trajectory guess = trajectory;
-  Summary first = solve_once(problem, requested, trajectory, flags, make);
+  Summary first =
+      with_identity_retry(problem, requested, solve_once(problem, requested, trajectory, flags, make), trajectory,
+                          flags, make);
   if (!failed_numerically(first)) return first;
   Trajectory second_trajectory = guess;
   Summary second = solve_once(problem, options, second_trajectory, flags, make);

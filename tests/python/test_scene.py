@@ -252,3 +252,31 @@ def test_a_stall_on_coordinates_of_far_apart_units_says_so():
     r = pardel.solve(SCALED_COSINE_LAG, q0=[0, 0], qN=[2e-8, 3e8], T=1, N=8, method="newton",
                      newton_shift="identity")
     assert r.status == "converged" and r.point["kind"] == "minimum", r.message
+
+
+def test_the_automatic_method_retries_such_a_stall_in_the_identity_metric():
+    r = pardel.solve(SCALED_COSINE_LAG, q0=[0, 0], qN=[2e-8, 3e8], T=1, N=8)
+    assert r.status == "converged" and r.point["kind"] == "minimum", r.message
+    assert "in the identity metric (newton_shift = identity), retried from where" in r.message
+    # Independent truth: the trapezoid action S = sum_k h [m1 vx^2/2 + m2 vy^2/2 - (cos th_k + cos th_k+1)/2],
+    # th = a x + b y, written out here; its gradient vanishes at the interior nodes to round-off
+    # of each coordinate's terms, and its Jacobi-scaled Hessian there is positive definite.
+    m1, m2, a, b, h = 1e12, 1e-12, 1e8, 1e-8, 1 / 8
+    x, y = r.q[:, 0], r.q[:, 1]
+    th = a * x + b * y
+    kin_x = m1 * (2 * x[1:-1] - x[:-2] - x[2:]) / h
+    kin_y = m2 * (2 * y[1:-1] - y[:-2] - y[2:]) / h
+    gx, gy = kin_x + h * a * np.sin(th[1:-1]), kin_y + h * b * np.sin(th[1:-1])
+    size_x = np.abs(m1 * np.diff(x) / h).max() + h * a
+    size_y = np.abs(m2 * np.diff(y) / h).max() + h * b
+    assert np.abs(gx).max() <= 1e-9 * size_x and np.abs(gy).max() <= 1e-9 * size_y
+    n = len(x) - 2
+    H = np.zeros((2 * n, 2 * n))
+    for k in range(n):
+        c = h * np.cos(th[k + 1])
+        H[2 * k:2 * k + 2, 2 * k:2 * k + 2] = [[2 * m1 / h + c * a * a, c * a * b], [c * a * b, 2 * m2 / h + c * b * b]]
+        if k + 1 < n:
+            H[2 * k, 2 * k + 2] = H[2 * k + 2, 2 * k] = -m1 / h
+            H[2 * k + 1, 2 * k + 3] = H[2 * k + 3, 2 * k + 1] = -m2 / h
+    J = 1 / np.sqrt(np.abs(np.diag(H)))
+    assert np.linalg.eigvalsh(J[:, None] * H * J[None, :]).min() > 1e-6
