@@ -381,7 +381,7 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   return out;
 }
 
-void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out) {
+void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out, double diagonal_spread) {
   out.kind = PointKind::minimum;
   out.lambda_min = e.lambda[0];
   out.lambda_next = e.lambda[1];
@@ -414,6 +414,10 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
     out.note += format("; the Hessian's condition number is about %.2g, so round-off alone can move the trajectory by "
                        "up to %.2g relative",
                        condition, condition * 1e-16);
+    if (diagonal_spread > kStallSpread)
+      out.note += format(" (a bound over all coordinates in one norm: the Hessian's diagonal spans a factor %.2g, and "
+                         "in their own units the coordinates can move far less)",
+                         diagonal_spread);
   }
 }
 
@@ -458,7 +462,10 @@ void assess_minimum(Context& ctx, double lambda_max, const std::function<void(co
       work);
   if (from && from->held()) op.start = [from, &ctx](int which, double* v) { return from->start(ctx, which, v); };
   try {
-    describe_minimum(smallest_eigenvalues(op, out.positive), sum_action(ctx), out);
+    const SmallestEigenvalues e = smallest_eigenvalues(op, out.positive);
+    // The spread only where the note gives the round-off bound (a pass over the nodes).
+    const bool bounded = e.lambda[0] > 0 && lambda_max / e.lambda[0] * 1e-16 > 1e-3;
+    describe_minimum(e, sum_action(ctx), out, bounded ? diagonal_spread(ctx) : 1.0);
   } catch (const Interrupted&) {
     out = PointAssessment{};
     out.note = "not assessed: interrupted during the assessment of the converged point";

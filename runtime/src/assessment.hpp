@@ -166,8 +166,9 @@ class LevelEigenvectors {
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive);
 
 /** A positive definite Hessian's assessment from its smallest eigenvalues, out.positive and
- *  out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note. */
-void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out);
+ *  out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note; `diagonal_spread`
+ *  (engine.hpp's, 1 where not known) qualifies the note's round-off bound. */
+void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out, double diagonal_spread = 1);
 
 /** False (with `message` naming the model and why) when D12 Ld is singular on every sampled
  *  interval of ctx.q: a degenerate Lagrangian whose DEL equations do not determine the motion. */

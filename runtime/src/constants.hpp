@@ -24,8 +24,9 @@ constexpr int kMaxPlacements = 20;
 constexpr long kUnsettledIterations = 200;
 /** A converged message warns where the round-off level sets the target above this many rtol. */
 constexpr double kRoundOffDominates = 100;
-/// Newton's stall message names the coordinates' scales where the Hessian's diagonal spans more
-/// than this factor over the free components (trust_region.hpp, newton_stalled).
+/// Newton's stall message names the coordinates' scales, and a minimum's round-off bound says it
+/// is one over all coordinates in one norm, where the Hessian's diagonal spans more than this
+/// factor over the free components (engine.hpp, diagonal_spread).
 constexpr double kStallSpread = 1e8;
 /** An iterate whose largest |q| passes this has exploded (`diverged`): far above any coordinate a
  *  model of physical units reaches, and far enough below overflow (1e308) that the DEL terms of

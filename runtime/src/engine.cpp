@@ -84,6 +84,22 @@ void setup_context(const Problem& problem, int N, int threads, Context& ctx) {
   setup_workspace(ctx, ctx);
 }
 
+double diagonal_spread(const Context& ctx) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim), dd = d * d;
+  double lo = std::numeric_limits<double>::infinity(), hi = 0;
+  for (int k = 1; k < ctx.N; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    if (ctx.D11.size() < (kk + 1) * dd || ctx.D22.size() < kk * dd) return 1;
+    for (std::size_t a = 0; a < d; ++a) {
+      if (!ctx.is_free[kk * d + a]) continue;
+      const double v = std::fabs(ctx.D22[(kk - 1) * dd + a * (d + 1)] + ctx.D11[kk * dd + a * (d + 1)]);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  return hi > 0 && lo > 0 && std::isfinite(hi) ? hi / lo : 1;
+}
+
 int knot_node(const Problem& problem, std::size_t a, int N, std::string* message) {
   const Knot& knot = problem.knots[a];
   if (!problem.times.empty() && N == problem.N) {  // a given grid: the node at the knot's time

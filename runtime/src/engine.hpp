@@ -347,6 +347,10 @@ inline double component_target(const Options& options, const Context& ctx, int i
                    160 * eps * start_scale});
 }
 
+/** The largest over the smallest |diagonal entry| of the Hessian over the free components at ctx's
+ *  full evaluation (1 where there is none, or a zero): how far apart the coordinates' units are. */
+double diagonal_spread(const Context& ctx);
+
 /** Number of threads to use for Options::threads (0: all cores). */
 int resolve_threads(int requested);
 

@@ -58,24 +58,6 @@
 
 namespace pardel::detail {
 
-/** The largest over the smallest |diagonal entry| of the Hessian over the free components at ctx's
- *  evaluation (1 where there is none, or a zero). */
-inline double diagonal_spread(const Context& ctx) {
-  const std::size_t d = static_cast<std::size_t>(ctx.dim), dd = d * d;
-  double lo = std::numeric_limits<double>::infinity(), hi = 0;
-  for (int k = 1; k < ctx.N; ++k) {
-    const std::size_t kk = static_cast<std::size_t>(k);
-    if (ctx.D11.size() < (kk + 1) * dd || ctx.D22.size() < kk * dd) return 1;
-    for (std::size_t a = 0; a < d; ++a) {
-      if (!ctx.is_free[kk * d + a]) continue;
-      const double v = std::fabs(ctx.D22[(kk - 1) * dd + a * (d + 1)] + ctx.D11[kk * dd + a * (d + 1)]);
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
-  }
-  return hi > 0 && lo > 0 && std::isfinite(hi) ? hi / lo : 1;
-}
-
 /**
  * The outcome when no trial step, down to a vanishing radius, decreased the action. A vanishing
  * trust-region step is a multiple of the negative gradient; an action that is unbounded below

@@ -258,6 +258,8 @@ def test_the_automatic_method_retries_such_a_stall_in_the_identity_metric():
     r = pardel.solve(SCALED_COSINE_LAG, q0=[0, 0], qN=[2e-8, 3e8], T=1, N=8)
     assert r.status == "converged" and r.point["kind"] == "minimum", r.message
     assert "in the identity metric (newton_shift = identity), retried from where" in r.message
+    # The round-off bound of the point note counts both coordinates in one norm, and says so.
+    assert "a bound over all coordinates in one norm: the Hessian's diagonal spans a factor" in r.point["note"]
     # Independent truth: the trapezoid action S = sum_k h [m1 vx^2/2 + m2 vy^2/2 - (cos th_k + cos th_k+1)/2],
     # th = a x + b y, written out here; its gradient vanishes at the interior nodes to round-off
     # of each coordinate's terms, and its Jacobi-scaled Hessian there is positive definite.
