@@ -41,11 +41,12 @@ const char* const kSweepExitCodesHelp =
 std::atomic<bool> g_sweep_interrupted{false};
 extern "C" void on_sweep_signal(int) { g_sweep_interrupted.store(true); }
 
-/** Threads per variant: --threads when given; under several ranks on a node, the scene's "all
- *  cores" (0) becomes the node's cores shared among its ranks. 0 keeps the scene's value. */
+/** Threads per variant: --threads when given (0: all cores); under several ranks on a node, the
+ *  scene's "all cores" (0) becomes the node's cores shared among its ranks. -1 keeps the scene's
+ *  value. */
 int threads_per_variant(const SweepArgs& args, const Sweep& sweep, int size) {
   if (args.threads >= 0) return args.threads;
-  if (size <= 1 || sweep.configurations.front().options.threads != 0) return 0;
+  if (size <= 1 || sweep.configurations.front().options.threads != 0) return -1;
   int local = size;
   for (const char* name : {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS"}) {
     if (const char* value = std::getenv(name)) {
@@ -118,7 +119,7 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
     try {
       SweepRunInfo info;
       info.ranks = size;
-      info.threads = threads > 0 ? threads : sweep.configurations.front().options.threads;
+      info.threads = threads >= 0 ? threads : sweep.configurations.front().options.threads;
       info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::vector<int> solution_of;
       const std::vector<Solution> solutions = group_solutions(results, sweep.grouping, &solution_of);

@@ -97,7 +97,7 @@ VariantResult solve_variant(const Sweep& sweep, const Variant& variant, int thre
       scene.guess.kind = GuessKind::polyline;
       scene.guess.points = variant.points;
     }
-    if (threads > 0) scene.options.threads = threads;
+    if (threads >= 0) scene.options.threads = threads;
     // Each variant in this process (sweeps spread variants, not nodes, over ranks); refused before
     // anything of size N is allocated, as `pardel solve` refuses the scene.
     SolveRequest request;

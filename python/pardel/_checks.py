@@ -232,14 +232,15 @@ def _checked_options(where, options):
     return arguments
 
 
-def _core_call(where, call, *args):
+def _core_call(where, call, *args, keep=()):
     """call(*args) into the compiled core, whose refusals of an argument (the guess's shape, a
     params list's length) do not know which function was called: such a PardelError is raised again,
-    of the same class, with `where` in front, as the package's own checks write it."""
+    of the same class, with `where` in front, as the package's own checks write it. Errors of the
+    classes in `keep` (whose messages are the command line's, naming a file) pass unchanged."""
     try:
         return call(*args)
     except PardelError as error:
         message = str(error)
-        if message.startswith("pardel"):
+        if message.startswith("pardel") or isinstance(error, keep):
             raise
         raise type(error)("%s: %s" % (where, message)) from None

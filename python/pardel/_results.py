@@ -7,7 +7,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ._checks import _shown
+from ._checks import _check_string, _shown
 from ._pardel import PardelError
 
 
@@ -122,6 +122,7 @@ class Result:
 
     def coordinate(self, name: str) -> np.ndarray:
         """The values of one coordinate (by name) at the nodes."""
+        _check_string("pardel.Result.coordinate", "name", name)
         if name not in self.coords:
             raise PardelError("pardel.Result.coordinate: unknown coordinate %s (the model's: %s)" % (
                 _shown(name), ", ".join(self.coords)))

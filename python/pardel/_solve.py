@@ -172,7 +172,8 @@ def resume(path: PathArg, *, threads: Optional[int] = None, on_iteration: Option
     if threads is not None:
         threads = _check_option(where, "threads", threads)
     _check_callback(where, "on_iteration", on_iteration)
-    raw = _pardel.resume(os.fsencode(path), threads, on_iteration, _checked_options(where, options))
+    raw = _core_call(where, _pardel.resume, os.fsencode(path), threads, on_iteration, _checked_options(where, options),
+                     keep=(_pardel.CheckpointError, _pardel.SceneError))
     return _finish(where, raw, raw["coords"], path)
 
 
@@ -320,7 +321,7 @@ def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int
     grouping and ranking) and returns a SweepResult.
 
     overrides: "key=value" strings for the base scene, as `pardel sweep --set` takes. threads:
-    threads per variant (None: the scene's solver.threads, where 0 is all cores). out: a folder
+    threads per variant (0: all cores; None: the scene's solver.threads). out: a folder
     to write solutions.csv, variants.csv, sweep.json and solution_<id>.csv into (no sweep.png;
     None: no files). A bad sweep file raises SceneError with the command line's FILE:LINE:COL message.
     Ctrl-C stops the running solve; the outputs (when out is given) hold what was done, and
@@ -330,13 +331,13 @@ def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int
     _check_path(where, "path", path)
     overrides = _check_overrides(where, "overrides", overrides)
     if threads is not None:
-        threads = _check_int(where, "threads", threads, 1, _pardel.max_threads)
+        threads = _check_int(where, "threads", threads, 0, _pardel.max_threads)
     if out is not None:
         _check_path(where, "out", out)
     out = None if out is None else os.fspath(out)
     if out == "":
         raise PardelError("out: a folder was expected, got ''")
-    raw = _pardel.run_sweep(os.fsencode(path), list(overrides), 0 if threads is None else int(threads),
+    raw = _pardel.run_sweep(os.fsencode(path), list(overrides), -1 if threads is None else int(threads),
                             os.fsencode(out or ""))  # bytes: paths need not be UTF-8
     return SweepResult(raw, out)
 

@@ -230,8 +230,8 @@ def lag_text(where, L, coords, params, order, name, discretizations, clock, cost
             raise PardelError("%s: %s: the name is not an identifier of at most 64 letters, digits and '_' "
                               "(not starting with a digit)" % (where, item))
         if pname in _RESERVED or pname == time.name:
-            raise PardelError("%s: %s: the name is reserved (the time %s, t, pi and the function names)" % (
-                where, item, time.name))
+            raise PardelError("%s: %s: the name is reserved (the time %s, pi and the function names)" % (
+                where, item, time.name if time.name == "t" else time.name + ", t"))
         if pname in names:
             raise PardelError("%s: %s: the name is also a coordinate's" % (where, item))
         if pname in param_values:

@@ -128,10 +128,11 @@ const pardel_model* resolve_spec(const std::string& spec) {
   const pardel_model* model = resolve_releasing_gil(spec);
   static std::vector<const pardel_model*> reported;
   if (model && std::find(reported.begin(), reported.end(), model) == reported.end()) {
-    reported.push_back(model);
     const std::string warnings = pardel::model_warnings(model);
-    // -1: a warnings filter made it an exception, which propagates (a scene reports it as its error)
+    // -1: a warnings filter made it an exception, which propagates (a scene reports it as its
+    // error); the model then counts as not reported, so that a later use raises it again.
     if (!warnings.empty() && PyErr_WarnEx(g_model_warning, warnings.c_str(), 1) != 0) throw py::error_already_set();
+    reported.push_back(model);
   }
   return model;
 }

@@ -37,7 +37,7 @@ py::dict run_sweep(const std::string& path, const std::vector<std::string>& over
 
   app::SweepRunInfo info;
   info.ranks = 1;
-  info.threads = threads > 0 ? threads : sweep.configurations.front().options.threads;
+  info.threads = threads >= 0 ? threads : sweep.configurations.front().options.threads;
   info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::vector<int> solution_of;
   const std::vector<app::Solution> solutions = app::group_solutions(results, sweep.grouping, &solution_of);

@@ -332,6 +332,20 @@ Summary after(Summary first, Summary second) {
   return second;
 }
 
+/** `options` for an attempt after `first`: Options::on_iteration sees its iterations numbered on
+ *  from the first's, with the first's time added, as the history has them (after()). */
+Options numbered_after(Options options, const Summary& first) {
+  if (options.on_iteration)
+    options.on_iteration = [inner = options.on_iteration, offset = first.iterations,
+                            seconds = first.wall_seconds](const IterationRecord& record) {
+      IterationRecord shifted = record;
+      shifted.iteration += offset;
+      shifted.seconds += seconds;
+      return inner(shifted);
+    };
+  return options;
+}
+
 /** The automatic method's two attempts as one summary: the second's as after() where it
  *  converged, else the first's; the message says what happened to the first or the second. */
 Summary combined(Summary first, Summary second) {
@@ -370,7 +384,7 @@ Summary with_identity_retry(const Problem& problem, const Options& requested, Su
   Options options = requested;
   options.newton_shift = NewtonShift::identity;
   Trajectory retry = trajectory;  // a retry that fails leaves the first attempt's iterate
-  Summary again = solve_once(problem, options, retry, flags, make);
+  Summary again = solve_once(problem, numbered_after(options, first), retry, flags, make);
   if (again.termination != Termination::converged) {
     first.message += std::string("; a retry from there in the identity metric (newton_shift = identity) ended ") +
                      to_string(again.termination) + ": " + again.message;
@@ -415,7 +429,7 @@ Summary solve_attempts(const Problem& problem, const Options& requested, Traject
                           flags, make);
   if (!failed_numerically(first)) return first;
   Trajectory second_trajectory = guess;
-  Summary second = solve_once(problem, options, second_trajectory, flags, make);
+  Summary second = solve_once(problem, numbered_after(options, first), second_trajectory, flags, make);
   if (second.termination == Termination::converged) trajectory = std::move(second_trajectory);
   return combined(std::move(first), std::move(second));
 }

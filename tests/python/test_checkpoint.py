@@ -286,11 +286,11 @@ def test_a_warm_start_interrupted_again_records_its_options(sweeps_stopped, tmp_
 
 
 @pytest.mark.parametrize("options,error,match", [
-    (dict(T=5.0), pardel.PardelError, "T: changes the problem"),
-    (dict(N=100), pardel.PardelError, "N: changes the problem"),
-    (dict(q0=[1, 1]), pardel.PardelError, "q0: changes the problem"),
-    (dict(params={"wind": 1.0}), pardel.PardelError, "params: changes the problem"),
-    (dict(methd="newton"), pardel.PardelError, "did you mean 'method'"),
+    (dict(T=5.0), pardel.PardelError, "^pardel.resume: T: changes the problem"),
+    (dict(N=100), pardel.PardelError, "^pardel.resume: N: changes the problem"),
+    (dict(q0=[1, 1]), pardel.PardelError, "^pardel.resume: q0: changes the problem"),
+    (dict(params={"wind": 1.0}), pardel.PardelError, "^pardel.resume: params: changes the problem"),
+    (dict(methd="newton"), pardel.PardelError, "^pardel.resume: unknown option 'methd'; did you mean 'method'"),
     (dict(rtol="tight"), TypeError, "pardel.resume: rtol must be a number"),
     (dict(method="newtn"), pardel.SceneError, "newtn"),
 ])

@@ -134,6 +134,18 @@ def test_generator_warnings_are_issued_once_per_model(tmp_path):
     assert done.stderr.count("ModelWarning: %s:4:5: warning: model 'fold_plane'" % path) == 1, done.stderr
 
 
+def test_a_warning_made_an_error_is_raised_at_every_use(tmp_path):
+    # With the "error" filter the warning is an exception; the model has then not been used, so a
+    # second use raises it again rather than passing silently.
+    path = tmp_path / "fold_again.lag"
+    path.write_text(FOLD_LAG.replace("model fold_plane", "model fold_plane_again"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", pardel.ModelWarning)
+        for _ in range(2):
+            with pytest.raises(pardel.ModelWarning, match="fold_plane_again"):
+                pardel.solve(path, q0=[0, 1], qN=[0.5, 1.5], T=1.0, N=20)
+
+
 def test_a_regular_model_issues_no_warning():
     with warnings.catch_warnings():
         warnings.simplefilter("error", pardel.ModelWarning)

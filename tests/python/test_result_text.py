@@ -59,5 +59,5 @@ def test_an_unknown_coordinate_is_named(converged):
     assert np.array_equal(converged.coordinate("y"), converged.q[:, 1])
     with pytest.raises(ValueError, match=r"^pardel\.Result\.coordinate: unknown coordinate 'z' \(the model's: x, y\)$"):
         converged.coordinate("z")
-    with pytest.raises(ValueError, match=r"unknown coordinate 0"):
+    with pytest.raises(TypeError, match=r"^pardel\.Result\.coordinate: name must be a str, got int 0$"):
         converged.coordinate(0)

@@ -132,6 +132,27 @@ def test_on_iteration_can_stop_the_solve(spring_lag):
     assert r.q.shape == (201, 2)
 
 
+HARMONIC_LAG = """\
+# x'' = -x: past its conjugate point (T > pi) the action has no minimum, only a saddle
+model past_conjugate
+coords x
+L = 1/2*x'^2 - 1/2*x^2
+discretizations trapezoid
+"""
+
+
+def test_on_iteration_numbers_the_automatic_methods_second_attempt_as_the_history(spring_lag):
+    # auto's minimizing Newton finds no minimum (T = 4 > pi); stationary-newton, its second attempt
+    # from the same start, converges to the saddle. The callback sees every recorded iteration of
+    # both, numbered as the history numbers them.
+    seen = []
+    r = pardel.solve(HARMONIC_LAG, q0=[0.0], qN=[1.0], T=4, N=80,
+                     on_iteration=lambda iteration, N, residual, action: seen.append(iteration))
+    assert r.status == "converged" and r.method == "stationary-newton", r.message
+    assert seen == list(r.history["iteration"])
+    assert seen[-1] == r.iterations
+
+
 @pytest.mark.parametrize("environment,expected", [({}, "passive"), ({"OMP_WAIT_POLICY": "active"}, "active"),
                                                   ({"GOMP_SPINCOUNT": "1000"}, "default")])
 def test_openmp_threads_wait_passively_unless_the_user_chose(environment, expected):

@@ -204,6 +204,15 @@ def test_overrides_apply_to_every_variant(sweep_file):
     assert all(v.q.shape == (51, 1) for v in r.variants)
 
 
+def test_threads_zero_is_all_cores_as_on_the_command_line(sweep_file, tmp_path):
+    # The scene asks for one thread; threads=0 overrides it with all cores, as `--threads 0` does,
+    # and the answers are those of one thread (any thread count gives the same bits).
+    one = pardel.sweep(sweep_file, ["solver.threads=1"])
+    every = pardel.sweep(sweep_file, ["solver.threads=1"], threads=0, out=tmp_path / "all")
+    assert json.loads((tmp_path / "all" / "sweep.json").read_text())["threads"] == 0
+    assert [v.q.tolist() for v in every.variants] == [v.q.tolist() for v in one.variants]
+
+
 def test_failed_variants_keep_no_trajectory(sweep_file):
     r = pardel.sweep(sweep_file, ["solver.method=jacobi-newton", "solver.max_iterations=1"], threads=1)
     assert r.converged == 0 and r.failures == {"max_iterations": 15}

@@ -130,7 +130,8 @@ struct VariantResult {
   bool converged() const { return status == "converged"; }
 };
 
-/** Solves one variant with `threads` OpenMP threads (0: the scene's solver.threads); never throws
+/** Solves one variant with `threads` OpenMP threads (0: all cores; negative: the scene's
+ *  solver.threads, as when --threads is not given); never throws
  *  for a numerical failure (the status says it), and reports an exception as status "error".
  *  A variant whose memory estimate exceeds what the machine has (Sweep::memory_check) is not
  *  started: status "error", the message names grid.N, the estimate and the machine's memory.
