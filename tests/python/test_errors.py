@@ -31,7 +31,7 @@ def test_bad_values_break_the_bounds_of_the_runtime_options(spring_lag):
     with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: newton_substeps must be an int between 1 and 1000, "
                                                  r"got 1001$"):
         pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, newton_substeps=1001)
-    with pytest.raises(pardel.PardelError, match=r"^pardel\.sweep: threads must be an int between 1 and 4096, got 4097$"):
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.sweep: threads must be an int between 0 and 4096, got 4097$"):
         pardel.sweep("no_such_sweep.toml", threads=4097)
     # An option outside the scene schema: the same bound (pardel::option_bound) and rule.
     with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: divergence_factor must be > 1, got 1\.0$"):
