@@ -381,6 +381,17 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   return out;
 }
 
+namespace {
+
+/** Whether a minimum's note bounds how far round-off in the DEL residual can move the solution:
+ *  by up to the condition number times 1e-16 (relative), said where that exceeds 1e-3 (high orders
+ *  at large N: the condition grows like N^(2 order)). */
+bool notes_round_off_bound(double lambda_min, double lambda_max) {
+  return lambda_min > 0 && lambda_max / lambda_min * 1e-16 > 1e-3;
+}
+
+}  // namespace
+
 void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out, double diagonal_spread) {
   out.kind = PointKind::minimum;
   out.lambda_min = e.lambda[0];
@@ -406,11 +417,8 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
     out.note += format("; the two smallest are upper bounds: Ritz values of %.0f Lanczos steps that had not "
                        "settled",
                        static_cast<double>(kLanczosSteps));
-  // Round-off in the DEL residual moves a solution by up to the condition number times 1e-16
-  // (relative): say so where that exceeds 1e-3 (high orders at large N: the condition grows like
-  // N^(2 order)).
-  const double condition = out.lambda_max / out.lambda_min;
-  if (out.lambda_min > 0 && condition * 1e-16 > 1e-3) {
+  if (notes_round_off_bound(out.lambda_min, out.lambda_max)) {
+    const double condition = out.lambda_max / out.lambda_min;
     out.note += format("; the Hessian's condition number is about %.2g, so round-off alone can move the trajectory by "
                        "up to %.2g relative",
                        condition, condition * 1e-16);
@@ -464,8 +472,8 @@ void assess_minimum(Context& ctx, double lambda_max, const std::function<void(co
   try {
     const SmallestEigenvalues e = smallest_eigenvalues(op, out.positive);
     // The spread only where the note gives the round-off bound (a pass over the nodes).
-    const bool bounded = e.lambda[0] > 0 && lambda_max / e.lambda[0] * 1e-16 > 1e-3;
-    describe_minimum(e, sum_action(ctx), out, bounded ? diagonal_spread(ctx) : 1.0);
+    describe_minimum(e, sum_action(ctx), out,
+                     notes_round_off_bound(e.lambda[0], lambda_max) ? diagonal_spread(ctx) : 1.0);
   } catch (const Interrupted&) {
     out = PointAssessment{};
     out.note = "not assessed: interrupted during the assessment of the converged point";

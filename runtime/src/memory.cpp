@@ -14,6 +14,7 @@
 #include <string>
 
 #include "block_tridiagonal.hpp"
+#include "cyclic_reduction.hpp"
 #include "engine.hpp"
 #include "methods.hpp"
 
@@ -61,7 +62,7 @@ double detail::block_tridiagonal_bytes(double N, int d, bool cyclic) {
   const BlockBytes b = block_bytes(d);
   const double n = std::max(N - 1, 0.0);
   const double factors = b.fixed_size ? b.mat : b.llt;
-  const double levels = cyclic ? 8 * 2 * n * (3.0 * d * d + 2.0 * d) : 0;  // cyclic_reduction::values
+  const double levels = cyclic ? 8.0 * static_cast<double>(cyclic_reduction::values(static_cast<long>(n), d)) : 0;
   return n * (3 * b.mat + b.vec + factors) + levels;
 }
 
