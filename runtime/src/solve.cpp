@@ -332,6 +332,19 @@ Summary after(Summary first, Summary second) {
   return second;
 }
 
+/** A later attempt (`what`) that `keep_going` interrupted: the solve ends interrupted with that
+ *  attempt's iterate, the history of both and the first attempt's outcome in the message. No
+ *  state is kept: a resume with the requested options would not continue that attempt. */
+Summary interrupted_after(Summary first, Summary later, const std::string& what) {
+  const std::string first_outcome = std::string(to_string(first.termination)) + ": " + first.message;
+  Summary both = after(std::move(first), std::move(later));
+  both.state = SolverState{};
+  both.message += " during " + what + ", the automatic method's attempt after the first ended " + first_outcome +
+                  "; not resumable (no checkpoint): a later attempt is not continued by a resume, its iterate can "
+                  "start a new solve";
+  return both;
+}
+
 /** `options` for an attempt after `first`: Options::on_iteration sees its iterations numbered on
  *  from the first's, with the first's time added, as the history has them (after()). */
 Options numbered_after(Options options, const Summary& first) {
@@ -347,9 +360,13 @@ Options numbered_after(Options options, const Summary& first) {
 }
 
 /** The automatic method's two attempts as one summary: the second's as after() where it
- *  converged, else the first's; the message says what happened to the first or the second. */
+ *  converged or was interrupted (interrupted_after), else the first's; the message says what
+ *  happened to the first or the second. */
 Summary combined(Summary first, Summary second) {
   const std::string first_outcome = std::string(to_string(first.termination)) + ": " + first.message;
+  if (second.termination == Termination::interrupted)
+    return interrupted_after(std::move(first), std::move(second),
+                             "Newton on the DEL residual (stationary-newton) from the same start");
   if (second.termination != Termination::converged) {
     first.message += std::string("; then Newton on the DEL residual (stationary-newton), which also converges to "
                                  "saddles of the action, from the same start ended ") +
@@ -376,8 +393,8 @@ bool retries_in_identity_metric(const Problem& problem, const Options& requested
 }
 
 /** `first`, or where retries_in_identity_metric() its retry: the retry's result as after() where it
- *  converged (trajectory then the retry's), else the first's with the retry's outcome in the
- *  message. */
+ *  converged or was interrupted (trajectory then the retry's), else the first's with the retry's
+ *  outcome in the message. */
 Summary with_identity_retry(const Problem& problem, const Options& requested, Summary first, Trajectory& trajectory,
                             const OnceFlags& flags, const TopologyFactory& make) {
   if (!retries_in_identity_metric(problem, requested, first, trajectory)) return first;
@@ -385,6 +402,11 @@ Summary with_identity_retry(const Problem& problem, const Options& requested, Su
   options.newton_shift = NewtonShift::identity;
   Trajectory retry = trajectory;  // a retry that fails leaves the first attempt's iterate
   Summary again = solve_once(problem, numbered_after(options, first), retry, flags, make);
+  if (again.termination == Termination::interrupted) {
+    trajectory = std::move(retry);
+    return interrupted_after(std::move(first), std::move(again),
+                             "a retry from there in the identity metric (newton_shift = identity)");
+  }
   if (again.termination != Termination::converged) {
     first.message += std::string("; a retry from there in the identity metric (newton_shift = identity) ended ") +
                      to_string(again.termination) + ": " + again.message;
@@ -430,7 +452,8 @@ Summary solve_attempts(const Problem& problem, const Options& requested, Traject
   if (!failed_numerically(first)) return first;
   Trajectory second_trajectory = guess;
   Summary second = solve_once(problem, numbered_after(options, first), second_trajectory, flags, make);
-  if (second.termination == Termination::converged) trajectory = std::move(second_trajectory);
+  if (second.termination == Termination::converged || second.termination == Termination::interrupted)
+    trajectory = std::move(second_trajectory);
   return combined(std::move(first), std::move(second));
 }
 

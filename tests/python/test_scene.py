@@ -282,3 +282,26 @@ def test_the_automatic_method_retries_such_a_stall_in_the_identity_metric():
             H[2 * k + 1, 2 * k + 3] = H[2 * k + 3, 2 * k + 1] = -m2 / h
     J = 1 / np.sqrt(np.abs(np.diag(H)))
     assert np.linalg.eigvalsh(J[:, None] * H * J[None, :]).min() > 1e-6
+
+
+def test_an_interruption_in_the_identity_metric_retry_ends_interrupted(tmp_path):
+    # Stopped by the callback in the retry, after its second step, the solve is interrupted with the
+    # retry's iterate (not the first attempt's stall), and no checkpoint is written.
+    whole = pardel.solve(SCALED_COSINE_LAG, q0=[0, 0], qN=[2e-8, 3e8], T=1, N=8)
+    iterations = list(whole.history["iteration"])
+    first_records = next(k for k in range(1, len(iterations)) if iterations[k] == iterations[k - 1])
+    calls = []
+
+    def callback(i, n, res, a):
+        calls.append(i)
+        return len(calls) < first_records + 4
+
+    r = pardel.solve(SCALED_COSINE_LAG, q0=[0, 0], qN=[2e-8, 3e8], T=1, N=8, on_iteration=callback,
+                     checkpoint=str(tmp_path))
+    assert r.status == "interrupted" and r.stopped_by_callback, r.message
+    assert "during a retry from there in the identity metric (newton_shift = identity)" in r.message
+    assert "the automatic method's attempt after the first ended stalled" in r.message
+    assert r.checkpoint is None and not (tmp_path / "checkpoint.json").exists()
+    np.testing.assert_array_equal(r.history["iteration"], iterations[:first_records + 4])
+    # The retry's iterate: its residual is far below the first attempt's where it stalled.
+    assert r.residual < 1e-3 * whole.history["residual"][first_records - 1]

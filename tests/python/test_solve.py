@@ -52,6 +52,33 @@ def test_a_saddle_past_the_conjugate_point_by_method_name_and_by_default(spring_
     assert "after the minimizing Newton found no minimum" in r.message
 
 
+def test_an_interruption_in_the_automatic_methods_second_attempt_ends_interrupted(spring_lag, tmp_path):
+    # The same saddle: the minimizing Newton diverges first, then stationary-newton runs from the
+    # straight line. Stopped by the callback at the second attempt's first record (the history's
+    # last but one), the solve is interrupted (not the first attempt's divergence), with the second
+    # attempt's iterate (its start) and no checkpoint (a resume would not continue it).
+    N, duration = 60, 3.0
+    whole = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=duration, N=N)
+    assert "after the minimizing Newton found no minimum" in whole.message
+    stop_on_call = len(whole.history["iteration"]) - 1
+    calls = []
+
+    def callback(i, n, res, a):
+        calls.append(i)
+        return len(calls) < stop_on_call
+
+    r = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=duration, N=N, on_iteration=callback,
+                     checkpoint=str(tmp_path))
+    assert r.status == "interrupted" and r.stopped_by_callback, r.message
+    assert "during Newton on the DEL residual (stationary-newton) from the same start" in r.message
+    assert "the automatic method's attempt after the first ended diverged" in r.message
+    assert "not resumable" in r.message and r.checkpoint is None
+    assert not (tmp_path / "checkpoint.json").exists()
+    assert r.point["kind"] == "unknown"
+    np.testing.assert_allclose(r.q, np.linspace([0, 0], [1, 2], N + 1), rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(r.history["iteration"], whole.history["iteration"][:-1])
+
+
 def test_params_by_name_and_by_position(spring_lag, exact):
     N = 30
     by_name = pardel.solve(spring_lag, q0=[0, 0], qN=[1, 1], T=T, N=N, params={"b": 1.1})
