@@ -552,6 +552,27 @@ bool classify_indefinite(PointAssessment& out) {
   return false;
 }
 
+void note_residual_caveats(double residual, double floor, double scale, PointAssessment& out) {
+  // Where round-off in the DEL terms is as large as the terms (high orders at large N), the
+  // elimination's negative pivots need not be the Hessian's: a minimum's note gives its
+  // condition, a saddle's says this.
+  if (out.kind == PointKind::saddle && scale > 0 && 10 * floor >= scale)
+    out.note +=
+        "; but at this N round-off in the DEL terms is as large as the terms themselves, and the Hessian is "
+        "beyond double precision: the negative eigenvalues (and so whether the point is a saddle at all) are "
+        "not resolved; a smaller N resolves them";
+  // At a discrete conjugate point of the end values the iterates walk along the zero direction
+  // until the residual is small next to their own terms.
+  constexpr double kFarAboveRoundOff = 1e3;
+  if (out.kind == PointKind::degenerate && floor > 0 && residual > kFarAboveRoundOff * floor)
+    out.note += format(
+        "; and the DEL residual %.3g is %.2g times its round-off level: along the zero direction(s) the tolerance "
+        "(relative to the DEL terms' scale %.3g, taken at this iterate) leaves the trajectory undetermined, and "
+        "where the discrete problem is singular there (a discrete conjugate point of these end values) it may "
+        "have no solution near here at all",
+        residual, residual / floor, scale);
+}
+
 namespace {
 
 /** Calls f(H) with H the unshifted Hessian at ctx.q, assembled (the full kernel evaluated there

@@ -170,6 +170,12 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
  *  (engine.hpp's, 1 where not known) qualifies the note's round-off bound. */
 void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out, double diagonal_spread = 1);
 
+/** Adds to a converged point's note what its residual says about it: a saddle where round-off in
+ *  the DEL terms (`floor`) is as large as their `scale` (its negative eigenvalues are not
+ *  resolved); a degenerate point whose `residual` is far above `floor` (the tolerance, relative to
+ *  terms that may have grown along the zero direction, leaves the trajectory undetermined there). */
+void note_residual_caveats(double residual, double floor, double scale, PointAssessment& out);
+
 /** False (with `message` naming the model and why) when D12 Ld is singular on every sampled
  *  interval of ctx.q: a degenerate Lagrangian whose DEL equations do not determine the motion. */
 bool lagrangian_regular(const Context& ctx, std::string* message);

@@ -182,15 +182,8 @@ void assess_point(const Options& options, const OnceFlags& flags, std::unique_pt
     }
     summary.assessment_seconds =
         on_levels + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    // Where round-off in the DEL terms is as large as the terms (high orders at large N), the
-    // elimination's negative pivots need not be the Hessian's: a minimum's note gives its
-    // condition, a saddle's says this.
-    const double scale = topology.context().residual_scale;
-    if (summary.point.kind == PointKind::saddle && scale > 0 && 10 * summary.residual_floor >= scale)
-      summary.point.note +=
-          "; but at this N round-off in the DEL terms is as large as the terms themselves, and the Hessian is "
-          "beyond double precision: the negative eigenvalues (and so whether the point is a saddle at all) are "
-          "not resolved; a smaller N resolves them";
+    detail::note_residual_caveats(summary.residual, summary.residual_floor, topology.context().residual_scale,
+                                  summary.point);
   }
 }
 

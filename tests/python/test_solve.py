@@ -195,3 +195,30 @@ def test_openmp_threads_wait_passively_unless_the_user_chose(environment, expect
             "print(r.status, r.summary['openmp_wait_policy'])")
     out = subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True).stdout
     assert out.split() == ["converged", expected]
+
+
+def test_a_discrete_conjugate_point_is_degenerate_and_its_residual_is_noted():
+    # x'' + w^2 x = 0 under the trapezoid rule, with w chosen so that the DEL recursion
+    # x_{k+1} + x_{k-1} = (2 - h^2 w^2) x_k has angle pi/N: the interior system is singular, and with
+    # x_0 = 0, x_N = 1 it has no solution of moderate size. The relative test can be met by an
+    # iterate that walked along the zero direction; the note must say that the residual is far
+    # above round-off and the trajectory undetermined there.
+    N, duration = 10, 1.0
+    h = duration / N
+    w = (2 / h) * math.sin(math.pi / (2 * N))
+    r = pardel.solve("harmonic", q0=[0], qN=[1], T=duration, N=N, params={"omega": w}, discretization="trapezoid")
+    x = r.q[:, 0]
+    # Independent truth: the interior system's matrix, written out here, is singular to working precision.
+    c = 2 - (h * w) ** 2
+    A = np.diag(np.full(N - 1, -c)) + np.diag(np.ones(N - 2), 1) + np.diag(np.ones(N - 2), -1)
+    assert np.linalg.cond(A) > 1e14
+    # The DEL equations at pardel's iterate do not hold in absolute terms (end values of size 1) ...
+    del_residual = np.abs(x[2:] + x[:-2] - c * x[1:-1]).max() / h
+    assert del_residual > 0.1
+    if r.status == "converged":
+        # ... so a converged status comes with a degenerate point whose note says so.
+        assert r.point["kind"] == "degenerate", r.point
+        assert "times its round-off level: along the zero direction(s) the tolerance" in r.point["note"]
+        assert "no solution near here" in r.point["note"]
+    else:
+        assert r.point["kind"] == "unknown"
