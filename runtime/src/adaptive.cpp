@@ -335,11 +335,35 @@ std::vector<double> first_grid(const Problem& problem) {
 /** The outcome of an adaptive solve whose last grid, N intervals, missed the request: at the
  *  largest N allowed (`at_max_N`) or after kMaxGrids grids. */
 std::string not_reached(const Summary& summary, int N, const Options& requested, bool at_max_N) {
+  const std::string unconfirmed =
+      summary.error_reliable ? ""
+      : summary.error_at_round_off
+          ? " (the grid levels agree to round-off, which is not confirmed where L depends on t)"
+      : std::isfinite(summary.error_observed_order)
+          ? " (not confirmed: observed order " + number(summary.error_observed_order) + " on three grid levels)"
+          : " (not confirmed by a third grid level)";
   return "accuracy " + number(requested.accuracy) + " not reached: estimate " + number(summary.error_estimate) +
-         (summary.error_reliable ? "" : " (not confirmed by a third grid level)") + " on N = " + std::to_string(N) +
+         unconfirmed + " on N = " + std::to_string(N) +
          ", " +
          (at_max_N ? "the largest N allowed (accuracy_max_N = " + std::to_string(requested.accuracy_max_N) + ")"
                    : "after " + std::to_string(kMaxGrids) + " grids");
+}
+
+/** Whether the solve of one grid (`a`) is a better answer than `b`'s: converged with an estimate
+ *  where `b` is not; else of a better kind of estimate, a confirmed one (Summary::error_reliable)
+ *  first, then one made with an observed order short of the nominal `p` (larger than the nominal
+ *  estimate), last the others (an observed order above p, an agreement to round-off that is not
+ *  confirmed: the finer grids agree more than the error allows, which says little of it); else of
+ *  a smaller estimate. */
+bool better_grid(const Summary& a, const Summary& b, double p) {
+  const bool a_has = a.converged() && std::isfinite(a.error_estimate);
+  const bool b_has = b.converged() && std::isfinite(b.error_estimate);
+  if (!a_has || !b_has) return a_has && !b_has;
+  auto kind = [p](const Summary& s) {
+    return s.error_reliable ? 2 : std::isfinite(s.error_observed_order) && s.error_observed_order <= p ? 1 : 0;
+  };
+  if (kind(a) != kind(b)) return kind(a) > kind(b);
+  return a.error_estimate < b.error_estimate;
 }
 
 /** Why an adaptive solve of `problem` with `requested` cannot be made ("" when it can). */
@@ -466,8 +490,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
     summary = solve(current, options, guess);  // options.accuracy = 0: one grid
     sizes.push_back(current.N);
     iterations += summary.iterations;
-    const bool improved = summary.converged() && std::isfinite(summary.error_estimate) &&
-                          !(best.error_estimate <= summary.error_estimate);
+    const bool improved = better_grid(summary, best, p);
     if (improved) {
       best = summary;
       best_solution = guess;
@@ -557,12 +580,12 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
     current.N = static_cast<int>(times.size()) - 1;
     current.times = std::move(times);
   }
-  if (!reached && best.converged() &&
-      !(summary.converged() && summary.error_estimate <= best.error_estimate)) {
-    // Not reached: the grid with the smallest estimate is returned, not a later, worse one (finer
-    // grids whose round-off grows).
-    outcome += "; the grid with the smallest estimate, N = " + std::to_string(best_solution.N) + " (estimate " +
-               number(best.error_estimate) + "), is returned";
+  if (!reached && best.converged() && better_grid(best, summary, p)) {
+    // Not reached: the grid with the smallest estimate (a confirmed one first) is returned, not a
+    // later, worse one (finer grids whose round-off grows).
+    outcome += std::string("; the grid with the smallest estimate") +
+               (best.error_reliable ? " among the confirmed ones" : "") + ", N = " + std::to_string(best_solution.N) +
+               " (estimate " + number(best.error_estimate) + "), is returned";
     summary = best;
     guess = best_solution;
   }

@@ -576,30 +576,31 @@ void note_residual_caveats(double residual, double floor, double scale, PointAss
 namespace {
 
 /** Calls f(H) with H the unshifted Hessian at ctx.q, assembled (the full kernel evaluated there
- *  where ctx lacks it); false, without calling f, for N < 2 or a second derivative that is not
- *  finite. */
+ *  where ctx lacks it); false, without calling f, for N < 2 or an entry of H that is not finite
+ *  (a second derivative of L at a fixed end, where L may be singular, does not enter H). */
 template <class F>
 bool with_hessian(Context& ctx, F&& f) {
   if (ctx.N < 2) return false;
   ensure_interval_arrays(ctx, Evaluated::full);
   if (ctx.evaluated != Evaluated::full) eval_full(ctx, ctx.q);
-  for (const std::vector<double>* a : {&ctx.D11, &ctx.D12, &ctx.D22})
-    for (double v : *a)
-      if (!std::isfinite(v)) return false;
+  bool finite = true;
   dispatch_dim_cold(ctx.dim, [&](auto D) {
     BlockTridiagonal<decltype(D)::value> H;
     H.resize(ctx.N, ctx.dim);
     H.assemble(ctx, 0.0);
-    f(H);
+    finite = H.all_finite();
+    if (finite) f(H);
   });
-  return true;
+  return finite;
 }
 
 }  // namespace
 
 void assess(Context& ctx, PointAssessment& out) {
   out = PointAssessment{};
-  with_hessian(ctx, [&](auto& H) { assess_hessian(ctx, H, false, out); });
+  if (!with_hessian(ctx, [&](auto& H) { assess_hessian(ctx, H, false, out); }))
+    out.note = ctx.N < 2 ? "not assessed: no interior node"
+                         : "not assessed: the Hessian of the action has an entry that is not finite at this point";
 }
 
 bool newton_correction(Context& ctx, std::vector<double>& delta) {

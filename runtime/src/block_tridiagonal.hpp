@@ -401,6 +401,15 @@ class BlockTridiagonal {
     }
   }
 
+  /** Whether every entry of the assembled blocks is finite (the second derivatives at the fixed
+   *  ends and components do not enter them). */
+  bool all_finite() const {
+    for (const std::vector<Mat>* blocks : {&diag_, &off_})
+      for (const Mat& m : *blocks)
+        if (!m.allFinite()) return false;
+    return true;
+  }
+
   /** The largest |diagonal entry| of the unshifted Hessian as assemble(ctx, 0) builds it (1 on fixed
    *  components), straight from the interval arrays. */
   static double max_abs_diagonal(const Context& ctx) {

@@ -187,6 +187,12 @@ bool Iteration::times_unsettled(int unsettled, long since_best) {
   return true;
 }
 
+bool Iteration::met_by_growth(double r) const {
+  constexpr double kGrowthFactor = 10;
+  return options_.tol <= 0 && have_initial_ && r > kGrowthFactor * r_initial_ &&
+         !at_round_off(r, ctx_.residual_floor);
+}
+
 /** At the tolerance where the method accepts to stop (Newton not at a saddle): the last level
  *  has converged; an intermediate level of Newton's nested iteration is solved. */
 bool Iteration::converged_at_tolerance(bool last, double r, double target, bool* settled) {
@@ -195,7 +201,7 @@ bool Iteration::converged_at_tolerance(bool last, double r, double target, bool*
   // so a small residual bounds only the rough part of the error. Newton takes one step on each
   // level before it stops; that step removes a smooth error.
   if (whole_system_newton(options_.method) && level_.level_it == 0) return false;
-  const bool stop = at_target(r, target) && method_.accept_stop(ctx_, last);
+  const bool stop = at_target(r, target) && !met_by_growth(r) && method_.accept_stop(ctx_, last);
   if (!stop) return false;
   if (last) {
     finish(Termination::converged, converged_message(r, target));
@@ -227,7 +233,7 @@ bool Iteration::intermediate_level_settled(bool last, double r, double target, b
  *  nothing better in 200 iterations: this point is the answer (the point assessment says what
  *  it is). */
 bool Iteration::answer_at_tolerance(bool last, double r, double target, bool* settled) {
-  if (!(at_target(r, target) && iteration_ - best_iteration_ >= 200)) return false;
+  if (!(at_target(r, target) && !met_by_growth(r) && iteration_ - best_iteration_ >= 200)) return false;
   *settled = !last;
   if (last) finish(Termination::converged, converged_message(r, target));
   return true;
@@ -305,7 +311,7 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
   if (!partition_.agree_on_outcome(outcome)) {
     // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer
     // (not where the times at the tolerance were found unsettled: r is not at the clock's times).
-    if (outcome.failure == Termination::stalled && at_target(r, target) && !times_pending_) {
+    if (outcome.failure == Termination::stalled && at_target(r, target) && !met_by_growth(r) && !times_pending_) {
       *settled = !last;
       if (last) finish(Termination::converged, converged_message(r, target));
       return true;

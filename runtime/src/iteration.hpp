@@ -118,6 +118,11 @@ class Iteration {
   /** Whether the DEL equations hold at the current iterate: the residual at most `target` and every
    *  component at most its own target. */
   bool at_target(double r, double target) const { return r <= target && unresolved_component() < 0; }
+  /** Whether the relative test is met only because the iterate's terms grew: the residual is more
+   *  than kGrowthFactor times the solve's first one (and above round-off). Iterates that slide off
+   *  along a direction where the action falls without bound (just past a conjugate point) grow
+   *  faster than their residual; such a point is not called converged. */
+  bool met_by_growth(double r) const;
   /** How far the iterate is from the test, max(r / target, max_i r_i / target_i): at most 1 when
    *  the equations hold; the stall rules watch it for progress. */
   double distance_to_target(double r, double target) const;

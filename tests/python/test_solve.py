@@ -222,3 +222,44 @@ def test_a_discrete_conjugate_point_is_degenerate_and_its_residual_is_noted():
         assert "no solution near here" in r.point["note"]
     else:
         assert r.point["kind"] == "unknown"
+
+
+def test_a_lagrangian_singular_at_a_fixed_end_is_assessed_on_the_interior():
+    # L = x'^2/2 + 1/x with x(0) = 0: the second derivatives at the fixed end are infinite (so is
+    # the action), but they do not enter the Hessian of the interior unknowns, which is positive
+    # definite here. The point is assessed on it, not left "unknown" with no note.
+    N, duration = 8, 1.0
+    r = pardel.solve("model divzero_end\ncoords x\nL = 1/2*x'^2 + 1/x\n", q0=[0], qN=[1], T=duration, N=N)
+    assert r.status == "converged", r.message
+    x, h = r.q[:, 0], duration / N
+    # Independent truth: the trapezoid DEL residual and the Hessian written out here.
+    assert np.abs((2 * x[1:-1] - x[:-2] - x[2:]) / h - h / x[1:-1] ** 2).max() < 1e-9
+    H = np.diag(2 / h + 2 * h / x[1:-1] ** 3) + np.diag(np.full(N - 2, -1 / h), 1) + np.diag(np.full(N - 2, -1 / h), -1)
+    eigenvalues = np.linalg.eigvalsh(H)
+    assert eigenvalues[0] > 0
+    assert r.point["kind"] == "minimum", r.point
+    # A Ritz value: an upper bound, settled to 1e-4 of the value (docs/solvers.md).
+    assert eigenvalues[0] <= r.point["lambda_min"] <= eigenvalues[0] * (1 + 1e-4)
+
+
+def test_iterates_that_slide_off_past_a_conjugate_point_are_not_called_converged():
+    # x'' + x = 0 under the trapezoid rule, N = 40, T a hair (1e-9 relative) past the first discrete
+    # conjugate time: the DEL solution is a saddle of size 3e8. The minimizing Newton slides down the
+    # negative direction; its iterates grow faster than their residual, which meets the relative
+    # test there while growing 60-fold: that is no convergence. The automatic method's second
+    # attempt (stationary-newton) reaches the saddle.
+    N = 40
+    conjugate_T = N * math.sqrt(2 * (1 - math.cos(math.pi / N)))
+    duration = conjugate_T * (1 + 1e-9)
+    h = duration / N
+    c = 2 - h * h
+    A = np.diag(np.full(N - 1, -c)) + np.diag(np.ones(N - 2), 1) + np.diag(np.ones(N - 2), -1)
+    b = np.zeros(N - 1)
+    b[-1] = -1.0
+    exact = np.concatenate([[0.0], np.linalg.solve(A, b), [1.0]])
+    assert np.abs(exact).max() > 1e8
+    newton = pardel.solve("harmonic", q0=[0], qN=[1], T=duration, N=N, discretization="trapezoid", method="newton")
+    assert newton.status != "converged", newton.message
+    auto = pardel.solve("harmonic", q0=[0], qN=[1], T=duration, N=N, discretization="trapezoid")
+    assert auto.status == "converged" and auto.point["kind"] == "saddle", auto.message
+    assert np.abs(auto.q[:, 0] - exact).max() < 1e-3 * np.abs(exact).max()
