@@ -207,10 +207,12 @@ def _checkpoint_path(where, checkpoint):
 
 def _checked_options(where, options):
     """Keyword options of pardel.solve checked (types, NaN, the runtime's option bounds) as plain
-    values; None values left out, unknown names left to the core."""
+    values; None values kept as None (the core checks every name, then leaves them out), unknown
+    names left to the core."""
     arguments = {}
     for name, value in options.items():
         if value is None:
+            arguments[name] = None
             continue
         if name in _STRING_OPTIONS:
             value = _check_string(where, name, value)
@@ -226,6 +228,9 @@ def _checked_options(where, options):
             value = _check_params(where, name, value)
         elif name == "polyline":
             value = _check_array(where, name, value, 2, "a sequence of points (sequences of numbers)").tolist()
+            if len(value) < 2:
+                raise PardelError("%s: polyline must have at least 2 points, its first and last standing for q0 "
+                                  "and qN (replaced by them), got %d" % (where, len(value)))
         elif name == "knots":
             value = _check_knots(where, name, value)
         arguments[name] = value

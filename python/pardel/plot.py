@@ -42,7 +42,9 @@ def path(result: Result, ax: Optional[Axes] = None, label: Optional[str] = None)
     """The path (first coordinate against the second) with its end points marked."""
     _check_result("pardel.plot.path", result)
     if len(result.coords) < 2:
-        raise ValueError("pardel.plot.path: result: the model has one coordinate; use pardel.plot.coordinates")
+        from . import PardelError
+
+        raise PardelError("pardel.plot.path: result: the model has one coordinate; use pardel.plot.coordinates")
     ax = _axes("pardel.plot.path", ax)
     x, y = result.q[:, 0], result.q[:, 1]
     ax.plot(x, y, "-", lw=1.5, label=label or "%s (%s)" % (result.model, result.status))

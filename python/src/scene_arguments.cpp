@@ -320,7 +320,6 @@ std::vector<std::string> warm_start_overrides(const py::dict& options) {
     if (a.first != "threads") names.push_back(a.first);
   for (const auto& item : options) {
     const std::string name = py::str(item.first).cast<std::string>();
-    if (item.second.is_none()) continue;
     std::string key;
     for (const auto& a : kArguments)
       if (a.first == name && name != "threads") key = a.second;
@@ -332,6 +331,7 @@ std::vector<std::string> warm_start_overrides(const py::dict& options) {
       if (!suggestion.empty()) message += fmt::format("; did you mean '{}'?", suggestion);
       throw InputError(message);
     }
+    if (item.second.is_none()) continue;
     if (key.rfind("solver.", 0) != 0)
       throw InputError(fmt::format("{}: changes the problem (scene key {}); only solver options may change a "
                                    "resumed solve (a warm start from its iterate)",

@@ -70,3 +70,32 @@ def test_a_time_origin_too_large_for_the_step_is_named(tmp_path):
         pardel.load_scene(scene)
     with pytest.raises(pardel.SceneError, match=r"--set grid\.t0=1e300: error: grid\.t0 = 1e\+300 is too large"):
         pardel.load_scene(scene, ["grid.t0=1e300"])
+
+
+def test_a_misspelled_option_is_named_even_with_the_value_none(spring_lag, tmp_path):
+    # None stands for "not given" for a known option; for an unknown name it is still an error.
+    for call in (lambda: pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, acuracy=None),
+                 lambda: pardel.solve_batch(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, foo=None)):
+        with pytest.raises(pardel.PardelError, match="unknown option"):
+            call()
+    pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=10, accuracy=None, guess=None)  # known names: fine
+    pardel.solve(spring_lag, q0=[0, 0], qN=[1, 2], T=1, N=200, method="jacobi", max_iterations=50,
+                 checkpoint=str(tmp_path), on_iteration=lambda i, *rest: i < 3)
+    with pytest.raises(pardel.PardelError, match="unknown option 'methd'; did you mean 'method'"):
+        pardel.resume(str(tmp_path), methd=None)
+
+
+def test_plot_path_of_one_coordinate_is_a_pardel_error():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import pardel.plot
+
+    r = pardel.solve("harmonic", q0=[0], qN=[1], T=1, N=10)
+    with pytest.raises(pardel.PardelError, match="the model has one coordinate"):
+        pardel.plot.path(r)
+
+
+def test_a_polyline_of_one_point_is_named_as_the_argument():
+    with pytest.raises(pardel.PardelError, match=r"^pardel\.solve: polyline must have at least 2 points"):
+        pardel.solve("fuel_nav", q0=[0, 0], qN=[6, 5], T=30, N=50, polyline=[[3, 0]])
