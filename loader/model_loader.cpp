@@ -53,8 +53,15 @@ std::string read_file(const fs::path& path) {
   return buf.str();
 }
 
-// Runs a program (no shell), its stdout and stderr appended to `log`; returns the exit status.
+// Runs a program (no shell), its stdout and stderr appended to `log`; returns the exit status. The
+// program runs in a process group of its own, so that a Ctrl-C at the terminal (which signals the
+// whole foreground group) reaches this process, which decides what an interruption does, and not
+// the compiler in the middle of a cache entry.
 int run_program(const std::vector<std::string>& argv, const fs::path& log) {
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  posix_spawnattr_setpgroup(&attributes, 0);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_APPEND,
@@ -64,8 +71,9 @@ int run_program(const std::vector<std::string>& argv, const fs::path& log) {
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   pid_t pid = 0;
-  int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  int rc = posix_spawn(&pid, args[0], &actions, &attributes, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
   if (rc != 0) return 127;
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {

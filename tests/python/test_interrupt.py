@@ -71,3 +71,62 @@ def test_sigint_during_a_model_compile_does_not_wait_for_the_compiler(fresh_chai
     assert loaded - raised > 0.3, "the compile ended %.3f s after Ctrl-C: too quick to tell" % (loaded - raised)
     r = pardel.solve(model, q0=[0] * 10, qN=[0.1] * 10, T=1.0, N=20)
     assert r.status == "converged"
+
+
+_COMPILE_IN_CHILD = """
+import sys
+import pardel
+sys.stdout.write("start\\n"); sys.stdout.flush()
+try:
+    model = pardel.model(open(sys.argv[1]).read())
+    print("compiled")
+except KeyboardInterrupt:
+    print("KeyboardInterrupt")
+"""
+
+
+def _children(pid):
+    """The pids of the processes whose parent is `pid` (from /proc)."""
+    import os
+
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open("/proc/%s/stat" % entry) as stat:
+                    fields = stat.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid:
+                found.append(int(entry))
+    return found
+
+
+def test_ctrl_c_at_a_terminal_does_not_kill_the_compiler(fresh_chain_lag, tmp_path):
+    # A terminal's Ctrl-C signals the whole foreground process group: a Python process compiling a
+    # fresh .lag, in a session of its own here, gets SIGINT sent to its group once its compiler
+    # runs. It raises KeyboardInterrupt (not a failed compile); the compiler, in a group of its
+    # own, completes the cache entry, which the next process loads.
+    import os
+    import subprocess
+    import sys
+
+    cache = tmp_path / "cache"
+    cache.mkdir(mode=0o700)
+    env = dict(os.environ, PARDEL_CACHE_DIR=str(cache))
+    lag = tmp_path / "text.lag"
+    lag.write_text(fresh_chain_lag())
+    command = [sys.executable, "-c", _COMPILE_IN_CHILD, str(lag)]
+    child = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)
+    assert child.stdout.readline() == "start\n"
+    deadline = time.monotonic() + 60
+    while not _children(child.pid) and child.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    assert _children(child.pid), "the compile did not start a program"
+    os.killpg(child.pid, signal.SIGINT)
+    out, err = child.communicate(timeout=300)
+    assert child.returncode == 0, err
+    assert out.strip() == "KeyboardInterrupt", (out, err)
+    again = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0 and again.stdout.split() == ["start", "compiled"], (again.stdout, again.stderr)
