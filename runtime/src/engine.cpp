@@ -310,6 +310,7 @@ int compute_residual(Context& ctx, const std::vector<double>& q) {
   const double eps = std::numeric_limits<double>::epsilon();
   ctx.residual_scale = scale;
   ctx.residual_floor = 16 * eps * scale + 2 * eps * hq;
+  for (double measured : ctx.comp_floor_measured) ctx.residual_floor = std::max(ctx.residual_floor, measured);
   if (bad <= N) {
     ctx.residual = std::numeric_limits<double>::quiet_NaN();
     return bad;

@@ -106,6 +106,12 @@ struct Workspace {
    *  (comp_hq, full evaluations only). The relative test holds every component to its own scale,
    *  so that a coordinate whose terms are orders of magnitude smaller than another's is solved too. */
   std::vector<double> comp_residual, comp_scale, comp_hq;
+  /** Per component, the round-off level of its residual as measured where Newton stalled (the
+   *  largest change of the component's residual when the iterate moves by a few units in its last
+   *  place; measured_round_off, trust_region.hpp), a lower bound of component_floor and
+   *  residual_floor from then on; empty before. Evaluations that amplify rounding (the elimination
+   *  of high-order Galerkin interior values) lie far above the level estimated from the terms. */
+  std::vector<double> comp_floor_measured;
   double action = 0;
   bool action_known = false;     ///< whether `action` belongs to q
   /** Options::keep_going of the solve, polled by the point assessment (empty: never stopped). */
@@ -328,7 +334,8 @@ inline std::string component_name(const Context& ctx, int i) {
 inline double component_floor(const Context& ctx, int i) {
   const std::size_t ii = static_cast<std::size_t>(i);
   const double eps = std::numeric_limits<double>::epsilon();
-  return 16 * eps * ctx.comp_scale[ii] + 2 * eps * ctx.comp_hq[ii];
+  const double estimated = 16 * eps * ctx.comp_scale[ii] + 2 * eps * ctx.comp_hq[ii];
+  return ctx.comp_floor_measured.empty() ? estimated : std::max(estimated, ctx.comp_floor_measured[ii]);
 }
 
 /**

@@ -311,9 +311,11 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
   if (!partition_.agree_on_outcome(outcome)) {
     // Newton could not leave a saddle or a degenerate point at the tolerance: it is the answer
     // (not where the times at the tolerance were found unsettled: r is not at the clock's times).
-    if (outcome.failure == Termination::stalled && at_target(r, target) && !met_by_growth(r) && !times_pending_) {
+    // (A stall may have measured the round-off level above the estimate: the target is taken again.)
+    const double now = std::max(target, target_residual());
+    if (outcome.failure == Termination::stalled && at_target(r, now) && !met_by_growth(r) && !times_pending_) {
       *settled = !last;
-      if (last) finish(Termination::converged, converged_message(r, target));
+      if (last) finish(Termination::converged, converged_message(r, now) + measured_note());
       return true;
     }
     finish(outcome.failure, outcome.message);
@@ -415,6 +417,14 @@ std::string Iteration::converged_message(double r, double target) const {
                       "better",
                       relative, options_.rtol);
   return message;
+}
+
+std::string Iteration::measured_note() const {
+  if (ctx_.comp_floor_measured.empty()) return {};
+  return format("; the round-off level was measured where Newton stalled (the residual's change when the "
+                "iterate moves by a few units in its last place): %.3g, where the terms' sizes gave less (an "
+                "evaluation that amplifies rounding, as the elimination of high-order interior values does)",
+                ctx_.residual_floor);
 }
 
 bool Iteration::should_record() {

@@ -131,6 +131,8 @@ class Iteration {
   /** Component i's target (detail::component_target) with its scale at the solve's start. */
   double component_target(int i) const;
   std::string converged_message(double r, double target) const;
+  /** "; the round-off level was measured …" where a stall measured it (Context::comp_floor_measured). */
+  std::string measured_note() const;
   bool should_record();
   bool record();
   void finish(Termination termination, std::string message);

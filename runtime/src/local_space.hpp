@@ -39,6 +39,7 @@ class LocalSpace {
   int first_node() const { return 1; }
   int intervals() const { return N_; }
   double sum(double v) const { return v; }
+  double max(double v) const { return v; }
   double max_abs_diagonal(const Context& ctx) const { return BlockTridiagonal<D>::max_abs_diagonal(ctx); }
 
   bool factor(const Context& ctx, double lambda, const double* b, double* x) {

@@ -27,7 +27,7 @@
  * every verdict the same on all ranks):
  *   void resize(Context&);  std::size_t size();  std::size_t offset();  (index of unknown 0 in ctx.q)
  *   bool is_free(const Context&, i);  int first_node();  (global node of unknown 0)  int intervals();  (N)
- *   double sum(double);  double max_abs_diagonal(const Context&);
+ *   double sum(double);  double max(double);  double max_abs_diagonal(const Context&);
  *   bool factor(const Context&, lambda, rhs, x);  (H + lambda M positive definite: x = its inverse times rhs)
  *   void solve(const Context&, in, out);  (after a successful factor)
  *   double quadratic_form(x);  (with the factored shift)  long negative_eigenvalues(const Context&);  (-1: unknown)
@@ -354,7 +354,8 @@ class TrustRegionNewton : public Method_ {
                     "; the last finite iterate is returned";
       return out;
     }
-    return newton_stalled(iteration, r0, ctx.residual_floor, diagonal_spread(ctx));
+    if (!at_round_off(r0, ctx.residual_floor)) measure_round_off(ctx);
+    return newton_stalled(iteration, ctx.residual, ctx.residual_floor, diagonal_spread(ctx));
   }
 
   /** Values of save_state() before the watchdog's reference point. */
@@ -416,6 +417,30 @@ class TrustRegionNewton : public Method_ {
     for (std::size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
     return space_.sum(s);
   }
+  /** A stall far above the estimated round-off level: the level measured at ctx.q instead, per
+   *  component the largest change of its residual when every free value moves by four units in its
+   *  last place (two sign patterns), kept in ctx.comp_floor_measured; ctx is evaluated at q again
+   *  (the same bits as before, the floors now at least the measured ones). Collective. */
+  void measure_round_off(Context& ctx) {
+    const std::size_t o = space_.offset(), n = space_.size(), d = static_cast<std::size_t>(ctx.dim);
+    const double eps = std::numeric_limits<double>::epsilon();
+    const std::vector<double> q = ctx.q, at_q(ctx.res.begin() + static_cast<std::ptrdiff_t>(o),
+                                              ctx.res.begin() + static_cast<std::ptrdiff_t>(o + n));
+    std::vector<double> change(d, 0.0), moved;
+    for (std::size_t pattern = 0; pattern < 2; ++pattern) {
+      moved = q;
+      for (std::size_t i = 0; i < n; ++i)
+        if (space_.is_free(ctx, i)) moved[o + i] *= 1 + (((i / d + pattern * (i % d)) % 2) ? 4 : -4) * eps;
+      space_.evaluate(ctx, moved);
+      for (std::size_t i = 0; i < n; ++i)
+        if (space_.is_free(ctx, i))
+          change[(o + i) % d] = std::max(change[(o + i) % d], std::fabs(ctx.res[o + i] - at_q[i]));
+    }
+    for (double& c : change) c = space_.max(c);
+    ctx.comp_floor_measured = std::move(change);
+    space_.evaluate(ctx, q);
+  }
+
   /** |q|_M of the unknowns' free components: the scale of an escape step. */
   double metric_norm_of_iterate(const Context& ctx) {
     const std::size_t o = space_.offset();

@@ -263,3 +263,26 @@ def test_iterates_that_slide_off_past_a_conjugate_point_are_not_called_converged
     auto = pardel.solve("harmonic", q0=[0], qN=[1], T=duration, N=N, discretization="trapezoid")
     assert auto.status == "converged" and auto.point["kind"] == "saddle", auto.message
     assert np.abs(auto.q[:, 0] - exact).max() < 1e-3 * np.abs(exact).max()
+
+
+def test_a_high_order_galerkin_solve_at_its_measured_round_off_level_converges():
+    # L = x''^2/2 + c x'^2/2 (c = 4): x'''' = 4 x'', exact x = a + b t + e cosh 2t + f sinh 2t. Under
+    # galerkin_gauss(s=6) and (s=8) the elimination of the interior values amplifies rounding far
+    # above the level the terms' sizes give: Newton stalls there with the answer as accurate as
+    # double precision allows. The measured level makes it converged, and the message says so.
+    lag = "model stiff_beam_s\norder 2\ncoords x\nparam c = 4\nL = x''^2/2 + c*x'^2/2\n" \
+          "discretizations galerkin_gauss(s=6) galerkin_gauss(s=8)\n"
+
+    def basis(t):
+        return np.array([np.ones_like(t), t, np.cosh(2 * t), np.sinh(2 * t)])
+
+    def dbasis(t):
+        return np.array([np.zeros_like(t), np.ones_like(t), 2 * np.sinh(2 * t), 2 * np.cosh(2 * t)])
+
+    M = np.array([basis(np.array(0.0)), dbasis(np.array(0.0)), basis(np.array(1.0)), dbasis(np.array(1.0))])
+    coef = np.linalg.solve(M, [0, 1, 1, 0])
+    for discretization, N in (("galerkin_gauss(s=6)", 20), ("galerkin_gauss(s=8)", 40)):
+        r = pardel.solve(lag, q0=[0, 1], qN=[1, 0], T=1.0, N=N, discretization=discretization)
+        assert r.status == "converged" and r.point["kind"] == "minimum", r.message
+        assert np.abs(r.q[:, 0] - coef @ basis(r.t)).max() < 1e-8
+        assert "the round-off level was measured where Newton stalled" in r.message

@@ -54,6 +54,7 @@ class DistributedSpace {
     MPI_Allreduce(&v, &out, 1, MPI_DOUBLE, MPI_SUM, local_.comm);
     return out;
   }
+  double max(double v) const { return detail::max_all(v, local_.comm); }
   /** The largest diagonal entry of the unshifted Hessian (1 on fixed components), over all ranks. */
   double max_abs_diagonal(const Context& ctx) const {
     const Layout& L = local_.layout;
