@@ -470,6 +470,9 @@ void Iteration::summarize() {
     rec.action = s_.action;
     rec.seconds = seconds();
     s_.history.push_back(rec);
+    // The callback sees every record of the history, this last one too (the solve has ended:
+    // what it returns changes nothing).
+    if (options_.on_iteration) (void)options_.on_iteration(rec);
   }
   s_.wall_seconds = seconds();
 }

@@ -286,3 +286,13 @@ def test_a_high_order_galerkin_solve_at_its_measured_round_off_level_converges()
         assert r.status == "converged" and r.point["kind"] == "minimum", r.message
         assert np.abs(r.q[:, 0] - coef @ basis(r.t)).max() < 1e-8
         assert "the round-off level was measured where Newton stalled" in r.message
+
+
+def test_on_iteration_sees_every_record_of_a_thinned_history_the_last_one_too():
+    calls = []
+    r = pardel.solve("fuel_nav", q0=[0, 0], qN=[6, 5], T=30, N=60, method="jacobi-newton",
+                     on_iteration=lambda *record: calls.append(record))
+    assert r.status == "converged", r.message
+    assert len(r.history["iteration"]) > 100  # thinned: far fewer records than iterations
+    assert [c[0] for c in calls] == list(r.history["iteration"])
+    assert calls[-1][0] == r.iterations and calls[-1][2] == r.history["residual"][-1]
