@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 
 namespace pardel::cli {
@@ -12,8 +13,12 @@ double parse_number_option(const std::string& text, const std::string& option) {
   char* end = nullptr;
   errno = 0;
   const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE) {
+  if (text.empty() || end != text.c_str() + text.size()) {
     throw UsageError(fmt::format("{}: '{}' is not a number", option, text));
+  }
+  if (errno == ERANGE) {
+    throw UsageError(fmt::format("{}: '{}' is out of the range of a double ({})", option, text,
+                                 std::fabs(value) > 1 ? "it overflows" : "it underflows to a subnormal or zero"));
   }
   return value;
 }

@@ -150,9 +150,22 @@ int run_kernels(const KernelArgs& args, const app::ModelResolver& resolve) {
   double Ld = 0;
   std::vector<double> D1(m), D2(m), D11(m * m), D12(m * m), D22(m * m);
   disc->full(h, t0, t1, q0.data(), q1.data(), p.data(), &Ld, D1.data(), D2.data(), D11.data(), D12.data(), D22.data());
+  if (!model->clock && std::fabs((t1 - t0) - h) > 1e-12 * std::max(std::fabs(t1 - t0), h))
+    std::cerr << fmt::format("pardel kernels: note: --h {} is not --t1 - --t0 = {}; model {} has no clock, and a solve "
+                             "always passes h = t1 - t0\n",
+                             args.h, format_double(t1 - t0), model->name);
   std::cout << "{\"Ld\": " << json_number(Ld) << ", \"D1\": " << json_vector(D1.data(), m)
             << ", \"D2\": " << json_vector(D2.data(), m) << ", \"D11\": " << json_matrix(D11.data(), m)
             << ", \"D12\": " << json_matrix(D12.data(), m) << ", \"D22\": " << json_matrix(D22.data(), m) << "}\n";
+  long non_finite = std::isfinite(Ld) ? 0 : 1;
+  for (const auto* values : {&D1, &D2, &D11, &D12, &D22})
+    non_finite += std::count_if(values->begin(), values->end(), [](double v) { return !std::isfinite(v); });
+  if (non_finite > 0) {
+    std::cerr << fmt::format("pardel kernels: error: {} of the values are not finite (null in the JSON): the discrete "
+                             "Lagrangian overflows or is undefined at these numbers\n",
+                             non_finite);
+    return 5;  // as a solve that meets a value that is not finite
+  }
   return 0;
 }
 

@@ -268,6 +268,14 @@ void load_configurations(const std::string& source_name, const ModelResolver& re
                                        values[a], what));
         }
       }
+      // An error of the base scene that only this configuration's varied values bring out (another
+      // model's coordinates against the scene's boundary values): the message names them.
+      if (!sweep.axes.empty()) {
+        std::string varied;
+        for (std::size_t a = 0; a < sweep.axes.size(); ++a)
+          varied += fmt::format("{}vary {} = {} ({})", a ? ", " : "", sweep.axes[a].key, values[a], sweep.axes[a].where);
+        throw SceneError(what + "; in the sweep's configuration " + varied);
+      }
       throw;
     }
     if (!sweep.configurations.empty() && scene.model->ncoords != sweep.configurations.front().model->ncoords) {

@@ -64,11 +64,28 @@ namespace pardel::detail {
  * would decrease along it, so failing here means that the gradient (the DEL residual) is at the
  * round-off level of the action.
  */
-inline StepOutcome newton_stalled(long iteration, double residual, double residual_floor, double diagonal_spread = 1) {
+inline StepOutcome newton_stalled(long iteration, double residual, double residual_floor, double diagonal_spread = 1,
+                                  double largest = 0) {
   StepOutcome out;
   char buf[640];
   out.failure = Termination::stalled;
-  if (at_round_off(residual, residual_floor)) {
+  // Within a factor 1e8 of the largest double, sums of the action and steps of the iterate
+  // overflow or lose their changes: no verdict on the model can be drawn there.
+  constexpr double kNearOverflow = 1e300;
+  if (!std::isfinite(largest)) {
+    std::snprintf(buf, sizeof buf,
+                  "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps, "
+                  "at a DEL residual %.3g, with an action that is not finite (a term of L infinite at these values, "
+                  "or an overflow): its changes cannot be compared",
+                  iteration, residual);
+  } else if (largest > kNearOverflow) {
+    std::snprintf(buf, sizeof buf,
+                  "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps, "
+                  "at a DEL residual %.3g, with the action or the DEL terms of size %.3g, within a factor 1e8 of the "
+                  "largest double: their sums overflow or lose the steps' changes at this size; in other units "
+                  "(rescaled time or coordinates) that keep them far below 1e300 the problem can be solved",
+                  iteration, residual, largest);
+  } else if (at_round_off(residual, residual_floor)) {
     std::snprintf(buf, sizeof buf,
                   "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
                   "the DEL residual %.3g is at the round-off level of this problem (estimate %.3g) and the "
@@ -355,7 +372,8 @@ class TrustRegionNewton : public Method_ {
       return out;
     }
     if (!at_round_off(r0, ctx.residual_floor)) measure_round_off(ctx);
-    return newton_stalled(iteration, ctx.residual, ctx.residual_floor, diagonal_spread(ctx));
+    return newton_stalled(iteration, ctx.residual, ctx.residual_floor, diagonal_spread(ctx),
+                          std::max(std::fabs(ctx.action), ctx.residual_scale));
   }
 
   /** Values of save_state() before the watchdog's reference point. */

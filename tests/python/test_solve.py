@@ -296,3 +296,12 @@ def test_on_iteration_sees_every_record_of_a_thinned_history_the_last_one_too():
     assert len(r.history["iteration"]) > 100  # thinned: far fewer records than iterations
     assert [c[0] for c in calls] == list(r.history["iteration"])
     assert calls[-1][0] == r.iterations and calls[-1][2] == r.history["residual"][-1]
+
+
+def test_a_stall_at_the_edge_of_the_double_range_says_so():
+    # T = 1e308 over 10 intervals: the oscillator's action and DEL terms are near 1e307, where sums
+    # overflow and steps' changes are lost; the stall names that, not the model's smoothness.
+    r = pardel.solve("harmonic", q0=[0], qN=[1], T=1e308, N=10, method="newton")
+    assert r.status == "stalled", r.message
+    assert "within a factor 1e8 of the largest double" in r.message
+    assert "not smooth" not in r.message

@@ -377,9 +377,37 @@ INSTANTIATE_TEST_SUITE_P(
                       KernelCase{"--t0", "nan", "--t0: 'nan' is not a finite number"},
                       KernelCase{"--t1", "-inf", "--t1: '-inf' is not a finite number"},
                       KernelCase{"--q0", "nan", "--q0: value 1 (x) is not a finite number"},
-                      KernelCase{"--q1", "1e999", "--q1: '1e999' is not a number"},
+                      KernelCase{"--q1", "1e999", "--q1: '1e999' is out of the range of a double (it overflows)"},
+                      KernelCase{"--h", "1e-320",
+                                 "--h: '1e-320' is out of the range of a double (it underflows to a subnormal or zero)"},
+                      KernelCase{"--t0", "0x", "--t0: '0x' is not a number"},
                       KernelCase{"--param", "omega=nan", "--param omega: 'nan' is not a finite number"}),
     [](const ::testing::TestParamInfo<KernelCase>& info) { return "Case" + std::to_string(info.index); });
+
+TEST_F(HostileCliEdges, KernelsThatOverflowExitWithTheNonFiniteStatus) {
+  // L = (x'^2 - x^2)/2 at x = 1e200 over a step of 1e308: Ld and D1 overflow; the JSON has null for
+  // them, and the exit code says that values are not finite.
+  const Outcome o = pardel({"kernels", "--model", "harmonic", "--disc", "trapezoid", "--h", "1e308", "--t0", "0",
+                            "--t1", "1e308", "--q0", "1e200", "--q1", "0.1"},
+                           30);
+  EXPECT_EQ(o.status, 5) << o.output;
+  EXPECT_NE(o.output.find("\"Ld\": null"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("pardel kernels: error: 2 of the values are not finite (null in the JSON)"), std::string::npos)
+      << o.output;
+}
+
+TEST_F(HostileCliEdges, KernelsSayWhenTheStepIsNotTheIntervalOfAModelWithoutAClock) {
+  const Outcome o = pardel({"kernels", "--model", "harmonic", "--disc", "trapezoid", "--h", "0.1", "--t0", "5",
+                            "--t1", "0.1", "--q0", "0", "--q1", "0.1"},
+                           30);
+  EXPECT_EQ(o.status, 0) << o.output;
+  EXPECT_NE(o.output.find("pardel kernels: note: --h 0.1 is not --t1 - --t0 = "), std::string::npos) << o.output;
+  const Outcome same = pardel({"kernels", "--model", "harmonic", "--disc", "trapezoid", "--h", "0.1", "--t0", "5",
+                               "--t1", "5.1", "--q0", "0", "--q1", "0.1"},
+                              30);
+  EXPECT_EQ(same.status, 0) << same.output;
+  EXPECT_EQ(same.output.find("note:"), std::string::npos) << same.output;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Pictures: never those of another solve beside the outputs

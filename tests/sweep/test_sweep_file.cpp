@@ -239,6 +239,17 @@ TEST(SweepFileErrors, AVariedValueTheSceneRefusesNamesTheVaryEntryAndTheSceneErr
   EXPECT_NE(unknown.find("did you mean 'params.s'?"), std::string::npos) << unknown;
 }
 
+TEST(SweepFileErrors, AModelVariedIntoAnErrorOfTheBaseSceneNamesTheConfiguration) {
+  // zermelo_1's boundary values have two coordinates; the harmonic oscillator has one: the base
+  // scene's error at boundary.q0 comes with the configuration that brings it out.
+  const std::string message =
+      error_of("scene = \"../zermelo_1.toml\"\n[[vary]]\nkey = \"model\"\nvalues = [\"zermelo\", \"harmonic\"]\n");
+  EXPECT_NE(message.find("boundary.q0 has 2 values; expected 1"), std::string::npos) << message;
+  EXPECT_NE(message.find("; in the sweep's configuration vary model = \"harmonic\" (" + kName + ":2:1)"),
+            std::string::npos)
+      << message;
+}
+
 TEST(SweepFileErrors, BadSetEntryAndCommandLineSet) {
   EXPECT_EQ(error_of("scene = \"../zermelo_1.toml\"\nset = [\"solver.method\"]\n"),
             kName + ":2:8: error: set[0] = \"solver.method\" is not KEY=VALUE (e.g. solver.method=newton)");
