@@ -161,3 +161,20 @@ def test_under_a_free_final_time_the_note_says_the_times_are_not_in_the_estimate
         travel_errors.append(abs(r.cost - (b - a)))
         assert travel_errors[-1] > 1e3 * r.error_estimate
     assert 1.4 < travel_errors[0] / travel_errors[1] < 2.6
+
+
+def test_a_third_level_with_a_lone_interval_beside_a_knot_does_not_confirm():
+    # x'' = -x on [0, 2] through a knot on the motion x = sin t at t = 0.5. At N = 16 the third level
+    # (N = 4) has a single interval from 0 to the knot, too coarse for an order to show: the estimate
+    # is not confirmed. At N = 32 (third level N = 8, two intervals there) it is, within a factor 3.
+    knot = [(0.5, [math.sin(0.5)])]
+    for N, confirmed in ((16, False), (32, True)):
+        r = pardel.solve("harmonic", q0=[0], qN=[math.sin(2.0)], T=2.0, N=N, knots=knot,
+                         discretization="galerkin_lobatto(s=2)")
+        assert r.status == "converged", r.message
+        assert r.error_reliable == confirmed, r.error_note
+        if confirmed:
+            true_error = np.abs(r.q[::2, 0] - np.sin(r.t[::2])).max()
+            assert r.error_estimate / 3 <= true_error <= 3 * r.error_estimate
+        else:
+            assert "it has a single interval between t = 0 and t = 0.5" in r.error_note
