@@ -333,6 +333,63 @@ static const pardel_condensation::Interval pendulum_galerkin_lobatto_s_2_interva
     pendulum_galerkin_lobatto_s_2_ext_full,
 };
 
+#if !defined(__CUDACC__)
+
+// interior_extended: in pd_quad, 29 operations
+static void pendulum_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
+    const pd_quad* p, const pd_quad* z, pd_quad* g, pd_quad* H) {
+  (void)t0;
+  (void)t1;
+  const pd_quad pd_t0001 = 1.0/h;
+  const pd_quad pd_t0002 = z[0]*4.0*pd_t0001;
+  const pd_quad pd_t0003 = sinq(z[0]);
+  const pd_quad pd_t0004 = p[0]/p[1];
+  const pd_quad pd_t0005 = cosq(z[0]);
+  g[0] = h*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*((pd_t0002 - (q0[0] + q1[0]*3.0)*pd_t0001)*pd_t0001 - ((q1[0] + q0[0]*3.0)*pd_t0001 - pd_t0002)*pd_t0001 - pd_t0003*pd_t0004);
+  H[0] = -(h*(((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0004*pd_t0005) - 1.0/(h*h)*((pd_quad(5.333333333333333) + 2.9605947323337506e-16 + 1.6177811532852781e-32))));
+}
+
+// ext_grad_extended: in pd_quad, 63 operations
+static void pendulum_galerkin_lobatto_s_2_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
+    const pd_quad* p, const pd_quad* z, pd_quad* S, pd_quad* g) {
+  (void)t0;
+  (void)t1;
+  const pd_quad pd_t0001 = p[0]/p[1];
+  const pd_quad pd_t0002 = cosq(z[0]);
+  const pd_quad pd_t0003 = q0[0] - q1[0];
+  const pd_quad pd_t0004 = 1.0/(h*h);
+  const pd_quad pd_t0005 = 1.0/h;
+  const pd_quad pd_t0006 = z[0]*4.0*pd_t0005;
+  const pd_quad pd_t0007 = (q1[0] + q0[0]*3.0)*pd_t0005 - pd_t0006;
+  const pd_quad pd_t0008 = pd_t0006 - (q0[0] + q1[0]*3.0)*pd_t0005;
+  const pd_quad pd_t0009 = cosq(q1[0]);
+  const pd_quad pd_t0010 = cosq(q0[0]);
+  const pd_quad pd_t0011 = pd_t0008*pd_t0005;
+  const pd_quad pd_t0012 = sinq(q0[0]);
+  const pd_quad pd_t0013 = pd_t0007*pd_t0005;
+  const pd_quad pd_t0014 = ((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0003*pd_t0004);
+  const pd_quad pd_t0015 = sinq(z[0]);
+  const pd_quad pd_t0016 = sinq(q1[0]);
+  S[0] = h*(pd_t0001*pd_t0002*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33)) + (pd_t0003*pd_t0003*pd_t0004*((pd_quad(0.33333333333333331) + 1.8503717077085941e-17 + 1.0111132208032988e-33)) + ((pd_t0007*pd_t0007 + pd_t0008*pd_t0008)*((pd_quad(0.083333333333333329) + 4.6259292692714853e-18 + 2.5277830520082471e-34)) + (pd_t0009*pd_t0001 + pd_t0001*pd_t0010)*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34)))));
+  g[0] = -(h*(((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34))*(pd_t0011 + pd_t0001*pd_t0012) - pd_t0013*0.5 - pd_t0014));
+  g[1] = h*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0011 - pd_t0013 - pd_t0001*pd_t0015);
+  g[2] = -(h*(pd_t0011*0.5 + (pd_t0014 + ((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34))*(pd_t0001*pd_t0016 - pd_t0013))));
+}
+
+static const pardel_condensation::ExtendedInterval<pd_quad> pendulum_galerkin_lobatto_s_2_interval_extended = {
+    pendulum_galerkin_lobatto_s_2_interior_extended,
+    pendulum_galerkin_lobatto_s_2_ext_grad_extended,
+    nullptr,
+};
+
+// grad_extended: the condensed interval in pd_quad, outputs as double-double pairs
+extern "C" void pendulum_galerkin_lobatto_s_2_grad_extended(double h, double t0, double t1, const double* q0,
+    const double* q1, const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed_extended<pd_quad, 1, 1, 1, 2>(pendulum_galerkin_lobatto_s_2_interval, pendulum_galerkin_lobatto_s_2_interval_extended, h, t0, t1, q0, q1, p, Ld, D1, D2,
+                                                    nullptr, nullptr, nullptr);
+}
+#endif
+
 extern "C" void pendulum_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   pardel_condensation::condensed<1, 1, 1>(pendulum_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
@@ -570,6 +627,122 @@ static const pardel_condensation::Interval pendulum_galerkin_gauss_s_4_interval 
     pendulum_galerkin_gauss_s_4_ext_full,
 };
 
+#if !defined(__CUDACC__)
+
+// interior_extended: in pd_quad, 207 operations
+static void pendulum_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
+    const pd_quad* p, const pd_quad* z, pd_quad* g, pd_quad* H) {
+  (void)t0;
+  (void)t1;
+  const pd_quad pd_t0001 = 1.0/h;
+  const pd_quad pd_t0002 = z[1]*((pd_quad(3.7995286238720101) + 1.1407526488132259e-16 + 8.0889057664263906e-33))*pd_t0001;
+  const pd_quad pd_t0003 = (z[2]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0001 + z[0]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0001 - (q1[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q0[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0001 - pd_t0002)*pd_t0001;
+  const pd_quad pd_t0004 = z[1]*((pd_quad(0.43835335626489408) - 1.3741310711245168e-17 + 6.7407548053553255e-34))*pd_t0001;
+  const pd_quad pd_t0005 = (z[2]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0001 + z[0]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0001 - pd_t0004 - (q1[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q0[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0001)*pd_t0001;
+  const pd_quad pd_t0006 = (z[0]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0001 + z[2]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0001 - pd_t0002 - (q0[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q1[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0001)*pd_t0001;
+  const pd_quad pd_t0007 = p[0]/p[1];
+  const pd_quad pd_t0008 = z[1]*((pd_quad(0.18874099619441229) - 9.1159616881575048e-18 + 5.2963073470648986e-34));
+  const pd_quad pd_t0009 = q1[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) + pd_t0008 - z[2]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q0[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[0]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
+  const pd_quad pd_t0010 = sinq(pd_t0009);
+  const pd_quad pd_t0011 = pd_t0007*pd_t0010;
+  const pd_quad pd_t0012 = z[1]*((pd_quad(0.64588385333726939) + 3.2913909958366282e-17 - 2.6963019221421302e-33));
+  const pd_quad pd_t0013 = z[2]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34)) + (pd_t0012 + q0[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34))) - q1[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[0]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
+  const pd_quad pd_t0014 = sinq(pd_t0013);
+  const pd_quad pd_t0015 = pd_t0007*pd_t0014;
+  const pd_quad pd_t0016 = pd_t0008 + q0[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) - z[0]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q1[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[2]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
+  const pd_quad pd_t0017 = sinq(pd_t0016);
+  const pd_quad pd_t0018 = pd_t0007*pd_t0017;
+  const pd_quad pd_t0019 = (z[0]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0001 + z[2]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0001 - (q0[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q1[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0001 - pd_t0004)*pd_t0001;
+  const pd_quad pd_t0020 = pd_t0012 + (q1[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34)) + z[0]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34))) - q0[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[2]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
+  const pd_quad pd_t0021 = sinq(pd_t0020);
+  const pd_quad pd_t0022 = pd_t0007*pd_t0021;
+  const pd_quad pd_t0023 = cosq(pd_t0020);
+  const pd_quad pd_t0024 = pd_t0007*pd_t0023;
+  const pd_quad pd_t0025 = cosq(pd_t0009);
+  const pd_quad pd_t0026 = pd_t0007*pd_t0025;
+  const pd_quad pd_t0027 = cosq(pd_t0016);
+  const pd_quad pd_t0028 = pd_t0007*pd_t0027;
+  const pd_quad pd_t0029 = cosq(pd_t0013);
+  const pd_quad pd_t0030 = pd_t0007*pd_t0029;
+  const pd_quad pd_t0031 = 1.0/(h*h);
+  const pd_quad pd_t0032 = pd_t0031*((pd_quad(12.703703703703704) - 4.6053695836302787e-16 - 2.6192647243666408e-32));
+  const pd_quad pd_t0033 = pd_t0031*((pd_quad(5.8074074074074078) - 3.8816686490598067e-16 + 1.771855548836257e-32));
+  const pd_quad pd_t0034 = h*(pd_t0030*((pd_quad(0.040683871556431793) - 3.2728035469436033e-19)) + (pd_t0028*((pd_quad(0.0030799344260414238) - 2.801391479903996e-20 - 1.504632769052528e-36)) + pd_t0026*((pd_quad(0.022609812278198024) + 1.4085901598314437e-18 - 9.0277966143151681e-36))) - pd_t0024*((pd_quad(0.12859584048289346) - 6.2745841083059631e-19 - 2.4074124304840448e-35)) - pd_t0033);
+  const pd_quad pd_t0035 = pd_t0024 + pd_t0030;
+  const pd_quad pd_t0036 = pd_t0028 + pd_t0026;
+  const pd_quad pd_t0037 = h*(pd_t0035*((pd_quad(0.038461486405326983) - 2.2997322445306122e-18 + 1.2638915260041235e-34)) + pd_t0031*((pd_quad(1.2703703703703704) - 1.6447748512965283e-18)) - pd_t0036*((pd_quad(0.011239264183104759) - 4.8020006528382776e-19 - 3.4606553688208144e-35)));
+  const pd_quad pd_t0038 = -(h*(pd_t0033 + pd_t0030*((pd_quad(0.12859584048289346) - 6.2745841083059631e-19 - 2.4074124304840448e-35)) - pd_t0026*((pd_quad(0.0030799344260414238) - 2.801391479903996e-20 - 1.504632769052528e-36)) - pd_t0028*((pd_quad(0.022609812278198024) + 1.4085901598314437e-18 - 9.0277966143151681e-36)) - pd_t0024*((pd_quad(0.040683871556431793) - 3.2728035469436033e-19))));
+  g[0] = h*(pd_t0003*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0005*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0006*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0011*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0015*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0018*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0019*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0022*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
+  g[1] = -(h*((pd_t0003 + pd_t0006)*((pd_quad(1.2389220914098444) + 1.8491905256815235e-17 + 5.7777898331617076e-34)) + ((pd_t0022 + pd_t0015)*((pd_quad(0.21060501277892579) + 9.908285689141597e-18 + 4.8148248609680896e-35)) + ((pd_t0011 + pd_t0018)*((pd_quad(0.032827235001148022) + 2.8151941429253193e-18 - 1.023150282955719e-34)) + (pd_t0019 + pd_t0005)*((pd_quad(0.07624166942950393) + 1.3223508262235632e-18 - 1.2037062152420224e-35))))));
+  g[2] = h*(pd_t0006*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0019*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0003*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0018*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0022*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0011*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0005*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0015*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
+  H[0] = -(h*(pd_t0024*((pd_quad(0.12157120208321184) + 4.5704781772984664e-18 - 2.8888949165808538e-34)) + (pd_t0026*((pd_quad(0.082507488203794471) + 1.3656102038054429e-18 + 3.6111186457260672e-35)) + (pd_t0028*((pd_quad(0.0015310253908785464) - 9.8038427481031055e-20 + 1.88079096131566e-36)) + pd_t0030*((pd_quad(0.01216806209989291) + 6.3921475862163336e-19 + 1.0532429383367696e-35)))) - pd_t0032));
+  H[1] = pd_t0034;
+  H[2] = pd_t0037;
+  H[3] = pd_t0034;
+  H[4] = -(h*(pd_t0036*((pd_quad(0.0061958450364247566) + 3.1167040125707034e-19 + 1.9560225997682864e-35)) + pd_t0035*((pd_quad(0.13602637718579746) + 6.7904945057857275e-19 + 4.8148248609680896e-35)) - pd_t0031*((pd_quad(9.481481481481481) + 5.26327952414889e-16 + 2.9274135154685985e-32))));
+  H[5] = pd_t0038;
+  H[6] = pd_t0037;
+  H[7] = pd_t0038;
+  H[8] = -(h*(pd_t0030*((pd_quad(0.12157120208321184) + 4.5704781772984664e-18 - 2.8888949165808538e-34)) + (pd_t0028*((pd_quad(0.082507488203794471) + 1.3656102038054429e-18 + 3.6111186457260672e-35)) + (pd_t0026*((pd_quad(0.0015310253908785464) - 9.8038427481031055e-20 + 1.88079096131566e-36)) + pd_t0024*((pd_quad(0.01216806209989291) + 6.3921475862163336e-19 + 1.0532429383367696e-35)))) - pd_t0032));
+}
+
+// ext_grad_extended: in pd_quad, 199 operations
+static void pendulum_galerkin_gauss_s_4_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
+    const pd_quad* p, const pd_quad* z, pd_quad* S, pd_quad* g) {
+  (void)t0;
+  (void)t1;
+  const pd_quad pd_t0001 = p[0]/p[1];
+  const pd_quad pd_t0002 = z[1]*((pd_quad(0.64588385333726939) + 3.2913909958366282e-17 - 2.6963019221421302e-33));
+  const pd_quad pd_t0003 = pd_t0002 + (q1[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34)) + z[0]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34))) - q0[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[2]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
+  const pd_quad pd_t0004 = cosq(pd_t0003);
+  const pd_quad pd_t0005 = z[2]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34)) + (pd_t0002 + q0[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34))) - q1[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[0]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
+  const pd_quad pd_t0006 = cosq(pd_t0005);
+  const pd_quad pd_t0007 = z[1]*((pd_quad(0.18874099619441229) - 9.1159616881575048e-18 + 5.2963073470648986e-34));
+  const pd_quad pd_t0008 = q0[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) + pd_t0007 - z[0]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q1[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[2]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
+  const pd_quad pd_t0009 = cosq(pd_t0008);
+  const pd_quad pd_t0010 = pd_t0007 + q1[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) - z[2]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q0[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[0]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
+  const pd_quad pd_t0011 = cosq(pd_t0010);
+  const pd_quad pd_t0012 = 1.0/h;
+  const pd_quad pd_t0013 = z[1]*((pd_quad(0.43835335626489408) - 1.3741310711245168e-17 + 6.7407548053553255e-34))*pd_t0012;
+  const pd_quad pd_t0014 = z[0]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0012 + z[2]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0012 - (q0[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q1[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0012 - pd_t0013;
+  const pd_quad pd_t0015 = z[2]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0012 + z[0]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0012 - pd_t0013 - (q1[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q0[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0012;
+  const pd_quad pd_t0016 = z[1]*((pd_quad(3.7995286238720101) + 1.1407526488132259e-16 + 8.0889057664263906e-33))*pd_t0012;
+  const pd_quad pd_t0017 = z[0]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0012 + z[2]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0012 - (q0[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q1[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0012 - pd_t0016;
+  const pd_quad pd_t0018 = z[2]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0012 + z[0]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0012 - pd_t0016 - (q1[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q0[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0012;
+  const pd_quad pd_t0019 = pd_t0015*pd_t0012;
+  const pd_quad pd_t0020 = pd_t0018*pd_t0012;
+  const pd_quad pd_t0021 = pd_t0017*pd_t0012;
+  const pd_quad pd_t0022 = sinq(pd_t0005);
+  const pd_quad pd_t0023 = pd_t0001*pd_t0022;
+  const pd_quad pd_t0024 = sinq(pd_t0008);
+  const pd_quad pd_t0025 = pd_t0001*pd_t0024;
+  const pd_quad pd_t0026 = pd_t0014*pd_t0012;
+  const pd_quad pd_t0027 = sinq(pd_t0003);
+  const pd_quad pd_t0028 = pd_t0001*pd_t0027;
+  const pd_quad pd_t0029 = sinq(pd_t0010);
+  const pd_quad pd_t0030 = pd_t0001*pd_t0029;
+  S[0] = h*((pd_t0001*pd_t0004 + pd_t0001*pd_t0006)*((pd_quad(0.32607257743127305) + 2.3925407421254193e-17 - 5.2963073470648986e-34)) + ((pd_t0009*pd_t0001 + pd_t0001*pd_t0011)*((pd_quad(0.17392742256872692) + 3.8301681943747208e-18 - 2.4074124304840448e-34)) + ((pd_t0014*pd_t0014 + pd_t0015*pd_t0015)*((pd_quad(0.086963711284363462) + 1.9150840971873604e-18 - 1.2037062152420224e-34)) + (pd_t0017*pd_t0017 + pd_t0018*pd_t0018)*((pd_quad(0.16303628871563652) + 1.1962703710627097e-17 - 2.6481536735324493e-34)))));
+  g[0] = -(h*(pd_t0019*((pd_quad(1.0994869450636569) - 2.1771214669942454e-18 + 1.9259299443872359e-34)) + (pd_t0020*((pd_quad(0.1232741032024484) + 6.0031508072989784e-18 + 1.2037062152420224e-34)) + (pd_t0021*((pd_quad(0.029907999238518453) - 1.5915643576772342e-18 + 1.2037062152420224e-35)) + (pd_t0023*((pd_quad(0.02003807601558252) + 4.3900808820685091e-19 - 1.504632769052528e-35)) + (pd_t0025*((pd_quad(0.0056958598140994963) + 2.4703631850434165e-19 + 1.5798644075051544e-35)) + pd_t0026*((pd_quad(0.0061208410997268927) - 2.3085751409801891e-19 + 1.9560225997682864e-35)))))) - pd_t0028*((pd_quad(0.040681622474346361) + 1.6103541235356328e-18 - 7.8240903990731457e-35)) - pd_t0030*((pd_quad(0.076339406272863342) - 2.2245369457181715e-18 + 6.018531076210112e-35))));
+  g[1] = h*(pd_t0020*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0019*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0021*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0030*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0023*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0025*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0026*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0028*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
+  g[2] = -(h*((pd_t0020 + pd_t0021)*((pd_quad(1.2389220914098444) + 1.8491905256815235e-17 + 5.7777898331617076e-34)) + ((pd_t0028 + pd_t0023)*((pd_quad(0.21060501277892579) + 9.908285689141597e-18 + 4.8148248609680896e-35)) + ((pd_t0030 + pd_t0025)*((pd_quad(0.032827235001148022) + 2.8151941429253193e-18 - 1.023150282955719e-34)) + (pd_t0026 + pd_t0019)*((pd_quad(0.07624166942950393) + 1.3223508262235632e-18 - 1.2037062152420224e-35))))));
+  g[3] = h*(pd_t0021*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0026*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0020*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0025*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0028*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0030*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0019*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0023*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
+  g[4] = -(h*(pd_t0026*((pd_quad(1.0994869450636569) - 2.1771214669942454e-18 + 1.9259299443872359e-34)) + (pd_t0021*((pd_quad(0.1232741032024484) + 6.0031508072989784e-18 + 1.2037062152420224e-34)) + (pd_t0020*((pd_quad(0.029907999238518453) - 1.5915643576772342e-18 + 1.2037062152420224e-35)) + (pd_t0028*((pd_quad(0.02003807601558252) + 4.3900808820685091e-19 - 1.504632769052528e-35)) + (pd_t0030*((pd_quad(0.0056958598140994963) + 2.4703631850434165e-19 + 1.5798644075051544e-35)) + pd_t0019*((pd_quad(0.0061208410997268927) - 2.3085751409801891e-19 + 1.9560225997682864e-35)))))) - pd_t0023*((pd_quad(0.040681622474346361) + 1.6103541235356328e-18 - 7.8240903990731457e-35)) - pd_t0025*((pd_quad(0.076339406272863342) - 2.2245369457181715e-18 + 6.018531076210112e-35))));
+}
+
+static const pardel_condensation::ExtendedInterval<pd_quad> pendulum_galerkin_gauss_s_4_interval_extended = {
+    pendulum_galerkin_gauss_s_4_interior_extended,
+    pendulum_galerkin_gauss_s_4_ext_grad_extended,
+    nullptr,
+};
+
+// grad_extended: the condensed interval in pd_quad, outputs as double-double pairs
+extern "C" void pendulum_galerkin_gauss_s_4_grad_extended(double h, double t0, double t1, const double* q0,
+    const double* q1, const double* p, double* Ld, double* D1, double* D2) {
+  pardel_condensation::condensed_extended<pd_quad, 1, 1, 3, 2>(pendulum_galerkin_gauss_s_4_interval, pendulum_galerkin_gauss_s_4_interval_extended, h, t0, t1, q0, q1, p, Ld, D1, D2,
+                                                    nullptr, nullptr, nullptr);
+}
+#endif
+
 extern "C" void pendulum_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   pardel_condensation::condensed<1, 1, 3>(pendulum_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
@@ -611,8 +784,8 @@ static const double pendulum_param_defaults[] = {
 static const pardel_discretization pendulum_discretizations[] = {
     {"trapezoid", 2, pendulum_trapezoid_full, pendulum_trapezoid_sweep, pendulum_trapezoid_grad, pendulum_trapezoid_action, PD_EXTENDED(pendulum_trapezoid_grad_extended), nullptr, "trapezoid"},
     {"midpoint", 2, pendulum_midpoint_full, pendulum_midpoint_sweep, pendulum_midpoint_grad, pendulum_midpoint_action, PD_EXTENDED(pendulum_midpoint_grad_extended), nullptr, "midpoint"},
-    {"galerkin_lobatto(s=2)", 4, pendulum_galerkin_lobatto_s_2_full, pendulum_galerkin_lobatto_s_2_sweep, pendulum_galerkin_lobatto_s_2_grad, pendulum_galerkin_lobatto_s_2_action, nullptr, nullptr, nullptr},
-    {"galerkin_gauss(s=4)", 8, pendulum_galerkin_gauss_s_4_full, pendulum_galerkin_gauss_s_4_sweep, pendulum_galerkin_gauss_s_4_grad, pendulum_galerkin_gauss_s_4_action, nullptr, nullptr, nullptr},
+    {"galerkin_lobatto(s=2)", 4, pendulum_galerkin_lobatto_s_2_full, pendulum_galerkin_lobatto_s_2_sweep, pendulum_galerkin_lobatto_s_2_grad, pendulum_galerkin_lobatto_s_2_action, PD_EXTENDED(pendulum_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr},
+    {"galerkin_gauss(s=4)", 8, pendulum_galerkin_gauss_s_4_full, pendulum_galerkin_gauss_s_4_sweep, pendulum_galerkin_gauss_s_4_grad, pendulum_galerkin_gauss_s_4_action, PD_EXTENDED(pendulum_galerkin_gauss_s_4_grad_extended), nullptr, nullptr},
 };
 
 extern "C" const pardel_model pendulum_model = {

@@ -46,6 +46,10 @@ void pendulum_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const d
 void pendulum_galerkin_lobatto_s_2_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double pendulum_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
+void pendulum_galerkin_lobatto_s_2_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 /* galerkin_gauss(s=4) (host functions: interior values) */
 void pendulum_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
@@ -55,6 +59,10 @@ void pendulum_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const dou
 void pendulum_galerkin_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double pendulum_galerkin_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+#if !defined(__CUDACC__)
+void pendulum_galerkin_gauss_s_4_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* Ld, double* D1, double* D2);
+#endif
 
 #ifdef __cplusplus
 }

@@ -178,7 +178,7 @@ namespace {
 /** The interval kernels of a Galerkin discretization with interior values: the action S over
  *  x = [q0, z, q1], its gradient and Hessian, and z's starting values. */
 std::vector<KernelIR> interval_kernels(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s,
-                                       const CseOptions& options, int* interior_dim) {
+                                       const CseOptions& options, int* interior_dim, std::vector<KernelIR>* extended) {
   const GalerkinInterval gi = galerkin_interval(model, spec, s);
   *interior_dim = static_cast<int>(gi.z.size());
   std::vector<KernelInput> inputs = kernel_inputs(s);
@@ -195,12 +195,22 @@ std::vector<KernelIR> interval_kernels(const LagModel& model, const Discretizati
   }
   const std::vector<std::string> args = {"h", "t0", "t1", "q0", "q1", "p", "z"};
   std::vector<KernelIR> out;
+  // The extended-precision twins of iterative refinement: "interior" and "ext_grad" for the
+  // gradient (grad_extended), "ext_full" for models of order >= 2 (full_extended).
   auto add = [&](const std::string& variant, const std::vector<KernelOutput>& outs) {
     KernelIR k;
     k.variant = variant;
     k.function = model.name + "_" + spec.ident + "_" + variant;
-    k.code = generate_kernel_code(outs, inputs, options);
+    const bool twin = variant == "interior" || variant == "ext_grad" || (variant == "ext_full" && model.order >= 2);
+    KernelIR wide;
+    k.code = generate_kernel_code(outs, inputs, options, twin ? &wide.code : nullptr);
     k.unused_inputs = unused(k.code, args);
+    if (twin) {
+      wide.variant = variant + "_extended";
+      wide.function = k.function + "_extended";
+      wide.unused_inputs = k.unused_inputs;
+      extended->push_back(std::move(wide));
+    }
     out.push_back(std::move(k));
   };
   std::vector<KernelOutput> outs;
@@ -233,7 +243,11 @@ ModelIR build_ir(const LagModel& model, const std::string& source_name, const Cs
     DiscretizationIR dir;
     dir.spec = spec;
     if (spec.interior_points > 0) {
-      dir.interval_kernels = interval_kernels(model, spec, s, options, &dir.interior_dim);
+      dir.interval_kernels = interval_kernels(model, spec, s, options, &dir.interior_dim, &dir.interval_extended);
+      // grad_extended and full_extended: condensation.hpp's condensed_extended over them.
+      dir.extended = KernelIR{"grad_extended", model.name + "_" + spec.ident + "_grad_extended", {}, {}};
+      if (model.order >= 2)
+        dir.extended_full = KernelIR{"full_extended", model.name + "_" + spec.ident + "_full_extended", {}, {}};
       for (const std::string& variant : kernel_variants()) {
         KernelIR k;
         k.variant = variant;
@@ -336,6 +350,8 @@ std::string ir_to_json(const ModelIR& ir) {
     disc["extended_full_kernel"] = optional_kernel_json(d.extended_full);
     disc["interval_kernels"] = Json::array();
     for (const KernelIR& k : d.interval_kernels) disc["interval_kernels"].push_back(kernel_json(k));
+    disc["interval_extended_kernels"] = Json::array();
+    for (const KernelIR& k : d.interval_extended) disc["interval_extended_kernels"].push_back(kernel_json(k));
     j["discretizations"].push_back(std::move(disc));
   }
   j["clock"] = optional_kernel_json(ir.clock);

@@ -22,6 +22,7 @@
 #include "assessment.hpp"
 #include "block_tridiagonal.hpp"
 #include "constants.hpp"
+#include "iterative_refinement.hpp"
 #include "lanczos.hpp"
 
 namespace pardel::detail {
@@ -611,6 +612,7 @@ bool newton_correction(Context& ctx, std::vector<double>& delta) {
     // fused Jacobi sweeps keep only its norm), and a stale or zero res would make the correction,
     // and the error estimate from it, zero.
     if (compute_residual(ctx) >= 0) return;
+    extend_residual(ctx);
     H.newton_correction(ctx, delta);
     solved = true;
   });

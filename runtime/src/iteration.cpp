@@ -129,6 +129,7 @@ bool Iteration::run_level(bool last) {
     if (stalled_at_round_off(r, target) || reached_max_iterations(r, target) || diverged(r)) return false;
     previous_comp_residual_.assign(ctx_.comp_residual.begin(), ctx_.comp_residual.end());
     StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
+    if (last && refined_after_stall(outcome)) continue;
     if (step_failed(outcome, last, r, target, &settled)) return settled;
     times_pending_ = false;
     std::swap(ctx_.q, ctx_.q_next);
@@ -271,13 +272,24 @@ bool Iteration::refined_at_round_off(double r, double target) {
   if (refined_ || !whole_system_newton(options_.method) || !(r <= target) || !at_round_off(r, ctx_.residual_floor) ||
       iteration_ - best_iteration_ < 10 || unresolved_component() < 0)
     return false;
+  return refine_during("where Newton stood at the round-off level with a component above its target");
+}
+
+bool Iteration::refined_after_stall(const StepOutcome& outcome) {
+  // Newton stalled at the round-off level of the double residual: the extended one may still
+  // show the way (a high-order Galerkin model of order 2 at N = 640 stalled 5e-7 from its motion).
+  if (refined_ || outcome.failure != Termination::stalled || !whole_system_newton(options_.method) ||
+      !at_round_off(ctx_.residual, ctx_.residual_floor))
+    return false;
+  return refine_during("where Newton stalled at the round-off level");
+}
+
+bool Iteration::refine_during(const std::string& where) {
   refined_ = true;
   refined_iteration_ = iteration_;
   partition_.refine(options_, s_);
   if (s_.refinement_steps == 0) return false;
-  refined_note_ = "in iteration " + std::to_string(iteration_) +
-                  ", where Newton stood at the round-off level with a component above its target: " +
-                  s_.refinement_note;
+  refined_note_ = "in iteration " + std::to_string(iteration_) + ", " + where + ": " + s_.refinement_note;
   ctx_.evaluated = Evaluated::nothing;  // evaluated again, by the method, at the refined iterate
   ctx_.action_known = false;
   method_.times_changed();  // the iterate moved outside the method: its trust-region history is void
@@ -315,7 +327,7 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
     const double now = std::max(target, target_residual());
     if (outcome.failure == Termination::stalled && at_target(r, now) && !met_by_growth(r) && !times_pending_) {
       *settled = !last;
-      if (last) finish(Termination::converged, converged_message(r, now) + measured_note());
+      if (last) finish(Termination::converged, converged_message(r, now));
       return true;
     }
     finish(outcome.failure, outcome.message);
@@ -416,7 +428,7 @@ std::string Iteration::converged_message(double r, double target) const {
                       "their scale (rtol %.2g), and the answer is uncertain accordingly; a smaller N resolves them "
                       "better",
                       relative, options_.rtol);
-  return message;
+  return message + measured_note();
 }
 
 std::string Iteration::measured_note() const {

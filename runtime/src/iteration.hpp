@@ -102,6 +102,11 @@ class Iteration {
   bool answer_at_tolerance(bool last, double r, double target, bool* settled);
   bool stalled_at_round_off(double r, double target);
   bool refined_at_round_off(double r, double target);
+  /** Iterative refinement once where Newton's step `outcome` stalled at the round-off level. */
+  bool refined_after_stall(const StepOutcome& outcome);
+  /** Iterative refinement from the current iterate during the solve (`where`: why, for the note);
+   *  false where it made no correction. */
+  bool refine_during(const std::string& where);
   bool times_unsettled(int unsettled, long since_best);
   bool times_stop_increasing();
   bool reached_max_iterations(double r, double target);

@@ -278,6 +278,15 @@ int extended_residual(const Context& ctx, const std::vector<double>& q, std::vec
   return bad;
 }
 
+bool extend_residual(Context& ctx) {
+  if (ctx.order < 2 || ctx.clock != ClockMode::none || !ctx.disc || !ctx.disc->grad_extended || ctx.N < 2)
+    return false;
+  std::vector<double> pairs, res;
+  if (extended_residual(ctx, ctx.q, pairs, res) >= 0) return false;
+  ctx.res.swap(res);
+  return true;
+}
+
 void refine_solution(Context& ctx, const Options& options, Summary& summary) {
   summary.refinement_steps = 0;
   summary.refinement_change = 0;

@@ -18,6 +18,13 @@
 namespace pardel::detail {
 
 
+/** Where iterative refinement runs by default (a model of order >= 2, no clock, a discretization
+ *  with an extended kernel): ctx.res replaced by the DEL residual at ctx.q from the extended kernel
+ *  (extended_residual), so that a Newton correction from it measures the solve's own error and not
+ *  the rounding of the double residual; true. Elsewhere, or where a value is not finite, ctx.res
+ *  unchanged; false. */
+bool extend_residual(Context& ctx);
+
 /** The DEL residual at q from the extended kernel into res ((N+1) dim; 0 on fixed components and
  *  at the ends), each node's two terms summed in double-double and rounded once; `pairs` is
  *  scratch. Returns the first node with a non-finite value, or -1. The same bits for any thread

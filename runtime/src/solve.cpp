@@ -21,6 +21,7 @@
 #include "engine.hpp"
 #include "error_estimate.hpp"
 #include "iteration.hpp"
+#include "iterative_refinement.hpp"
 #include "levels.hpp"
 #include "methods.hpp"
 #include "topology.hpp"
@@ -275,6 +276,7 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
   const bool solve_error = flags.assess && options.error_estimate && summary.converged() &&
                            !topology->releases_whole_trajectories();
   std::vector<double> delta;
+  if (solve_error) detail::extend_residual(topology->context());  // its right-hand side, where refinement has one
   bool corrected = solve_error && method->newton_correction(topology->context(), delta);
   assess_point(options, flags, method, *topology, summary);
   if (solve_error && !corrected) {

@@ -40,15 +40,20 @@ struct DiscretizationIR {
   /** With interior values z: "start" (z's starting values), "interior" (dS/dz and d2S/dz2),
    *  "ext_grad" (S and its gradient in [q0, z, q1]) and "ext_full" (with the Hessian). */
   std::vector<KernelIR> interval_kernels;
-  /** Without interior values: the grad kernel's code printed for extended precision (variant
-   *  "grad_extended": Ld, D1, D2 in pd_quad from double inputs, written as double-double pairs;
-   *  kernel_abi.h, pardel_extended_grad_kernel). Absent for a discretization with interior values,
-   *  whose Newton solve for z is not straight-line code. */
+  /** With interior values: "interior_extended", "ext_grad_extended" and, for models of order >= 2,
+   *  "ext_full_extended", the interval kernels' code printed for extended precision (pd_quad in
+   *  and out), which condensation.hpp's condensed_extended runs for grad_extended and
+   *  full_extended. */
+  std::vector<KernelIR> interval_extended;
+  /** The grad kernel in extended precision (variant "grad_extended": Ld, D1, D2 in pd_quad from
+   *  double inputs, written as double-double pairs; kernel_abi.h, pardel_extended_grad_kernel):
+   *  without interior values its code printed for pd_quad, with them only its name (the code
+   *  condenses interval_extended). */
   std::optional<KernelIR> extended;
-  /** Models of order >= 2 without interior values: the full kernel's code printed for extended
-   *  precision (variant "full_extended": Ld, D1, D2, D11, D12, D22 as double-double pairs;
-   *  kernel_abi.h, pardel_extended_full_kernel), for the corrections of iterative refinement where
-   *  the Hessian rounded to double is too ill-conditioned (condition ~ N^(2 order)). */
+  /** Models of order >= 2: the full kernel in extended precision (variant "full_extended": Ld,
+   *  D1, D2, D11, D12, D22 as double-double pairs; kernel_abi.h, pardel_extended_full_kernel), for
+   *  the corrections of iterative refinement where the Hessian rounded to double is too
+   *  ill-conditioned (condition ~ N^(2 order)); as `extended` for interior values. */
   std::optional<KernelIR> extended_full;
 };
 

@@ -13,6 +13,11 @@
  * on the stack, nothing is allocated. When the interior Newton iteration does not converge (or
  * d2S/dz2 is singular), every output is NaN, which the solvers report as a failure of the model
  * at that point.
+ *
+ * The same steps run in extended precision (pd_quad, pardel/extended_kernels.hpp) for the
+ * grad_extended and full_extended kernels of iterative refinement: the interior values found in
+ * double are refined by Newton's method in pd_quad with the extended interval kernels, and the
+ * outputs are written as double-double pairs.
  */
 #ifndef PARDEL_CONDENSATION_HPP
 #define PARDEL_CONDENSATION_HPP
@@ -43,24 +48,63 @@ struct Interval {
   ext_full_fn ext_full;
 };
 
+/** The extended-precision interval kernels (no starting values: the double solve gives them). */
+template <class S>
+struct ExtendedInterval {
+  void (*interior)(S h, S t0, S t1, const S* q0, const S* q1, const S* p, const S* z, S* g, S* H);
+  void (*ext_grad)(S h, S t0, S t1, const S* q0, const S* q1, const S* p, const S* z, S* Sz, S* g);
+  void (*ext_full)(S h, S t0, S t1, const S* q0, const S* q1, const S* p, const S* z, S* Sz, S* g, S* H);
+};
+
+// The arithmetic the steps below need, for double (the std:: functions) and for an extended type.
+inline double magnitude(double x) { return std::fabs(x); }
+template <class S>
+S magnitude(S x) {
+  return x < 0 ? -x : x;
+}
+inline bool finite(double x) { return std::isfinite(x); }
+template <class S>
+bool finite(S x) {
+  return x - x == x - x;  // NaN for an infinity or a NaN
+}
+inline double larger(double a, double b) { return std::fmax(a, b); }
+template <class S>
+S larger(S a, S b) {
+  return a < b ? b : a;
+}
+template <class S>
+S epsilon_of() {
+  static const S eps = [] {
+    S e = 1;
+    while (S(1) + e / 2 != S(1)) e /= 2;
+    return e;
+  }();
+  return eps;
+}
+template <>
+inline double epsilon_of<double>() {
+  return std::numeric_limits<double>::epsilon();
+}
+
 /** LU factorization with partial pivoting of the n x n row-major A in place; false when a pivot
  *  is zero or not finite. */
-inline bool lu_factor(int n, double* A, int* piv) {
+template <class S>
+bool lu_factor(int n, S* A, int* piv) {
   for (int k = 0; k < n; ++k) {
     int best = k;
     for (int i = k + 1; i < n; ++i)
-      if (std::fabs(A[i * n + k]) > std::fabs(A[best * n + k])) best = i;
+      if (magnitude(A[i * n + k]) > magnitude(A[best * n + k])) best = i;
     piv[k] = best;
-    if (!(std::fabs(A[best * n + k]) > 0) || !std::isfinite(A[best * n + k])) return false;
+    if (!(magnitude(A[best * n + k]) > 0) || !finite(A[best * n + k])) return false;
     if (best != k)
       for (int j = 0; j < n; ++j) {
-        const double t = A[k * n + j];
+        const S t = A[k * n + j];
         A[k * n + j] = A[best * n + j];
         A[best * n + j] = t;
       }
-    const double inv = 1.0 / A[k * n + k];
+    const S inv = S(1) / A[k * n + k];
     for (int i = k + 1; i < n; ++i) {
-      const double f = A[i * n + k] *= inv;
+      const S f = A[i * n + k] *= inv;
       if (f != 0)
         for (int j = k + 1; j < n; ++j) A[i * n + j] -= f * A[k * n + j];
     }
@@ -69,11 +113,12 @@ inline bool lu_factor(int n, double* A, int* piv) {
 }
 
 /** Solves A x = b with lu_factor's result; b (n entries, stride `stride`) is overwritten by x. */
-inline void lu_solve(int n, const double* A, const int* piv, double* b, int stride = 1) {
+template <class S>
+void lu_solve(int n, const S* A, const int* piv, S* b, int stride = 1) {
   // The row exchanges first (lu_factor exchanged whole rows, multipliers included), then L and U.
   for (int k = 0; k < n; ++k) {
     if (piv[k] != k) {
-      const double t = b[k * stride];
+      const S t = b[k * stride];
       b[k * stride] = b[piv[k] * stride];
       b[piv[k] * stride] = t;
     }
@@ -81,54 +126,61 @@ inline void lu_solve(int n, const double* A, const int* piv, double* b, int stri
   for (int k = 0; k < n; ++k)
     for (int i = k + 1; i < n; ++i) b[i * stride] -= A[i * n + k] * b[k * stride];
   for (int k = n - 1; k >= 0; --k) {
-    double s = b[k * stride];
+    S s = b[k * stride];
     for (int j = k + 1; j < n; ++j) s -= A[k * n + j] * b[j * stride];
     b[k * stride] = s / A[k * n + k];
   }
 }
 
 /**
- * Newton's method on dS/dz = 0 from the starting values. Converged when a step changes every
- * entry of z by at most 8 eps times the size of its coordinate (|z_i| and the node values of the
- * same coordinate); when the step that quadratic convergence predicts next is that small (the
- * largest relative step r_k at most 1e-6 and below the one before, and r_k^3 / r_(k-1)^2 at most
- * 8 eps: Newton's steps shrink like r_(k+1) = K r_k^2 with K = r_k / r_(k-1)^2), which saves the
- * evaluation that would only confirm it; or when the steps stop decreasing below 1e-8 of that
- * size (round-off).
+ * Newton's method on dS/dz = 0 from the values in z, with interior(z, g, H) giving dS/dz and
+ * d2S/dz2. Converged when a step changes every entry of z by at most 8 eps times the size of its
+ * coordinate (|z_i| and the node values of the same coordinate); when the step that quadratic
+ * convergence predicts next is that small (the largest relative step r_k at most 1e-6 and below
+ * the one before, and r_k^3 / r_(k-1)^2 at most 8 eps: Newton's steps shrink like
+ * r_(k+1) = K r_k^2 with K = r_k / r_(k-1)^2), which saves the evaluation that would only confirm
+ * it; or when the steps stop decreasing below 1e-8 of that size (round-off). eps is T's.
  * @tparam D the dimension of a node point, N the number of coordinates, M = interior values
  */
-template <int D, int N, int M>
-bool solve_interior(const Interval& f, double h, double t0, double t1, const double* q0, const double* q1,
-                    const double* p, double* z) {
-  constexpr double eps = std::numeric_limits<double>::epsilon();
+template <class T, int D, int N, int M, class Interior>
+bool newton_interior(Interior&& interior, const T* q0, const T* q1, T* z) {
+  const T eps = epsilon_of<T>();
   constexpr int kMaxIterations = 40;
-  double g[M], H[M * M];
+  T g[M], H[M * M];
   int piv[M];
-  f.start(h, t0, t1, q0, q1, p, z);
-  double previous = std::numeric_limits<double>::infinity();
+  const T infinity = T(std::numeric_limits<double>::infinity());
+  T previous = infinity;
   for (int it = 0; it < kMaxIterations; ++it) {
-    f.interior(h, t0, t1, q0, q1, p, z, g, H);
+    interior(z, g, H);
     if (!lu_factor(M, H, piv)) return false;
     lu_solve(M, H, piv, g);
-    double ratio = 0;  // the largest step relative to its coordinate's size
+    T ratio = 0;  // the largest step relative to its coordinate's size
     bool small = true;
     for (int i = 0; i < M; ++i) {
       const int c = i % N;
       z[i] -= g[i];
-      const double size = std::fabs(z[i]) + std::fabs(q0[c]) + std::fabs(q1[c]);
-      const double step = std::fabs(g[i]);
-      if (!std::isfinite(z[i])) return false;
+      const T size = magnitude(z[i]) + magnitude(q0[c]) + magnitude(q1[c]);
+      const T step = magnitude(g[i]);
+      if (!finite(z[i])) return false;
       if (step > 8 * eps * size) small = false;
-      ratio = size > 0 ? std::fmax(ratio, step / size) : (step > 0 ? std::numeric_limits<double>::infinity() : ratio);
+      ratio = size > 0 ? larger(ratio, step / size) : (step > 0 ? infinity : ratio);
     }
     if (small) return true;
-    if (std::isfinite(previous) && ratio < previous && ratio <= 1e-6 &&
-        ratio * ratio * ratio <= 8 * eps * previous * previous)
+    if (finite(previous) && ratio < previous && ratio <= T(1e-6) && ratio * ratio * ratio <= 8 * eps * previous * previous)
       return true;
-    if (ratio >= previous && ratio <= 1e-8) return true;
+    if (ratio >= previous && ratio <= T(1e-8)) return true;
     previous = ratio;
   }
   return false;
+}
+
+/** The interior values of the double interval kernels: z's starting values, then newton_interior. */
+template <int D, int N, int M>
+bool solve_interior(const Interval& f, double h, double t0, double t1, const double* q0, const double* q1,
+                    const double* p, double* z) {
+  f.start(h, t0, t1, q0, q1, p, z);
+  return newton_interior<double, D, N, M>(
+      [&](const double* x, double* g, double* H) { f.interior(h, t0, t1, q0, q1, p, x, g, H); }, q0, q1, z);
 }
 
 /** Every output NaN: the interval could not be condensed. */
@@ -144,26 +196,24 @@ inline void fail_outputs(int D, double* Ld, double* D1, double* D2, double* D11,
 
 /**
  * Ld, D1, D2 and, when D11 is not null, D11, D12 (unless null: the sweep kernel) and D22 of the
- * condensed interval. Ld and the gradient are the envelope values S(z*) and dS/da(z*) at the
- * converged interior values, the same in every kernel.
+ * interval condensed at the interior values z, with ext_grad(z, S, g) and ext_full(z, S, g, H) its
+ * action's derivatives over x = [q0, z, q1]; false (nothing written) where d2S/dz2 is singular.
+ * Ld and the gradient are the envelope values S(z*) and dS/da(z*).
  */
-template <int D, int N, int M>
-void condensed(const Interval& f, double h, double t0, double t1, const double* q0, const double* q1,
-               const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+template <class T, int D, int N, int M, class Grad, class Full>
+bool condense_at(Grad&& ext_grad, Full&& ext_full, const T* z, T* Ld, T* D1, T* D2, T* D11, T* D12, T* D22) {
   constexpr int E = 2 * D + M;
-  double z[M];
-  if (!solve_interior<D, N, M>(f, h, t0, t1, q0, q1, p, z)) return fail_outputs(D, Ld, D1, D2, D11, D12, D22);
-  double S, g[E];
+  T action, g[E];
   auto node = [](int a) { return a < D ? a : D + M + (a - D); };  // index in x = [q0, z, q1]
   if (D11 == nullptr) {
-    f.ext_grad(h, t0, t1, q0, q1, p, z, &S, g);
+    ext_grad(z, &action, g);
   } else {
-    double Hx[E * E], Hzz[M * M], X[M * 2 * D];
+    T Hx[E * E], Hzz[M * M], X[M * 2 * D];
     int piv[M];
-    f.ext_full(h, t0, t1, q0, q1, p, z, &S, g, Hx);
+    ext_full(z, &action, g, Hx);
     for (int i = 0; i < M; ++i)
       for (int j = 0; j < M; ++j) Hzz[i * M + j] = Hx[(D + i) * E + D + j];
-    if (!lu_factor(M, Hzz, piv)) return fail_outputs(D, Ld, D1, D2, D11, D12, D22);
+    if (!lu_factor(M, Hzz, piv)) return false;
     // X = (d2S/dz2)^-1 d2S/dzdb for the 2 D node variables b, then the Schur complement.
     for (int i = 0; i < M; ++i)
       for (int b = 0; b < 2 * D; ++b) X[i * 2 * D + b] = Hx[(D + i) * E + node(b)];
@@ -172,7 +222,7 @@ void condensed(const Interval& f, double h, double t0, double t1, const double* 
     for (int a = 0; a < 2 * D; ++a) {
       for (int b = a; b < 2 * D; ++b) {
         if (a < D && b >= D && D12 == nullptr) continue;
-        double s = Hx[node(a) * E + node(b)];
+        T s = Hx[node(a) * E + node(b)];
         for (int i = 0; i < M; ++i) s -= Hx[node(a) * E + D + i] * X[i * 2 * D + b];
         if (a < D && b < D) D11[a * D + b] = D11[b * D + a] = s;
         else if (a < D) D12[a * D + (b - D)] = s;
@@ -182,10 +232,81 @@ void condensed(const Interval& f, double h, double t0, double t1, const double* 
     // D12's lower-left part (a >= D, b < D) is D12 transposed, not an output; the loop above
     // covers D12 whole because b runs over all of q1 for every a in q0.
   }
-  if (Ld) *Ld = S;
+  if (Ld) *Ld = action;
   for (int a = 0; a < D; ++a) {
     D1[a] = g[a];
     D2[a] = g[D + M + a];
+  }
+  return true;
+}
+
+/** Ld, D1, D2 and, when D11 is not null, D11, D12 (unless null: the sweep kernel) and D22 of the
+ *  condensed interval; every output NaN where it cannot be condensed. */
+template <int D, int N, int M>
+void condensed(const Interval& f, double h, double t0, double t1, const double* q0, const double* q1,
+               const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
+  double z[M];
+  if (!solve_interior<D, N, M>(f, h, t0, t1, q0, q1, p, z) ||
+      !condense_at<double, D, N, M>(
+          [&](const double* x, double* a, double* g) { f.ext_grad(h, t0, t1, q0, q1, p, x, a, g); },
+          [&](const double* x, double* a, double* g, double* H) { f.ext_full(h, t0, t1, q0, q1, p, x, a, g, H); },
+          z, Ld, D1, D2, D11, D12, D22))
+    fail_outputs(D, Ld, D1, D2, D11, D12, D22);
+}
+
+/** n values of T as double-double pairs out[2i] + out[2i+1]. */
+template <class T>
+void split_pairs(const T* v, double* out, int n) {
+  for (int i = 0; i < n; ++i) {
+    out[2 * i] = static_cast<double>(v[i]);
+    out[2 * i + 1] = static_cast<double>(v[i] - static_cast<T>(out[2 * i]));
+  }
+}
+
+/**
+ * The condensed interval in extended precision T (the kernels grad_extended and, with D11 not
+ * null, full_extended of pardel/kernel_abi.h): the interior values found in double, refined by
+ * newton_interior in T with the extended kernels `x`, and the outputs of condense_at in T written
+ * as double-double pairs (Ld 2, D1 and D2 2 D, D11, D12 and D22 2 D^2 values each); every value NaN
+ * where the interval cannot be condensed. P: the model's params.
+ */
+template <class T, int D, int N, int M, int P>
+void condensed_extended(const Interval& f, const ExtendedInterval<T>& x, double h, double t0, double t1,
+                        const double* q0, const double* q1, const double* p, double* Ld, double* D1, double* D2,
+                        double* D11, double* D12, double* D22) {
+  double z[M];
+  T zq[M], a[D], b[D], pq[P + 1], Lq, D1q[D], D2q[D], D11q[D * D], D12q[D * D], D22q[D * D];
+  const T hq = h, t0q = t0, t1q = t1;
+  for (int i = 0; i < D; ++i) {
+    a[i] = q0[i];
+    b[i] = q1[i];
+  }
+  for (int i = 0; i < P; ++i) pq[i] = p[i];
+  bool done = solve_interior<D, N, M>(f, h, t0, t1, q0, q1, p, z);
+  if (done) {
+    for (int i = 0; i < M; ++i) zq[i] = z[i];
+    done = newton_interior<T, D, N, M>(
+        [&](const T* w, T* g, T* H) { x.interior(hq, t0q, t1q, a, b, pq, w, g, H); }, a, b, zq);
+  }
+  const bool full = D11 != nullptr;
+  done = done && condense_at<T, D, N, M>(
+                     [&](const T* w, T* s, T* g) { x.ext_grad(hq, t0q, t1q, a, b, pq, w, s, g); },
+                     [&](const T* w, T* s, T* g, T* H) { x.ext_full(hq, t0q, t1q, a, b, pq, w, s, g, H); }, zq, &Lq,
+                     D1q, D2q, full ? D11q : nullptr, full ? D12q : nullptr, full ? D22q : nullptr);
+  if (!done) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    for (int i = 0; i < 2; ++i) Ld[i] = nan;
+    for (int i = 0; i < 2 * D; ++i) D1[i] = D2[i] = nan;
+    for (int i = 0; full && i < 2 * D * D; ++i) D11[i] = D12[i] = D22[i] = nan;
+    return;
+  }
+  split_pairs(&Lq, Ld, 1);
+  split_pairs(D1q, D1, D);
+  split_pairs(D2q, D2, D);
+  if (full) {
+    split_pairs(D11q, D11, D * D);
+    split_pairs(D12q, D12, D * D);
+    split_pairs(D22q, D22, D * D);
   }
 }
 

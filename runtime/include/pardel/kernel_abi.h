@@ -96,8 +96,9 @@ typedef struct pardel_discretization {
   pardel_sweep_kernel sweep;
   pardel_grad_kernel grad;
   pardel_action_kernel action;
-  /** NULL when absent: discretizations with interior values (Galerkin with s > order), and
-   *  kernels compiled without an extended floating-point type. */
+  /** NULL when absent: kernels compiled without an extended floating-point type (a CUDA
+   *  compiler). A discretization with interior values (Galerkin with s > order) condenses its
+   *  interval in extended precision (pardel/condensation.hpp, condensed_extended). */
   pardel_extended_grad_kernel grad_extended;
   /** NULL when absent: as grad_extended, and for models of order 1. */
   pardel_extended_full_kernel full_extended;
