@@ -437,8 +437,9 @@ class TrustRegionNewton : public Method_ {
   }
   /** A stall far above the estimated round-off level: the level measured at ctx.q instead, per
    *  component the largest change of its residual when every free value moves by four units in its
-   *  last place (two sign patterns), kept in ctx.comp_floor_measured; ctx is evaluated at q again
-   *  (the same bits as before, the floors now at least the measured ones). Collective. */
+   *  last place (two sign patterns), kept in ctx.comp_floor_measured where it exceeds the estimate;
+   *  ctx is evaluated at q again (the same bits as before, the floors now at least the measured
+   *  ones). Collective. */
   void measure_round_off(Context& ctx) {
     const std::size_t o = space_.offset(), n = space_.size(), d = static_cast<std::size_t>(ctx.dim);
     const double eps = std::numeric_limits<double>::epsilon();
@@ -454,8 +455,10 @@ class TrustRegionNewton : public Method_ {
         if (space_.is_free(ctx, i))
           change[(o + i) % d] = std::max(change[(o + i) % d], std::fabs(ctx.res[o + i] - at_q[i]));
     }
-    for (double& c : change) c = space_.max(c);
-    ctx.comp_floor_measured = std::move(change);
+    const double estimated = ctx.residual_floor;  // at the last pattern's point, as at q to rounding
+    double largest = 0;
+    for (double& c : change) largest = std::max(largest, c = space_.max(c));
+    if (largest > estimated) ctx.comp_floor_measured = std::move(change);  // kept where it says more
     space_.evaluate(ctx, q);
   }
 

@@ -440,9 +440,10 @@ struct Summary {
    *  falls short (then error_estimate uses the observed order, and error_note says "estimate
    *  unreliable"). An adaptive solve accepts only a grid whose estimate is confirmed. */
   bool error_reliable = false;
-  /** The three grid levels' solutions agree to within 100 times round-off (no order observed).
-   *  Confirmed (error_reliable) where neither L nor the clock depends on t; otherwise an adaptive
-   *  solve accepts it only on a second grid of other nodes where it holds too. */
+  /** The grid levels' solutions agree to within 100 times round-off (no order observed): the two
+   *  finer ones, and where L or the clock depends on t all three. Confirmed (error_reliable) only
+   *  where neither depends on t: a jump or kink of the data in t that every grid's quadrature
+   *  points miss alike gives the same agreement (docs/solvers.md, "Error estimate"). */
   bool error_at_round_off = false;
   /** An adaptive solve (Options::accuracy): the N of every grid it solved, in order (the last is
    *  the returned one), and one line on the outcome ("accuracy 1e-08 reached on N = 96 after 3
