@@ -190,7 +190,9 @@ bool Iteration::times_unsettled(int unsettled, long since_best) {
 
 bool Iteration::met_by_growth(double r) const {
   constexpr double kGrowthFactor = 10;
-  return options_.tol <= 0 && have_initial_ && r > kGrowthFactor * r_initial_ &&
+  // Against the solve's first residual and this level's (a finer level of a model of order >= 2
+  // starts from larger DEL terms than the coarsest: h^(1 - 2 order)).
+  return options_.tol <= 0 && have_initial_ && r > kGrowthFactor * std::max(r_initial_, level_.r_level0) &&
          !at_round_off(r, ctx_.residual_floor);
 }
 

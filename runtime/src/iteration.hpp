@@ -124,7 +124,7 @@ class Iteration {
    *  component at most its own target. */
   bool at_target(double r, double target) const { return r <= target && unresolved_component() < 0; }
   /** Whether the relative test is met only because the iterate's terms grew: the residual is more
-   *  than kGrowthFactor times the solve's first one (and above round-off). Iterates that slide off
+   *  than kGrowthFactor times the solve's first one and this level's first (and above round-off). Iterates that slide off
    *  along a direction where the action falls without bound (just past a conjugate point) grow
    *  faster than their residual; such a point is not called converged. */
   bool met_by_growth(double r) const;
