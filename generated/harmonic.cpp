@@ -288,8 +288,8 @@ static const pardel_condensation::Interval harmonic_galerkin_lobatto_s_2_interva
 #if !defined(__CUDACC__)
 
 // interior_extended: in pd_quad, 26 operations
-static void harmonic_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* g, pd_quad* H) {
+static void harmonic_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* g, pd_quad* H) {
   (void)t0;
   (void)t1;
   const pd_quad pd_t0001 = 1.0/h;
@@ -300,8 +300,8 @@ static void harmonic_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd_quad t
 }
 
 // ext_grad_extended: in pd_quad, 59 operations
-static void harmonic_galerkin_lobatto_s_2_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* S, pd_quad* g) {
+static void harmonic_galerkin_lobatto_s_2_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* S, pd_quad* g) {
   (void)t0;
   (void)t1;
   const pd_quad pd_t0001 = p[0]*p[0];
@@ -556,8 +556,8 @@ static const pardel_condensation::Interval harmonic_galerkin_gauss_s_4_interval 
 #if !defined(__CUDACC__)
 
 // interior_extended: in pd_quad, 186 operations
-static void harmonic_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* g, pd_quad* H) {
+static void harmonic_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* g, pd_quad* H) {
   (void)t0;
   (void)t1;
   const pd_quad pd_t0001 = 1.0/h;
@@ -598,8 +598,8 @@ static void harmonic_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_quad t0,
 }
 
 // ext_grad_extended: in pd_quad, 267 operations
-static void harmonic_galerkin_gauss_s_4_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* S, pd_quad* g) {
+static void harmonic_galerkin_gauss_s_4_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* S, pd_quad* g) {
   (void)t0;
   (void)t1;
   const pd_quad pd_t0001 = 1.0/h;

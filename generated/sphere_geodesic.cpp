@@ -553,8 +553,8 @@ static const pardel_condensation::Interval sphere_geodesic_galerkin_lobatto_s_2_
 #if !defined(__CUDACC__)
 
 // interior_extended: in pd_quad, 61 operations
-static void sphere_geodesic_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* g, pd_quad* H) {
+static void sphere_geodesic_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* g, pd_quad* H) {
   (void)t0;
   (void)t1;
   (void)p;
@@ -580,8 +580,8 @@ static void sphere_geodesic_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd
 }
 
 // ext_grad_extended: in pd_quad, 101 operations
-static void sphere_geodesic_galerkin_lobatto_s_2_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* S, pd_quad* g) {
+static void sphere_geodesic_galerkin_lobatto_s_2_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* S, pd_quad* g) {
   (void)t0;
   (void)t1;
   (void)p;
@@ -1143,8 +1143,8 @@ static const pardel_condensation::Interval sphere_geodesic_galerkin_gauss_s_4_in
 #if !defined(__CUDACC__)
 
 // interior_extended: in pd_quad, 437 operations
-static void sphere_geodesic_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* g, pd_quad* H) {
+static void sphere_geodesic_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* g, pd_quad* H) {
   (void)t0;
   (void)t1;
   (void)p;
@@ -1279,8 +1279,8 @@ static void sphere_geodesic_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_q
 }
 
 // ext_grad_extended: in pd_quad, 304 operations
-static void sphere_geodesic_galerkin_gauss_s_4_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1,
-    const pd_quad* p, const pd_quad* z, pd_quad* S, pd_quad* g) {
+static void sphere_geodesic_galerkin_gauss_s_4_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
+    const pd_quad* z, pd_quad* S, pd_quad* g) {
   (void)t0;
   (void)t1;
   (void)p;

@@ -278,9 +278,19 @@ int extended_residual(const Context& ctx, const std::vector<double>& q, std::vec
   return bad;
 }
 
+namespace {
+
+/** Whether refine_solution runs under `mode` at all (its first correction may still keep nothing):
+ *  not off, N >= 2, order >= 2 under automatic, no clock, an extended kernel. */
+bool refines(const Context& ctx, Refinement mode) {
+  return mode != Refinement::off && ctx.N >= 2 && !(mode == Refinement::automatic && ctx.order < 2) &&
+         ctx.clock == ClockMode::none && ctx.disc && ctx.disc->grad_extended;
+}
+
+}  // namespace
+
 bool extend_residual(Context& ctx) {
-  if (ctx.order < 2 || ctx.clock != ClockMode::none || !ctx.disc || !ctx.disc->grad_extended || ctx.N < 2)
-    return false;
+  if (!refines(ctx, Refinement::automatic)) return false;
   std::vector<double> pairs, res;
   if (extended_residual(ctx, ctx.q, pairs, res) >= 0) return false;
   ctx.res.swap(res);
