@@ -206,6 +206,9 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
   j["grid"] = {{"accuracy", scene.options.accuracy > 0 ? nlohmann::ordered_json(scene.options.accuracy) : nlohmann::ordered_json()},
                {"sizes", summary.grid_sizes},
                {"note", summary.grid_note}};
+  j["refinement"] = {{"steps", summary.refinement_steps},
+                     {"largest_change", summary.refinement_change},
+                     {"note", summary.refinement_note}};
   j["boundary_momenta"] = boundary_momenta_json(problem, trajectory);
   if (certificate.free_components > 0 || !certificate.error.empty()) j["certificate"] = certificate_json(certificate);
   return j;

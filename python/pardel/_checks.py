@@ -21,7 +21,8 @@ _INT_OPTIONS = {"max_iterations": _LONG_MAX, "newton_substeps": _INT_MAX, "threa
                 "refine_start_N": _INT_MAX, "clock_update_every": _INT_MAX, "history_every": _LONG_MAX,
                 "accuracy_max_N": _INT_MAX}
 _NUMBER_OPTIONS = ("tol", "rtol", "damping", "refine_factor", "refine_settle", "divergence_factor", "accuracy")
-_STRING_OPTIONS = ("discretization", "clock", "method", "linear_solver", "newton_shift", "device")
+_STRING_OPTIONS = ("discretization", "clock", "method", "linear_solver", "newton_shift", "device",
+                   "iterative_refinement")
 _BOOL_OPTIONS = ("error_estimate", "extrapolate")
 
 

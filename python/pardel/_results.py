@@ -35,7 +35,9 @@ class Result:
     value of the Newton correction delta = -H^-1 r at the returned iterate over the nodes and
     coordinates, NaN where not computed), error_note (how it was made, or "not estimated: " and why),
     error_reliable (whether a third grid level confirmed the estimate) and error_observed_order (the
-    order it observed, NaN where none), extrapolated (whether q holds the extrapolated values), grid_sizes and grid_note (an adaptive
+    order it observed, NaN where none), extrapolated (whether q holds the extrapolated values), refinement_steps and refinement_note
+    (iterative refinement in extended precision: corrections applied, and what happened or why it
+    did not run; "" where it was off), grid_sizes and grid_note (an adaptive
     solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
     wall_seconds, assessment_seconds (the point assessment's part of it), model (the model's name), coords (its coordinate names), stopped_by_callback
     (whether on_iteration stopped the solve), checkpoint (the folder of the checkpoint this
@@ -65,6 +67,8 @@ class Result:
     error_reliable: bool
     error_observed_order: float
     extrapolated: bool
+    refinement_steps: int
+    refinement_note: str
     grid_sizes: List[int]
     grid_note: str
     method: str
@@ -104,6 +108,8 @@ class Result:
         order = s["error"].get("observed_order")
         self.error_observed_order = float("nan") if order is None else float(order)
         self.extrapolated = s["error"]["extrapolated"]
+        self.refinement_steps = s["refinement"]["steps"]
+        self.refinement_note = s["refinement"]["note"]
         self.grid_sizes = list(s["grid"]["sizes"])
         self.grid_note = s["grid"]["note"]
         self.method = s["method"]

@@ -118,7 +118,8 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
     (dict by name, or a list in declaration order), t0, knots ([(t, q), ...]), polyline (guess
     vertices), clock, method, tol, rtol, max_iterations, damping, newton_substeps, newton_shift,
     linear_solver, device ("cpu" or "cuda": docs/gpu.md), threads, refine_start_N, refine_factor,
-    clock_update_every, error_estimate (True/False), extrapolate (True/False); and history_every, refine_settle, divergence_factor of
+    clock_update_every, error_estimate (True/False), extrapolate (True/False), iterative_refinement
+    ("auto", "on" or "off"); and history_every, refine_settle, divergence_factor of
     pardel::Options. guess and on_iteration: as in solve_scene; Ctrl-C raises pardel.Interrupted
     (a KeyboardInterrupt) whose .result is the stopped solve's Result.
     checkpoint: a folder (made if missing). A solve that ends "interrupted" (Ctrl-C, on_iteration)

@@ -52,6 +52,7 @@ const std::vector<std::pair<std::string, std::string>> kArguments = {
     {"clock_update_every", "solver.clock_update_every"},
     {"error_estimate", "solver.error_estimate"},
     {"extrapolate", "solver.extrapolate"},
+    {"iterative_refinement", "solver.iterative_refinement"},
     {"accuracy", "grid.accuracy"},
     {"accuracy_max_N", "grid.accuracy_max_N"},
     {"history_every", ""},

@@ -194,6 +194,9 @@ TEST(Outputs, SummaryHasTheErrorEstimateOrNullWithItsReason) {
   EXPECT_EQ(j["error"]["observed_order"].get<double>(), summary.error_observed_order);
   EXPECT_TRUE(j["error"]["reliable"].get<bool>());
   EXPECT_EQ(j["error"]["note"].get<std::string>(), summary.error_note);
+  // An order-1 model: the automatic iterative refinement does not run, and says nothing.
+  EXPECT_EQ(j["refinement"]["steps"].get<int>(), 0);
+  EXPECT_EQ(j["refinement"]["note"].get<std::string>(), "");
 
   Summary not_converged;
   not_converged.termination = Termination::max_iterations;

@@ -42,6 +42,7 @@ SOLVE = {
     "method": without("None"),
     "linear_solver": without("None"),
     "newton_shift": without("None"),
+    "iterative_refinement": without("None"),
     "params": without("None"),
     "t0": without("None", "float", "huge_int"),
     "tol": without("None", "float", "huge_int"),
