@@ -420,6 +420,41 @@ Prediction predict_grid(const Problem& current, const Trajectory& sol, double p,
   return out;
 }
 
+/**
+ * The node times of a grid whose nodes shared by all three of its levels (every 4th node, the
+ * levels of the estimate and its check) lie midway between those of `current` (solved as `sol`,
+ * whose times it uses): in each stretch of n intervals between the ends and the knots, those
+ * nodes move from t_0, t_4, ..., t_n to t_0, t_2, t_6, ..., t_{n-2}, t_n, each interval between
+ * them split into 4 equal ones (n + 4 intervals). A jump or kink in t that the grid levels miss
+ * alike lies within an interval of a node all three share; the two grids' such nodes are 2
+ * intervals apart, so it cannot lie so near nodes of both (unless at an end or a knot, which both
+ * hold).
+ */
+std::vector<double> moved_grid(const Problem& current, const Trajectory& sol) {
+  std::vector<double> t = sol.t;
+  if (t.size() != static_cast<std::size_t>(current.N) + 1) {
+    t.resize(static_cast<std::size_t>(current.N) + 1);
+    for (int k = 0; k <= current.N; ++k) t[static_cast<std::size_t>(k)] = current.t0 + current.T * k / current.N;
+  }
+  const std::vector<int> fixed = fixed_nodes(current);
+  std::vector<double> out{t.front()};
+  auto split = [&out](double from, double to) {
+    for (int m = 1; m <= kMultiple; ++m) out.push_back(from + (to - from) * m / kMultiple);
+  };
+  for (std::size_t s = 0; s + 1 < fixed.size(); ++s) {
+    const int a = fixed[s], b = fixed[s + 1];
+    PARDEL_INVARIANT((b - a) % kMultiple == 0, "every stretch has a multiple of kMultiple intervals");
+    double from = t[static_cast<std::size_t>(a)];
+    for (int k = a + kMultiple / 2; k < b; k += kMultiple) {
+      split(from, t[static_cast<std::size_t>(k)]);
+      from = t[static_cast<std::size_t>(k)];
+    }
+    split(from, t[static_cast<std::size_t>(b)]);
+    out.back() = t[static_cast<std::size_t>(b)];
+  }
+  return out;
+}
+
 /** The node times of the next grid of about N_new intervals (a multiple of kMultiple, at most
  *  max_N, at least kMultiple per span between fixed nodes), equidistributing `rho` (the predicted
  *  monitor; null: the solution's own monitor) over the solution `sol` of `current`, with the ends
@@ -485,6 +520,8 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
   Summary best;             // the converged grid with the smallest estimate, and its solution
   Trajectory best_solution;
   int tightened = 0;        // solves again on one grid with a smaller tolerance
+  int moved_from = 0;       // the N of the grid whose agreement to round-off this one checks (moved_grid)
+  bool move_refuted = false;  // a moved grid did not confirm an agreement to round-off
   bool reached = false;
   for (int round = 0;; ++round) {
     summary = solve(current, options, guess);  // options.accuracy = 0: one grid
@@ -510,6 +547,28 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
     // estimate (Summary::error_reliable): on a coarse grid of a high order the error need not yet
     // fall with the nominal order, and the estimate from two grids can be far below it.
     const double estimate = summary.error_estimate;
+    // The grid levels agree to round-off where L depends on t (Summary::error_at_round_off), which
+    // nested grids cannot confirm: a jump or kink in t that their quadrature points miss alike
+    // near a node they share gives the same agreement. A grid whose nodes shared by its levels lie
+    // midway between this one's (moved_grid) confirms it when its own levels agree to round-off too.
+    const bool agreement = summary.error_at_round_off && !summary.error_reliable && std::isfinite(estimate) &&
+                           estimate <= accuracy;
+    const bool confirmed_agreement = agreement && moved_from > 0;
+    if (confirmed_agreement) confirm_round_off(summary, moved_from);
+    // A moved grid that did not confirm the agreement showed a feature in t that nested grids
+    // miss: later agreements are not checked again (each check costs a grid).
+    if (moved_from > 0 && !confirmed_agreement) move_refuted = true;
+    moved_from = 0;
+    if (agreement && !confirmed_agreement && !move_refuted && round + 1 < kMaxGrids) {
+      std::vector<double> times = moved_grid(current, guess);
+      if (static_cast<long>(times.size()) - 1 <= requested.accuracy_max_N) {
+        moved_from = current.N;
+        guess = interpolate(guess, times);
+        current.N = static_cast<int>(times.size()) - 1;
+        current.times = std::move(times);
+        continue;
+      }
+    }
     const bool met = std::isfinite(estimate) && estimate <= accuracy && summary.error_reliable;
     if (!met && shrinking) {
       // The smaller grid missed the request: solve once more on the last grid that met it (from its
@@ -551,7 +610,8 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       // it and a solve again on this grid within kMaxGrids.
       const long smaller = std::max({N_predicted, static_cast<long>(std::ceil(current.N / kMaxShrink)),
                                      static_cast<long>(problem.N)});
-      if (N_predicted == 0 || shrink_failed || smaller > kShrink * current.N || round + 2 >= kMaxGrids) {
+      if (N_predicted == 0 || shrink_failed || confirmed_agreement || smaller > kShrink * current.N ||
+          round + 2 >= kMaxGrids) {
         outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
                   number(estimate) + ") after " + std::to_string(sizes.size()) + " grid" + (sizes.size() == 1 ? "" : "s");
         reached = true;

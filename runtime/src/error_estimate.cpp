@@ -83,6 +83,12 @@ struct Order {
   std::string note;
 };
 
+/** The note's words on an agreement to round-off that nested grids cannot confirm (check_order,
+ *  confirm_round_off). */
+const std::string kUnconfirmedAgreement =
+    " (not confirmed: L depends on t, and a jump or kink in t that all three grids' quadrature points miss alike "
+    "near a node they share gives the same agreement; another grid of other nodes does confirm it)";
+
 /** Where the grid `level` has a single interval between two fixed times (the ends and the knots),
  *  that stretch ("between t = 0.2 and the knot at t = 1.13"); empty where every stretch has two
  *  or more. Not checked under a clock (no knots there). */
@@ -146,10 +152,7 @@ Order check_order(const Problem& problem, const Trajectory& fine, const Trajecto
     out.reliable = !problem.model->time_dependent;
     out.note = "; on " + grids + " the " + (problem.model->time_dependent ? "three" : "two finer") +
                " solutions agree to within 100 times round-off, where no order is observed";
-    if (!out.reliable)
-      out.note += " (not confirmed: L depends on t, and a jump or kink in t that all three grids' quadrature points "
-                  "miss alike near a node they share gives the same agreement; another grid of other nodes does "
-                  "confirm it)";
+    if (!out.reliable) out.note += kUnconfirmedAgreement;
     return out;
   }
   out.observed = observed_order(d1, d2, ratio, third.ratio);
@@ -279,6 +282,16 @@ void include_solve_error(Summary& summary) {
   }
   summary.error_note += "; with the solve's own error " + number(summary.solve_error, 3) +
                         " (the Newton correction at the answer) added";
+}
+
+void confirm_round_off(Summary& summary, int other_N) {
+  PARDEL_INVARIANT(summary.error_at_round_off, "an agreement to round-off is what another grid confirms");
+  summary.error_reliable = true;
+  const std::size_t at = summary.error_note.find(kUnconfirmedAgreement);
+  if (at != std::string::npos) summary.error_note.erase(at, kUnconfirmedAgreement.size());
+  summary.error_note += "; confirmed by the solve on N = " + std::to_string(other_N) +
+                        " before it, whose nodes shared by its three levels lie midway between this grid's, and whose levels agree "
+                        "to round-off too";
 }
 
 void not_estimated(Summary& summary, const std::string& why) {

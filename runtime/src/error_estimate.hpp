@@ -61,6 +61,12 @@ void record_solve_error(const std::vector<double>& delta, int dim, int ncoords, 
  *  coordinate, the estimate their largest; and says so in the note. */
 void include_solve_error(Summary& summary);
 
+/** Marks an agreement of the grid levels to round-off where L depends on t (Summary::
+ *  error_at_round_off, left unconfirmed by richardson) as confirmed by the solve on a grid of
+ *  `other_N` intervals whose nodes shared by its three levels lie midway between this grid's and
+ *  whose levels agree to round-off too (solve_adaptive): error_reliable, and the note says so in place of "not confirmed". */
+void confirm_round_off(Summary& summary, int other_N);
+
 /** Sets the summary's estimate to "not estimated" with the reason (`why`, after "not estimated: "). */
 void not_estimated(Summary& summary, const std::string& why);
 

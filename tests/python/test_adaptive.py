@@ -207,3 +207,28 @@ def test_grids_that_miss_a_jump_in_t_alike_do_not_confirm_an_estimate_at_round_o
             assert "not reached" in r.grid_note
             # The grid returned is not one whose estimate says nothing of the error.
             assert true_error <= 3 * r.error_estimate, (r.grid_note, true_error)
+
+
+CUBIC_LAG = """\
+# x'' = t: the cubic x = t^3/6 + 5t/6 through (0, 0) and (1, 1), which galerkin_gauss(s=2) and
+# (s=3) reproduce at the nodes of any grid
+model time_cubic
+coords x
+L = 1/2*x'^2 + t*x
+discretizations galerkin_gauss(s=2) galerkin_gauss(s=3)
+"""
+
+
+@pytest.mark.parametrize("discretization", ["galerkin_gauss(s=2)", "galerkin_gauss(s=3)"])
+def test_a_motion_exact_on_every_grid_of_a_time_dependent_model_is_confirmed_on_moved_nodes(discretization):
+    # The grid levels agree to round-off, which nested grids alone cannot confirm where L depends
+    # on t; a grid whose every 4th node lies midway between the first grid's (N = 16 + 4) confirms
+    # it, and the request is reached there (before, 12 grids up to N = 1460 ended "not reached").
+    r = pardel.solve(CUBIC_LAG, q0=[0], qN=[1], T=1, accuracy=1e-8, discretization=discretization)
+    assert r.grid_note.startswith("accuracy 1e-08 reached on N = 20"), r.grid_note
+    assert r.grid_sizes == [16, 20]
+    assert r.error_reliable and "not confirmed" not in r.error_note
+    assert "confirmed by the solve on N = 16 before it" in r.error_note
+    assert np.abs(r.q[:, 0] - (r.t ** 3 / 6 + 5 * r.t / 6)).max() < 1e-13
+    # Its every 4th node: the ends and the first grid's nodes 2, 6, 10 and 14.
+    np.testing.assert_allclose(r.t[::4], [0, 2 / 16, 6 / 16, 10 / 16, 14 / 16, 1], rtol=0, atol=1e-15)
