@@ -366,6 +366,11 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, con
     summary.error_note += "; the node times and the final time (the clock summed by a left rule: first order in the "
                           "step) are not in this estimate";
   if (!extrapolate) return;
+  if (!order.reliable) {
+    // An estimate that the check did not confirm says too little of the error to correct the path by.
+    summary.error_note += "; not extrapolated: the estimate is not confirmed";
+    return;
+  }
   add_corrections(e, et, ratio, clocked, fine);
   summary.extrapolated = true;
 }

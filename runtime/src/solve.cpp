@@ -265,8 +265,12 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
     if (topology->holds_result() && starts.extrapolates()) summary.state.previous_level = starts.previous();
   }
   // Nested iteration's levels below N were solved to the tolerance (a coarse level of the other
-  // methods' refinement only settled): the last of them can serve the error estimate.
-  if (flags.coarser_levels && summary.converged() && levels.size() >= 2 && detail::whole_system_newton(options.method)) {
+  // methods' refinement only settled): the last of them can serve the error estimate. Not where
+  // iterative refinement corrected this level: the levels were not refined, and their round-off
+  // (growing like eps N^(2 order)) would enter the estimate; it solves its coarse grids itself.
+  const bool refined = summary.refinement_steps > 0 || !driver.refined_note().empty();
+  if (flags.coarser_levels && summary.converged() && levels.size() >= 2 && !refined &&
+      detail::whole_system_newton(options.method)) {
     flags.coarser_levels->below = std::move(starts.previous());
     flags.coarser_levels->further = std::move(further);
   }

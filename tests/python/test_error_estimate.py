@@ -178,3 +178,38 @@ def test_a_third_level_with_a_lone_interval_beside_a_knot_does_not_confirm():
             assert r.error_estimate / 3 <= true_error <= 3 * r.error_estimate
         else:
             assert "it has a single interval between t = 0 and t = 0.5" in r.error_note
+
+
+FORCED_BEAM_LAG = """\
+# order 2: x'''' + a x'' ... with the forcing made so that x = sin 2t + 0.3 t^2 is the motion
+model forced_beam_estimate
+order 2
+coords x
+param a = 3
+let X = sin(2*t) + 3/10*t^2
+L = 1/2*x''^2 + a/2*x'^2 + 1/4*x^4 - (16*sin(2*t) - a*(-4*sin(2*t) + 6/10) + X^3)*x
+discretizations trapezoid(alpha=1) gauss2
+"""
+
+
+@pytest.mark.parametrize("discretization", ["trapezoid(alpha=1)", "gauss2"])
+def test_grid_levels_that_were_not_refined_do_not_enter_the_estimate(discretization):
+    # An order-2 model at N = 2000: iterative refinement corrects the final level of auto's nested
+    # iteration, not its coarser levels, whose round-off (eps N^4) made the estimate 4.1e-6 against
+    # a true 3.4e-14 under gauss2 (observed order 0.69), and the extrapolated path that far off;
+    # under trapezoid(alpha=1) a confirmed estimate 7 times the error and an extrapolated path 4
+    # times worse than the discrete one. Exact motion x = sin 2t + 0.3 t^2 on [0.3, 2.5].
+    def jet(t):
+        return [math.sin(2 * t) + 0.3 * t * t, 2 * math.cos(2 * t) + 0.6 * t]
+
+    common = dict(q0=jet(0.3), qN=jet(2.5), T=2.2, t0=0.3, N=2000, discretization=discretization)
+    plain = pardel.solve(FORCED_BEAM_LAG, **common)
+    assert plain.converged and plain.refinement_steps >= 1, plain.refinement_note
+    exact = np.sin(2 * plain.t) + 0.3 * plain.t ** 2
+    true_error = np.abs(plain.q[:, 0] - exact).max()
+    assert true_error / 3 <= plain.error_estimate <= 3 * max(true_error, 1e-13), (plain.error_estimate, true_error)
+    extrapolated = pardel.solve(FORCED_BEAM_LAG, extrapolate=True, **common)
+    if extrapolated.extrapolated:
+        assert np.abs(extrapolated.q[:, 0] - exact).max() <= max(true_error, 1e-14)
+    else:
+        assert "not extrapolated: the estimate is not confirmed" in extrapolated.error_note
