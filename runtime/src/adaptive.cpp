@@ -522,6 +522,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
   int tightened = 0;        // solves again on one grid with a smaller tolerance
   int moved_from = 0;       // the N of the grid whose agreement to round-off this one checks (moved_grid)
   bool move_refuted = false;  // a moved grid did not confirm an agreement to round-off
+  int check_of = 0;         // the N of the grid that met the request and that this one checks (L depends on t)
   bool reached = false;
   for (int round = 0;; ++round) {
     summary = solve(current, options, guess);  // options.accuracy = 0: one grid
@@ -604,6 +605,39 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
     const long N_predicted = next.N;
     const int max_N = requested.accuracy_max_N - requested.accuracy_max_N % kMultiple;
     int N_new = 0;
+    if (met && problem.model->time_dependent && !confirmed_agreement) {
+      // Where L depends on t, nested grids sample it at the same times: a forcing whose period
+      // divides the step (or a jump they miss alike) gives three levels that converge at full
+      // order to one wrong problem. The request counts as reached when a second grid, of other
+      // node spacings (kMultiple more intervals per stretch between fixed nodes, placed from
+      // this solution), meets it too.
+      if (check_of > 0) {
+        outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
+                  number(estimate) + ") after " + std::to_string(sizes.size()) + " grids, checked against N = " +
+                  std::to_string(check_of) + " before it, whose nodes sample t elsewhere";
+        reached = true;
+        break;
+      }
+      const int N_check = current.N + kMultiple * static_cast<int>(fixed_nodes(current).size() - 1);
+      if (round + 1 >= kMaxGrids || N_check > max_N) {
+        outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
+                  number(estimate) + ") after " + std::to_string(sizes.size()) + " grid" +
+                  (sizes.size() == 1 ? "" : "s") + ", not checked on a second grid (" +
+                  (N_check > max_N ? "it would exceed accuracy_max_N" : "the last of " + std::to_string(kMaxGrids)) +
+                  "), which L's dependence on t asks for";
+        reached = true;
+        break;
+      }
+      check_of = current.N;
+      shrinking = false;
+      std::vector<double> times =
+          place_grid(problem, current, guess, p, N_predicted > 0 ? &next.rho : nullptr, N_check, max_N);
+      guess = interpolate(guess, times);
+      current.N = static_cast<int>(times.size()) - 1;
+      current.times = std::move(times);
+      continue;
+    }
+    check_of = 0;
     if (met) {
       // A grid that meets the request with room is followed by a smaller one placed from its
       // well-resolved solution, unless a smaller one already failed or there is no room left for
