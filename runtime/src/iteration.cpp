@@ -473,6 +473,15 @@ void Iteration::summarize() {
   s_.iterations = iteration_;
   s_.residual = ctx_.residual;
   s_.action = ctx_.action_known ? ctx_.action : partition_.action(ctx_);
+  if (s_.termination == Termination::converged && !std::isfinite(s_.action)) {
+    // The DEL equations hold (their derivatives are finite), but the discrete Lagrangian is not
+    // finite somewhere along the path (log(x) at a node with x < 0): no discrete problem is solved.
+    s_.termination = Termination::non_finite;
+    s_.message = "the DEL residual meets the tolerance, but the discrete action is " +
+                 std::string(std::isnan(s_.action) ? "NaN" : "infinite") +
+                 " at this iterate: the path leaves the domain of L (an interval where the discrete Lagrangian is "
+                 "not finite), so it solves no discrete problem (" + s_.message + ")";
+  }
   s_.final_time = partition_.final_time(ctx_);
   s_.residual_floor = ctx_.residual_floor;
   s_.tolerance = target_residual();
