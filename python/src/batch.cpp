@@ -63,7 +63,7 @@ py::dict solve_batch_scene(Scene scene, const py::object& q0, const py::object& 
     Problem& problem = scenes[static_cast<std::size_t>(i)].problem;
     problem.q0.assign(q0s.data(i, 0), q0s.data(i, 0) + dim);
     problem.qN.assign(qNs.data(i, 0), qNs.data(i, 0) + dim);
-    if (have_params) problem.params.assign(ps.data(i, 0), ps.data(i, 0) + np);
+    if (have_params && np > 0) problem.params.assign(ps.data(i, 0), ps.data(i, 0) + np);
     BatchProblem& b = problems[static_cast<std::size_t>(i)];
     b.q0 = problem.q0;
     b.qN = problem.qN;

@@ -173,3 +173,11 @@ def test_a_batch_refuses_what_it_does_not_take():
     with pytest.raises(pardel.PardelError, match=r"give guess or polyline, not both"):
         pardel.solve(MODEL, q0=[0, 0], qN=[0.2, 0.1], T=T, N=N, guess=np.zeros((3, 2)),
                      polyline=[[0, 0], [0.1, 0.5], [0.2, 0.1]])
+
+
+def test_empty_params_of_a_model_without_params_are_accepted_as_by_solve():
+    # params=[] for a model with no params: pardel.solve takes it; the batch indexed the empty
+    # array and raised numpy's IndexError.
+    batch = pardel.solve_batch("fuel_nav", q0=[0, 0], qN=[[6, 5], [5, 5]], T=30, N=20, params=[])
+    alone = pardel.solve("fuel_nav", q0=[0, 0], qN=[5, 5], T=30, N=20, params=[], threads=1)
+    assert len(batch) == 2 and same(batch.q[1], alone.q)
