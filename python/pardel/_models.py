@@ -96,15 +96,16 @@ def _lag_text_file(text):
     return path
 
 
-def _model_spec(spec):
+def _model_spec(spec, where="pardel.model", argument="spec"):
     """The loader's spec for a model given as a Model, a bundled name, a .lag path or .lag text
-    (a string with a line break)."""
+    (a string with a line break); `where` names the calling function in a refusal."""
     if isinstance(spec, Model):
         return spec.spec
     if isinstance(spec, os.PathLike):
         spec = os.fspath(spec)
     if not isinstance(spec, str):
-        raise TypeError("model: a name, a .lag path, .lag text or a pardel.Model was expected")
+        raise TypeError(where + ": " + argument + ": a name, a .lag path, .lag text or a pardel.Model was expected, got " +
+                        type(spec).__name__)
     if "\n" in spec:
         return _lag_text_file(spec)
     if spec.endswith(".lag") or "/" in spec:

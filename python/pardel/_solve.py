@@ -132,7 +132,7 @@ def solve(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[ArrayLi
     """
     arguments = _solve_arguments(model, q0, qN, T, N, guess, on_iteration, options)
     path = _checkpoint_path("pardel.solve", checkpoint)
-    spec = _model_spec(model)
+    spec = _model_spec(model, "pardel.solve", "model")
     if path is None:
         # a Model solves with the model it holds (its .lag file is not read again)
         loaded = model._handle if isinstance(model, Model) else None
@@ -337,7 +337,7 @@ def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int
         _check_path(where, "out", out)
     out = None if out is None else os.fspath(out)
     if out == "":
-        raise PardelError("out: a folder was expected, got ''")
+        raise PardelError(where + ": out: a folder was expected, got ''")
     raw = _pardel.run_sweep(os.fsencode(path), list(overrides), -1 if threads is None else int(threads),
                             os.fsencode(out or ""))  # bytes: paths need not be UTF-8
     return SweepResult(raw, out)
