@@ -64,6 +64,7 @@ from ._results import (BatchResult, Interrupted, Result, SweepResult, SweepSolut
                        _interrupted)
 from ._solve import Scene, check, kernels, load_scene, resume, solve, solve_batch, solve_scene, sweep  # noqa: E402
 from ._types import ArrayLike, Guess, ModelLike, OnIteration, Params, PathArg  # noqa: E402,F401
+from . import plot  # noqa: E402,F401  (pardel.plot after `import pardel`; matplotlib is imported when it draws)
 
 __all__ = [
     "Model", "Result", "Scene", "PardelError", "SceneError", "ModelError", "ModelWarning", "CheckpointError",
