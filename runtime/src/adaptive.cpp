@@ -455,6 +455,34 @@ std::vector<double> moved_grid(const Problem& current, const Trajectory& sol) {
   return out;
 }
 
+/**
+ * The node times of the check grid of a solve where L depends on t: the grading of `current`'s
+ * grid (solved as `sol`) kept, each stretch of n intervals between the ends and the knots split
+ * into n + kMultiple, the node m of a stretch at the fractional node index m n / (n + kMultiple)
+ * of the old one (the times linear between old nodes): every spacing shrinks by n / (n + 4), so
+ * the nodes sample t at other times than the grid's and its nested levels' all along.
+ */
+std::vector<double> respaced_grid(const Problem& current, const Trajectory& sol) {
+  std::vector<double> t = sol.t;
+  if (t.size() != static_cast<std::size_t>(current.N) + 1) {
+    t.resize(static_cast<std::size_t>(current.N) + 1);
+    for (int k = 0; k <= current.N; ++k) t[static_cast<std::size_t>(k)] = current.t0 + current.T * k / current.N;
+  }
+  const std::vector<int> fixed = fixed_nodes(current);
+  std::vector<double> out{t.front()};
+  for (std::size_t s = 0; s + 1 < fixed.size(); ++s) {
+    const int a = fixed[s], n = fixed[s + 1] - a, n_new = n + kMultiple;
+    for (int m = 1; m < n_new; ++m) {
+      const double x = static_cast<double>(m) * n / n_new;
+      const int j = std::min(n - 1, static_cast<int>(x));
+      const double w = x - j;
+      out.push_back((1 - w) * t[static_cast<std::size_t>(a + j)] + w * t[static_cast<std::size_t>(a + j + 1)]);
+    }
+    out.push_back(t[static_cast<std::size_t>(fixed[s + 1])]);
+  }
+  return out;
+}
+
 /** The node times of the next grid of about N_new intervals (a multiple of kMultiple, at most
  *  max_N, at least kMultiple per span between fixed nodes), equidistributing `rho` (the predicted
  *  monitor; null: the solution's own monitor) over the solution `sol` of `current`, with the ends
@@ -609,8 +637,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       // Where L depends on t, nested grids sample it at the same times: a forcing whose period
       // divides the step (or a jump they miss alike) gives three levels that converge at full
       // order to one wrong problem. The request counts as reached when a second grid, of other
-      // node spacings (kMultiple more intervals per stretch between fixed nodes, placed from
-      // this solution), meets it too.
+      // node spacings all along (respaced_grid), meets it too.
       if (check_of > 0) {
         outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
                   number(estimate) + ") after " + std::to_string(sizes.size()) + " grids, checked against N = " +
@@ -618,7 +645,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
         reached = true;
         break;
       }
-      const int N_check = current.N + kMultiple * static_cast<int>(fixed_nodes(current).size() - 1);
+      const int N_check = current.N + kMultiple * static_cast<int>(fixed_nodes(current).size() - 1);  // respaced_grid's
       if (round + 1 >= kMaxGrids || N_check > max_N) {
         outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
                   number(estimate) + ") after " + std::to_string(sizes.size()) + " grid" +
@@ -630,8 +657,7 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       }
       check_of = current.N;
       shrinking = false;
-      std::vector<double> times =
-          place_grid(problem, current, guess, p, N_predicted > 0 ? &next.rho : nullptr, N_check, max_N);
+      std::vector<double> times = respaced_grid(current, guess);
       guess = interpolate(guess, times);
       current.N = static_cast<int>(times.size()) - 1;
       current.times = std::move(times);

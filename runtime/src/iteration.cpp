@@ -36,6 +36,7 @@ bool Iteration::run_level(bool last) {
   if (!resumed_level_) {
     level_ = LevelCounters{};
     previous_comp_residual_.clear();
+    refinements_ = 0;  // each level may be refined kMaxRefinements times where Newton stalls at round-off
   }
   resumed_level_ = false;
   const bool clocked = ctx_.clock != ClockMode::none;
@@ -129,7 +130,7 @@ bool Iteration::run_level(bool last) {
     if (stalled_at_round_off(r, target) || reached_max_iterations(r, target) || diverged(r)) return false;
     previous_comp_residual_.assign(ctx_.comp_residual.begin(), ctx_.comp_residual.end());
     StepOutcome outcome = method_.iterate(ctx_, iteration_ + 1);
-    if (last && refined_after_stall(outcome)) continue;
+    if (refined_after_stall(outcome)) continue;
     if (step_failed(outcome, last, r, target, &settled)) return settled;
     times_pending_ = false;
     std::swap(ctx_.q, ctx_.q_next);
@@ -265,13 +266,14 @@ bool Iteration::stalled_at_round_off(double r, double target) {
  *  which the Hessian of a model of order >= 2 amplifies like N^(2 order), is what keeps Newton from
  *  that component (an order-4 model at N = 1000 crept 800 iterations and stalled). Iterative
  *  refinement in extended precision (docs/solvers.md) runs there after 10 iterations without
- *  progress, once a solve; its corrections
+ *  progress, once a level; its corrections
  *  kept, the iteration goes on from the refined iterate, which the next pass tests as any other. */
 bool Iteration::refined_at_round_off(double r, double target) {
   // Only once Newton has stopped gaining there (10 iterations without coming 1% closer to the
   // test): where its next step resolves the component (min_jerk at N = 2e4), the extended
   // Hessian's refinement would only add its cost.
-  if (refined_ || !whole_system_newton(options_.method) || !(r <= target) || !at_round_off(r, ctx_.residual_floor) ||
+  if (refinements_ > 0 || !whole_system_newton(options_.method) || !(r <= target) ||
+      !at_round_off(r, ctx_.residual_floor) ||
       iteration_ - best_iteration_ < 10 || unresolved_component() < 0)
     return false;
   return refine_during("where Newton stood at the round-off level with a component above its target");
@@ -280,18 +282,20 @@ bool Iteration::refined_at_round_off(double r, double target) {
 bool Iteration::refined_after_stall(const StepOutcome& outcome) {
   // Newton stalled at the round-off level of the double residual: the extended one may still
   // show the way (a high-order Galerkin model of order 2 at N = 640 stalled 5e-7 from its motion).
-  if (refined_ || outcome.failure != Termination::stalled || !whole_system_newton(options_.method) ||
+  if (refinements_ >= kMaxRefinements || outcome.failure != Termination::stalled ||
+      !whole_system_newton(options_.method) ||
       !at_round_off(ctx_.residual, ctx_.residual_floor))
     return false;
   return refine_during("where Newton stalled at the round-off level");
 }
 
 bool Iteration::refine_during(const std::string& where) {
-  refined_ = true;
+  ++refinements_;
   refined_iteration_ = iteration_;
   partition_.refine(options_, s_);
   if (s_.refinement_steps == 0) return false;
-  refined_note_ = "in iteration " + std::to_string(iteration_) + ", " + where + ": " + s_.refinement_note;
+  refined_note_ += std::string(refined_note_.empty() ? "" : "; ") + "in iteration " + std::to_string(iteration_) +
+                   ", " + where + ": " + s_.refinement_note;
   ctx_.evaluated = Evaluated::nothing;  // evaluated again, by the method, at the refined iterate
   ctx_.action_known = false;
   method_.times_changed();  // the iterate moved outside the method: its trust-region history is void
@@ -327,6 +331,13 @@ bool Iteration::step_failed(const StepOutcome& step, bool last, double r, double
     // (not where the times at the tolerance were found unsettled: r is not at the clock's times).
     // (A stall may have measured the round-off level above the estimate: the target is taken again.)
     const double now = std::max(target, target_residual());
+    // A level below the last that stalls at its round-off level is solved as well as double
+    // precision allows: the next level starts from it (an order-4 model under galerkin_gauss(s=5)
+    // at N = 1000 stopped on its level N = 250 and returned it interpolated, 6e-2 off).
+    if (outcome.failure == Termination::stalled && !last && at_round_off(r, ctx_.residual_floor) && !times_pending_) {
+      *settled = true;
+      return true;
+    }
     if (outcome.failure == Termination::stalled && at_target(r, now) && !met_by_growth(r) && !times_pending_) {
       *settled = !last;
       if (last) finish(Termination::converged, converged_message(r, now));
@@ -473,14 +484,15 @@ void Iteration::summarize() {
   s_.iterations = iteration_;
   s_.residual = ctx_.residual;
   s_.action = ctx_.action_known ? ctx_.action : partition_.action(ctx_);
-  if (s_.termination == Termination::converged && !std::isfinite(s_.action)) {
-    // The DEL equations hold (their derivatives are finite), but the discrete Lagrangian is not
-    // finite somewhere along the path (log(x) at a node with x < 0): no discrete problem is solved.
+  if (s_.termination == Termination::converged && std::isnan(s_.action)) {
+    // The DEL equations hold (their derivatives are finite), but the discrete Lagrangian is NaN
+    // somewhere along the path (log(x) at a node with x < 0): no discrete problem is solved. (An
+    // infinite action can come from a fixed end alone, 1/x with x(0) = 0, whose singular terms
+    // do not enter the equations of the unknowns; at an unknown they make the residual infinite.)
     s_.termination = Termination::non_finite;
-    s_.message = "the DEL residual meets the tolerance, but the discrete action is " +
-                 std::string(std::isnan(s_.action) ? "NaN" : "infinite") +
-                 " at this iterate: the path leaves the domain of L (an interval where the discrete Lagrangian is "
-                 "not finite), so it solves no discrete problem (" + s_.message + ")";
+    s_.message = "the DEL residual meets the tolerance, but the discrete action is NaN at this iterate: the path "
+                 "leaves the domain of L (an interval where the discrete Lagrangian is not a number), so it solves "
+                 "no discrete problem (" + s_.message + ")";
   }
   s_.final_time = partition_.final_time(ctx_);
   s_.residual_floor = ctx_.residual_floor;

@@ -79,7 +79,7 @@ class Iteration {
   Context& context() { return ctx_; }
   long iterations() const { return iteration_; }
   /** Whether the current iterate is the one refined_at_round_off refined (no step since). */
-  bool refined() const { return refined_ && refined_iteration_ == iteration_; }
+  bool refined() const { return refinements_ > 0 && refined_iteration_ == iteration_; }
   /** What refined_at_round_off did ("" where it did not run or kept no correction), for the
    *  summary's refinement note once the solve has ended. */
   const std::string& refined_note() const { return refined_note_; }
@@ -161,7 +161,10 @@ class Iteration {
   double best_residual_ = std::numeric_limits<double>::infinity();
   long best_iteration_ = 0;
   bool have_initial_ = false;
-  bool refined_ = false;  ///< refined_at_round_off ran the refinement (once a solve)
+  /** refine_during's runs on this level, at most kMaxRefinements (a second one after Newton
+   *  stalled again gained nothing on an order-3 model under galerkin_gauss(s=4) at N = 1000). */
+  static constexpr int kMaxRefinements = 1;
+  int refinements_ = 0;
   long refined_iteration_ = -1;  ///< the iteration count when it did
   std::string refined_note_;
 };

@@ -3,6 +3,8 @@ like N^(2 order): iterative refinement in extended precision (the condensed inte
 carries the solves to the rounding of the nodes, against exact motions written here. Before it,
 the order-3 model's node error grew to 4.4e-3 at N = 256, and the order-2 model stalled from
 N = 20 under s = 6 and s = 8."""
+import math
+
 import numpy as np
 import pytest
 
@@ -78,3 +80,29 @@ def test_iterative_refinement_keyword_turns_the_refinement_off_and_on():
     assert np.abs(plain.q[:, 0] - exact(plain.t)).max() > 1e-9
     with pytest.raises(pardel.PardelError, match="iterative_refinement"):
         pardel.solve(SEXTIC_LAG, iterative_refinement="sometimes", **common)
+
+
+SNAP_LAG = """\
+# order 4: x'''''''' + x^3 = X^3 + sin t, so that x = X = sin t + t^4/10
+model forced_snap_fine
+order 4
+coords x
+let X = sin(t) + 1/10*t^4
+L = 1/2*x''''^2 + 1/4*x^4 - (X^3 + sin(t))*x
+discretizations galerkin_gauss(s=5)
+"""
+
+
+def test_an_order_four_model_under_auto_passes_a_level_stalled_at_round_off():
+    # auto's nested iteration at N = 1000 solves the levels 250 and 1000: Newton stalled at the
+    # round-off level on the level N = 250 (condition ~N^8), and the solve stopped there, returning
+    # that level interpolated, 6.2e-2 from the motion. A level below the last that stalls at its
+    # round-off level is solved as well as double precision allows; the next one starts from it.
+    def jet(t):
+        return [math.sin(t) + 0.1 * t ** 4, math.cos(t) + 0.4 * t ** 3, -math.sin(t) + 1.2 * t * t,
+                -math.cos(t) + 2.4 * t]
+
+    r = pardel.solve(SNAP_LAG, q0=jet(0.3), qN=jet(2.5), T=2.2, t0=0.3, N=1000, discretization="galerkin_gauss(s=5)")
+    assert r.status == "converged", r.message
+    assert list(np.unique(r.history["N"])) == [250, 1000]
+    assert np.abs(r.q[:, 0] - (np.sin(r.t) + 0.1 * r.t ** 4)).max() < 1e-9

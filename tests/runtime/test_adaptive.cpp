@@ -147,29 +147,31 @@ TEST(Adaptive, TroeschAgainstAFineUniformSolve) {
 /** Troesch's problem u'' = lambda sinh(lambda u), u(0) = 0, u(1) = 1, exactly: with c = u'(0) its
  *  first integral u' = sqrt(c^2 + 4 sinh^2(lambda u / 2)) gives
  *  t(u) = F(arctan(2 sinh(lambda u / 2) / c) | m = 1 - c^2 / 4) / lambda, F the incomplete elliptic
- *  integral of the first kind; c from t(1) = 1 and u(t) by bisection, both monotone. */
+ *  integral of the first kind; c from t(1) = 1 and u(t) by bisection, both monotone. In long
+ *  double: near m = 1 F amplifies the rounding of its modulus by about 1 / (1 - k^2) = 4 / c^2
+ *  (6e5 at lambda = 8), which left the double evaluation 3e-10 from a 40-digit one (mpmath). */
 struct TroeschExact {
-  double lambda, c;
-  double t_of(double u, double cc) const {
+  long double lambda, c;
+  long double t_of(long double u, long double cc) const {
     return std::ellint_1(std::sqrt(1 - cc * cc / 4), std::atan2(2 * std::sinh(lambda * u / 2), cc)) / lambda;
   }
   explicit TroeschExact(double lam) : lambda(lam), c(0) {
-    double lo = 1e-14, hi = 2 - 1e-12;  // t(1) falls as c grows
+    long double lo = 1e-14L, hi = 2 - 1e-15L;  // t(1) falls as c grows
     for (int i = 0; i < 200; ++i) {
-      const double mid = std::sqrt(lo * hi);
-      (t_of(1.0, mid) > 1 ? lo : hi) = mid;
+      const long double mid = std::sqrt(lo * hi);
+      (t_of(1.0L, mid) > 1 ? lo : hi) = mid;
     }
     c = std::sqrt(lo * hi);
   }
   double operator()(double t) const {
     if (t <= 0) return 0;
     if (t >= 1) return 1;
-    double lo = 0, hi = 1;
+    long double lo = 0, hi = 1;
     for (int i = 0; i < 80; ++i) {
-      const double mid = 0.5 * (lo + hi);
+      const long double mid = 0.5L * (lo + hi);
       (t_of(mid, c) < t ? lo : hi) = mid;
     }
-    return 0.5 * (lo + hi);
+    return static_cast<double>(0.5L * (lo + hi));
   }
 };
 
@@ -195,9 +197,9 @@ pardel::Summary solve_adaptive(const pardel::Problem& p, double accuracy, pardel
 
 TEST(Adaptive, TroeschAgainstItsExactSolution) {
   const TroeschExact exact(8.0);
-  // std::ellint_1 near m = 1 is good to about 1e-12 here; times that far off move u by at most
-  // u'(1) = 2 sinh(4) < 55 times as much, far below the 1e-8 compared with.
-  ASSERT_LT(std::fabs(exact.t_of(1.0, exact.c) - 1), 1e-11);
+  // t(1) = 1 to far below the errors compared with (u moves by at most u'(1) = 2 sinh(4) < 55
+  // times a shift of t).
+  ASSERT_LT(std::fabs(exact.t_of(1.0L, exact.c) - 1), 1e-14L);
   for (const char* disc : {"galerkin_gauss(s=2)", "galerkin_gauss(s=4)"}) {
     const pardel::Problem p = troesch_problem(disc);
     pardel::Trajectory tr;
