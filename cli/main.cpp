@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <new>
 #include <optional>
 #include <nlohmann/json.hpp>
@@ -60,34 +61,10 @@ const char* const kExitCodesHelp =
     "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate),\n"
     "7 stalled (no progress at the round-off level of the problem: tol is unattainable).";
 
-bool looks_like_path(const std::string& spec) {
-  return spec.find('/') != std::string::npos || (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
-}
-
-/** A bundled name (nullptr if unknown) or a .lag path (compiled on first use when the loader is
- *  linked). The generator's warnings about a .lag model (kept with its cache entry, so also when it
- *  was compiled by an earlier run) go to stderr, once per model, on rank 0 alone under mpirun. */
-const pardel_model* resolve_model_spec(const std::string& spec) {
-  if (!looks_like_path(spec)) return find_model(spec);
-#ifdef PARDEL_HAVE_MODEL_LOADER
-  const pardel_model* model = pardel::resolve_model(spec);
-  static std::vector<const pardel_model*> reported;
-  if (model && std::find(reported.begin(), reported.end(), model) == reported.end()) {
-    reported.push_back(model);
-    const std::string warnings = pardel::model_warnings(model);
-    if (!warnings.empty() && pardel::mpi::world_rank() == 0) std::cerr << warnings << "\n" << std::flush;
-  }
-  return model;
-#else
-  throw std::runtime_error("this build cannot load .lag files (no model loader); use a bundled model");
-#endif
-}
-
-// ---------------------------------------------------------------------------------------------
-// pardel solve / check
-
 std::atomic<bool> g_interrupted{false};
 std::atomic<int> g_signal{0};  ///< the signal that set g_interrupted
+/** A signal stopped the compile of a .lag model (resolve_model_spec): the command ends interrupted. */
+std::atomic<bool> g_compile_interrupted{false};
 extern "C" void on_sigint(int signal) {
   g_signal.store(signal);
   g_interrupted.store(true);
@@ -113,6 +90,53 @@ class StopOnSignals {
   void (*previous_term_)(int);
   bool installed_ = true;
 };
+
+/** The message and status of a command whose model compile a signal stopped (`what`: the error
+ *  that carried it out, which names the model). */
+int compile_interrupted(const char* what) {
+  std::fprintf(stderr, "pardel: %s (%s): nothing was solved\n", what,
+               g_signal.load() == SIGTERM ? "SIGTERM" : "Ctrl-C");
+  return exit_code(Termination::interrupted);
+}
+
+bool looks_like_path(const std::string& spec) {
+  return spec.find('/') != std::string::npos || (spec.size() > 4 && spec.compare(spec.size() - 4, 4, ".lag") == 0);
+}
+
+/** A bundled name (nullptr if unknown) or a .lag path (compiled on first use when the loader is
+ *  linked). The generator's warnings about a .lag model (kept with its cache entry, so also when it
+ *  was compiled by an earlier run) go to stderr, once per model, on rank 0 alone under mpirun. */
+const pardel_model* resolve_model_spec(const std::string& spec) {
+  if (!looks_like_path(spec)) return find_model(spec);
+#ifdef PARDEL_HAVE_MODEL_LOADER
+  // Ctrl-C or SIGTERM while a .lag compiles stops the compile (the loader polls g_interrupted,
+  // set_compile_interrupt in main) and ends the command with the interrupted status.
+  static std::mutex resolving;
+  std::lock_guard<std::mutex> lock(resolving);
+  const pardel_model* model = nullptr;
+  {
+    StopOnSignals stop_on_signals;
+    try {
+      model = pardel::resolve_model(spec);
+    } catch (...) {
+      if (g_interrupted.load()) g_compile_interrupted.store(true);
+      throw;
+    }
+  }
+  static std::vector<const pardel_model*> reported;
+  if (model && std::find(reported.begin(), reported.end(), model) == reported.end()) {
+    reported.push_back(model);
+    const std::string warnings = pardel::model_warnings(model);
+    if (!warnings.empty() && pardel::mpi::world_rank() == 0) std::cerr << warnings << "\n" << std::flush;
+  }
+  return model;
+#else
+  throw std::runtime_error("this build cannot load .lag files (no model loader); use a bundled model");
+#endif
+}
+
+// ---------------------------------------------------------------------------------------------
+// pardel solve / check
 
 Scene load_scene_or_throw(const std::string& path, const std::vector<std::string>& sets) {
   return load_scene(path, sets, resolve_model_spec, bundled_model_names());
@@ -457,6 +481,7 @@ int main(int argc, char** argv) {
   }
 
 #ifdef PARDEL_HAVE_MODEL_LOADER
+  pardel::set_compile_interrupt([] { return g_interrupted.load(); });
   // A .lag file's first use compiles it (seconds, minutes for a large model under a high-order
   // discretization): said on a terminal, as the progress line is, unless --quiet.
   const bool quiet = (*solve_cmd && s.quiet) || (sweep_cmd.parsed() && sweep_cmd.quiet());
@@ -479,6 +504,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
     return fail(kExitUsage);
   } catch (const SceneError& error) {
+    if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
     std::fprintf(stderr, "%s\n", error.what());
     return fail(kExitUsage);
   } catch (const CheckpointError& error) {
@@ -488,6 +514,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pardel: error: out of memory (std::bad_alloc)\n");
     return fail(kExitInternal);
   } catch (const std::exception& error) {
+    if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
     return fail(kExitInternal);
   }

@@ -5,6 +5,7 @@
 #include "pardel/model_loader.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -24,6 +25,7 @@
 #include <mutex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "model_cache.hpp"
@@ -57,7 +59,21 @@ std::string read_file(const fs::path& path) {
 // program runs in a process group of its own, so that a Ctrl-C at the terminal (which signals the
 // whole foreground group) reaches this process, which decides what an interruption does, and not
 // the compiler in the middle of a cache entry.
+std::mutex interrupt_mutex;
+std::function<bool()>& compile_interrupt() {
+  static std::function<bool()> stop;
+  return stop;
+}
+
+/** run_program's status for a program stopped by the compile interrupt (set_compile_interrupt). */
+constexpr int kStopped = -2;
+
 int run_program(const std::vector<std::string>& argv, const fs::path& log) {
+  std::function<bool()> stop;
+  {
+    std::lock_guard<std::mutex> lock(interrupt_mutex);
+    stop = compile_interrupt();
+  }
   posix_spawnattr_t attributes;
   posix_spawnattr_init(&attributes);
   posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
@@ -76,13 +92,29 @@ int run_program(const std::vector<std::string>& argv, const fs::path& log) {
   posix_spawnattr_destroy(&attributes);
   if (rc != 0) return 127;
   int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return 127;
+  for (;;) {
+    const pid_t done = waitpid(pid, &status, stop ? WNOHANG : 0);
+    if (done == pid) break;
+    if (done < 0 && errno != EINTR) return 127;
+    if (done == 0 && stop()) {
+      ::kill(-pid, SIGTERM);  // the program's group: the compiler driver and what it started
+      while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+      }
+      return kStopped;
+    }
+    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
 
 #ifdef PARDEL_LOADER_GEN
+/** run_program, throwing ModelLoadError where the compile interrupt stopped the program. */
+int run_step(const std::vector<std::string>& argv, const fs::path& log, const fs::path& lag) {
+  const int status = run_program(argv, log);
+  if (status == kStopped) throw ModelLoadError("interrupted while compiling " + lag.string());
+  return status;
+}
+
 // The toolchain in use (guarded by its mutex; read once per compile).
 std::mutex toolchain_mutex;
 LoaderToolchain& current_toolchain() {
@@ -136,14 +168,13 @@ void build_into(const fs::path& lag, const fs::path& dir, const LoaderToolchain&
     if (details.empty()) throw ModelLoadError(what);
     throw ModelLoadError(details_only ? details : what + ":\n" + details);
   };
-  if (run_program({tools.generator, lag.string(), "-o", ir.string(), "--source-name",
+  if (run_step({tools.generator, lag.string(), "-o", ir.string(), "--source-name",
                    lag.filename().string()},
-                  log) != 0)
+                  log, lag) != 0)
     fail("pardel-gen failed on " + lag.string(), true);
   // What the generator printed on success is its warnings; kept with the entry for every load.
   const std::string warnings = fs::exists(log) ? trim(read_file(log)) : std::string();
-  if (run_program({tools.python, tools.render_script, ir.string(), "--out-dir", tmp.string()},
-                  log) != 0)
+  if (run_step({tools.python, tools.render_script, ir.string(), "--out-dir", tmp.string()}, log, lag) != 0)
     fail("rendering the kernels of " + lag.string() + " failed");
   std::string model;
   for (const auto& entry : fs::directory_iterator(tmp)) {
@@ -151,10 +182,10 @@ void build_into(const fs::path& lag, const fs::path& dir, const LoaderToolchain&
   }
   if (model.empty()) fail("the generator wrote no kernels for " + lag.string());
   const fs::path so = tmp / "model.so";
-  if (run_program({tools.compiler, "-std=c++17", "-O2", "-fPIC", "-shared", "-Wl,-Bsymbolic",
+  if (run_step({tools.compiler, "-std=c++17", "-O2", "-fPIC", "-shared", "-Wl,-Bsymbolic",
                    "-I" + tools.abi_include, (tmp / (model + ".cpp")).string(), "-o", so.string(),
                    "-lquadmath"},  // the extended-precision kernels (grad_extended) call libquadmath
-                  log) != 0)
+               log, lag) != 0)
     fail("compiling the kernels of " + lag.string() + " failed (" + tools.compiler + ")");
   try {
     // model.so: this user's alone, its bytes on disk, its digest taken from what is on disk.
@@ -252,6 +283,11 @@ std::function<void(const std::string&)>& compile_notice() {
 void set_compile_notice(std::function<void(const std::string& path)> notice) {
   std::lock_guard<std::mutex> lock(notice_mutex);
   compile_notice() = std::move(notice);
+}
+
+void set_compile_interrupt(std::function<bool()> stop) {
+  std::lock_guard<std::mutex> lock(interrupt_mutex);
+  compile_interrupt() = std::move(stop);
 }
 
 void set_loader_toolchain(const LoaderToolchain& toolchain) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <fstream>
@@ -73,6 +74,65 @@ class HostileCliEdges : public ::testing::Test {
   }
   fs::path dir_;
 };
+
+// ---------------------------------------------------------------------------------------------
+// A signal while a .lag compiles
+
+/** Whether any running process's command line names `text` (the scratch folder of this test). */
+bool process_naming(const std::string& text) {
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || !std::isdigit(static_cast<unsigned char>(name[0]))) continue;
+    std::string cmdline = read_text(entry.path() / "cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    if (cmdline.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+/** Whether a temporary entry (NAME.tmp.*) lies anywhere under `dir`. */
+bool temporary_entry_under(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    if (it->path().filename().string().find(".tmp.") != std::string::npos) return true;
+  return false;
+}
+
+TEST_F(HostileCliEdges, SignalWhileAModelCompilesStopsTheCompileAndEndsInterrupted) {
+  // Ctrl-C or SIGTERM while `pardel solve` compiled a .lag killed pardel at once (exit 130 or 143,
+  // no message) and left the compiler running on, detached (its own process group), with its
+  // temporary folder in the cache. Now the compile is stopped, the folder removed, and the
+  // command ends with the interrupted status and a message.
+  int round = 0;
+  for (const int signal : {SIGINT, SIGTERM}) {
+    SCOPED_TRACE(signal == SIGINT ? "SIGINT" : "SIGTERM");
+    const fs::path cache = dir_ / ("cache" + std::to_string(round));
+    const fs::path lag = dir_ / ("slow" + std::to_string(round) + ".lag");
+    ++round;
+    // Four coordinates under two Galerkin discretizations of high degree: seconds to compile.
+    write_text(lag, "model slow\ncoords a b c d\nL = 1/2*(a'^2+b'^2+c'^2+d'^2) + cos(a*b+c)*sin(b*d-a)*exp(-c^2) + "
+                    "log(2+sin(a)^2*cos(d)^2) + (a*b*c*d)^2/(1+a^2+b^2)\n"
+                    "discretizations trapezoid galerkin_gauss(s=6) galerkin_lobatto(s=5)\n");
+    const fs::path scene = dir_ / "slow.toml";
+    write_text(scene, "model = \"" + lag.string() + "\"\ndiscretization = \"trapezoid\"\n[grid]\nT = 1\nN = 20\n"
+                      "[boundary]\nq0 = [0, 0, 0, 0]\nqN = [1, 1, 1, 1]\n");
+    const pid_t pid = start_pardel({"solve", scene.string(), "--out", (dir_ / "out").string(), "--no-plot", "--quiet"},
+                                   dir_ / "log", {"PARDEL_CACHE_DIR=" + cache.string()});
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!temporary_entry_under(cache) && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    ASSERT_TRUE(temporary_entry_under(cache)) << "the compile did not start";
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ::kill(pid, signal);
+    const Outcome o = finish_pardel(pid, dir_ / "log", 60);
+    ASSERT_FALSE(o.timed_out) << o.output;
+    EXPECT_EQ(o.status, 6) << o.output;
+    EXPECT_NE(o.output.find("interrupted while compiling"), std::string::npos) << o.output;
+    EXPECT_FALSE(temporary_entry_under(cache));
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    EXPECT_FALSE(process_naming(cache.string())) << "a program of the compile runs on";
+  }
+}
 
 // ---------------------------------------------------------------------------------------------
 // Sweeps

@@ -55,6 +55,12 @@ std::string model_warnings(const pardel_model* model);
  *  function: nothing. The loader itself prints nothing. */
 void set_compile_notice(std::function<void(const std::string& path)> notice);
 
+/** Sets what the loader polls (every 20 ms) while a program of a compile runs: when it returns
+ *  true, the program's process group is terminated, the entry's temporary folder removed and
+ *  resolve_model throws ModelLoadError("interrupted while compiling FILE"). An empty function (the
+ *  default): a compile runs to its end (pardel's Python module lets it finish in the background). */
+void set_compile_interrupt(std::function<bool()> stop);
+
 /** True when this build can compile .lag files at run time (pardel-gen and a compiler found). */
 bool can_compile_lag_files();
 
