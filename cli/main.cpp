@@ -507,6 +507,9 @@ int main(int argc, char** argv) {
     if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
     std::fprintf(stderr, "%s\n", error.what());
     return fail(kExitUsage);
+  } catch (const CheckpointWriteError& error) {  // the outputs are written; the checkpoint could not be
+    std::fprintf(stderr, "%s\n", error.what());
+    return fail(kExitInternal);
   } catch (const CheckpointError& error) {
     std::fprintf(stderr, "%s\n", error.what());
     return fail(kExitUsage);

@@ -149,10 +149,22 @@ def read_table(path):
 
 
 def save(fig, path):
+    """Writes the figure to path through a temporary file; where that fails (a full disk, no write
+    permission), the plot is skipped with the reason, and neither the temporary file nor an older
+    solve's picture at path is left (it would be taken for this one's)."""
     tmp = "%s.tmp.%d" % (path, os.getpid())
-    fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    os.replace(tmp, path)
+    try:
+        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
+        os.replace(tmp, path)
+    except OSError as error:
+        skip(os.path.basename(path), "it could not be written (%s)" % (error.strerror or error))
+        for leftover in (tmp, path):
+            try:
+                os.remove(leftover)
+            except OSError:
+                pass
+    finally:
+        plt.close(fig)
 
 
 def cost_text(summary):

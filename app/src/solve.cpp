@@ -36,7 +36,7 @@ bool write_checkpoint_of(const CheckpointPlan& plan, const Scene& scene, const S
   } catch (const CheckpointError&) {
     throw;
   } catch (const std::exception& error) {
-    throw CheckpointError(
+    throw CheckpointWriteError(
         fmt::format("{}: error: the checkpoint could not be written: {}", file.string(), error.what()));
   }
 }

@@ -171,7 +171,14 @@ double trajectory_distance(const Trajectory& a, const Trajectory& b) {
 
 bool same_solution(const VariantResult& a, const VariantResult& b, const GroupingOptions& options) {
   if (a.configuration != b.configuration) return false;
-  if (!(std::abs(a.action - b.action) <= options.action_tol * std::max(1.0, std::abs(a.action)))) return false;
+  // Actions that are not finite (a singular fixed end: 1/x with x(0) = 0 makes every variant's +inf)
+  // match where they are the same infinity (inf - inf is NaN, and inf is within any relative
+  // tolerance of -inf); then the paths decide.
+  const bool finite = std::isfinite(a.action) && std::isfinite(b.action);
+  const bool same_action =
+      finite ? std::abs(a.action - b.action) <= options.action_tol * std::max(1.0, std::abs(a.action))
+             : a.action == b.action;
+  if (!same_action) return false;
   return trajectory_distance(a.trajectory, b.trajectory) <= options.distance_tol;
 }
 

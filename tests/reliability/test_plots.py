@@ -234,6 +234,19 @@ def main(argv):
         print("costs covered:\n  " + "\n  ".join(sorted(costs)))
         if len(costs) < 4:
             errors.append("fewer than 4 kinds of cost covered: %s" % sorted(costs))
+        # A picture that cannot be written (here a folder, not empty, where convergence.png goes; a
+        # full disk printed a traceback): skipped with the reason, the other drawn, exit 0.
+        out = os.path.join(work, "unwritable")
+        solve(pardel, harmonic, out)
+        os.makedirs(os.path.join(out, "convergence.png", "inside"))
+        r = subprocess.run([python, plot_script, out], capture_output=True, text=True, timeout=120)
+        if r.returncode != 0 or "Traceback" in r.stderr:
+            errors.append("unwritable: plot.py exited %d: %s" % (r.returncode, r.stderr))
+        if "plot.py: convergence.png skipped: it could not be written" not in r.stderr:
+            errors.append("unwritable: no message says that convergence.png was skipped: %s" % r.stderr)
+        errors += check_plot("unwritable", r.stderr, out, "trajectory.png", "drawn")
+        if any(".tmp." in name for name in os.listdir(out)):
+            errors.append("unwritable: a temporary file is left: %s" % os.listdir(out))
         # End to end: `pardel solve` draws the plots itself and reports no failure of the plot step.
         out = os.path.join(work, "end_to_end")
         r = subprocess.run([pardel, "solve", os.path.join(scenes, "zermelo_1.toml"), "--out", out, "--quiet",

@@ -55,6 +55,20 @@ TEST(SweepGrouping, SameActionButDistantPathsAreDistinct) {
   EXPECT_EQ(group_solutions(results, GroupingOptions{}).size(), 2u);
 }
 
+TEST(SweepGrouping, InfiniteActionsLeaveTheGroupingToThePaths) {
+  // A singular fixed end (L = x'^2/2 + 1/x with x(0) = 0) makes every variant's action +inf: six
+  // variants on one path were six solutions, inf - inf being NaN.
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<VariantResult> results = {result(0, inf, inf, {0, 1, 2}), result(1, inf, inf, {0, 1, 2}),
+                                              result(2, inf, inf, {0, -1, 2}), result(3, inf, -inf, {0, 1, 2})};
+  std::vector<int> solution_of;
+  const auto solutions = group_solutions(results, GroupingOptions{}, &solution_of);
+  ASSERT_EQ(solutions.size(), 3u);
+  EXPECT_EQ(solution_of[0], solution_of[1]);
+  EXPECT_NE(solution_of[0], solution_of[2]);
+  EXPECT_NE(solution_of[0], solution_of[3]);
+}
+
 TEST(SweepGrouping, ClosePathsButDifferentActionsAreDistinct) {
   const std::vector<VariantResult> results = {result(0, 5.0, 2.0, {0, 1, 2}), result(1, 5.0, 2.1, {0, 1, 2})};
   EXPECT_EQ(group_solutions(results, GroupingOptions{}).size(), 2u);

@@ -30,6 +30,13 @@ class CheckpointError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/** A checkpoint that could not be written (a full disk, a folder without write permission): an
+ *  output failure, not bad input (the command line exits 1, as for its other outputs). */
+class CheckpointWriteError : public CheckpointError {
+ public:
+  using CheckpointError::CheckpointError;
+};
+
 /** Everything `pardel solve --resume` needs besides the scene file itself. */
 struct Checkpoint {
   static constexpr int kVersion = 1;  ///< of the file layout (the state has its own)
