@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -90,6 +91,19 @@ class StopOnSignals {
   void (*previous_term_)(int);
   bool installed_ = true;
 };
+
+/** `text` as one word of a POSIX shell: as it is where it holds only characters no shell treats
+ *  specially, else in single quotes (each ' written as '\''), so that a suggested command pastes
+ *  as it is meant (a folder named with a blank or a line break). */
+std::string shell_word(const std::string& text) {
+  const bool plain = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || std::strchr("/._-+,:=@%", c) != nullptr;
+  });
+  if (plain) return text;
+  std::string out = "'";
+  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
 
 /** The message and status of a command whose model compile a signal stopped (`what`: the error
  *  that carried it out, which names the model). */
@@ -279,7 +293,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   }
   if (run.checkpoint_written) {
     std::fprintf(stderr, "pardel solve: checkpoint written; continue with: pardel solve --resume %s\n",
-                 out_dir.c_str());
+                 shell_word(out_dir).c_str());
   }
   return exit_code(summary.termination);
 }
