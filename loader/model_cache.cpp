@@ -120,6 +120,25 @@ fs::path process_cache() {
   return cache.path;
 }
 
+/**
+ * Why a folder above the cache (`st` from stat: a link is judged by what it leads to) would let
+ * another user replace the cache folder, completing "it is ...": owned by a user other than this
+ * one and root, or writable by its group or by others without the sticky bit (which /tmp has);
+ * empty when it is safe.
+ */
+std::string unsafe_above(const struct stat& st) {
+  if (st.st_uid != ::geteuid() && st.st_uid != 0)
+    return "owned by user " + std::to_string(st.st_uid) + ", neither this user (" + std::to_string(::geteuid()) +
+           ") nor root";
+  if ((st.st_mode & (S_IWGRP | S_IWOTH)) && !(st.st_mode & S_ISVTX)) {
+    char mode[16];
+    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+    return std::string("writable by ") + ((st.st_mode & S_IWOTH) ? "others" : "its group") +
+           " without the sticky bit (mode " + mode + ")";
+  }
+  return {};
+}
+
 }  // namespace
 
 fs::path cache_root() {
@@ -139,6 +158,17 @@ fs::path cache_root() {
   }
   while (root.size() > 1 && root.back() == '/') root.pop_back();  // else lstat would follow a link
   std::error_code ec;
+  // Whoever can write a folder above it can rename the cache away and put another in its place.
+  for (fs::path above = fs::absolute(root, ec).parent_path(); !above.empty(); above = above.parent_path()) {
+    struct stat up;
+    if (::stat(above.c_str(), &up) == 0)
+      if (const std::string why = unsafe_above(up); !why.empty())
+        throw ModelLoadError("refusing the model cache folder " + root + " (" + from + "): the folder " +
+                             above.string() + " above it is " + why +
+                             ", so another user could replace the cache; set PARDEL_CACHE_DIR to a folder under "
+                             "folders of this user's or root's");
+    if (above == above.root_path()) break;
+  }
   const fs::path parent = fs::path(root).parent_path();
   if (!parent.empty()) fs::create_directories(parent, ec);
   if (::mkdir(root.c_str(), 0700) != 0 && errno != EEXIST)

@@ -377,6 +377,26 @@ TEST_F(HostileCache, CacheWritableByOthersIsRefused) {
   expect_one_complete_entry(cache_);
 }
 
+TEST_F(HostileCache, CacheUnderAFolderOthersCanWriteIsRefused) {
+  // Whoever can write a folder above the cache can rename the cache away and put another in its
+  // place: a parent of mode 0777 is refused, and nothing is made in it; with the sticky bit (as
+  // /tmp has) it is not.
+  const fs::path open = dir_ / "open";
+  fs::create_directories(open);
+  ::chmod(open.c_str(), 0777);
+  const Outcome o = kernels({"PARDEL_CACHE_DIR=" + (open / "cache").string()}, "open.log");
+  EXPECT_EQ(o.status, 2) << o.output;
+  EXPECT_NE(o.output.find("the folder " + open.string() +
+                          " above it is writable by others without the sticky bit (mode 0777)"),
+            std::string::npos)
+      << o.output;
+  EXPECT_TRUE(entries(open).empty());
+  ::chmod(open.c_str(), 01777);
+  const Outcome sticky = kernels({"PARDEL_CACHE_DIR=" + (open / "cache").string()}, "sticky.log");
+  EXPECT_EQ(sticky.status, 0) << sticky.output;
+  expect_one_complete_entry(open / "cache");
+}
+
 TEST_F(HostileCache, CacheThatIsASymbolicLinkIsRefused) {
   fs::create_directories(dir_ / "elsewhere");
   ::chmod((dir_ / "elsewhere").c_str(), 0700);
