@@ -420,6 +420,14 @@ Prediction predict_grid(const Problem& current, const Trajectory& sol, double p,
   return out;
 }
 
+/** The node times of `sol`, the solution on `current`'s grid: its own, or uniform where it has none. */
+std::vector<double> node_times(const Problem& current, const Trajectory& sol) {
+  if (sol.t.size() == static_cast<std::size_t>(current.N) + 1) return sol.t;
+  std::vector<double> t(static_cast<std::size_t>(current.N) + 1);
+  for (int k = 0; k <= current.N; ++k) t[static_cast<std::size_t>(k)] = current.t0 + current.T * k / current.N;
+  return t;
+}
+
 /**
  * The node times of a grid whose nodes shared by all three of its levels (every 4th node, the
  * levels of the estimate and its check) lie midway between those of `current` (solved as `sol`,
@@ -431,11 +439,7 @@ Prediction predict_grid(const Problem& current, const Trajectory& sol, double p,
  * hold).
  */
 std::vector<double> moved_grid(const Problem& current, const Trajectory& sol) {
-  std::vector<double> t = sol.t;
-  if (t.size() != static_cast<std::size_t>(current.N) + 1) {
-    t.resize(static_cast<std::size_t>(current.N) + 1);
-    for (int k = 0; k <= current.N; ++k) t[static_cast<std::size_t>(k)] = current.t0 + current.T * k / current.N;
-  }
+  const std::vector<double> t = node_times(current, sol);
   const std::vector<int> fixed = fixed_nodes(current);
   std::vector<double> out{t.front()};
   auto split = [&out](double from, double to) {
@@ -463,11 +467,7 @@ std::vector<double> moved_grid(const Problem& current, const Trajectory& sol) {
  * the nodes sample t at other times than the grid's and its nested levels' all along.
  */
 std::vector<double> respaced_grid(const Problem& current, const Trajectory& sol) {
-  std::vector<double> t = sol.t;
-  if (t.size() != static_cast<std::size_t>(current.N) + 1) {
-    t.resize(static_cast<std::size_t>(current.N) + 1);
-    for (int k = 0; k <= current.N; ++k) t[static_cast<std::size_t>(k)] = current.t0 + current.T * k / current.N;
-  }
+  const std::vector<double> t = node_times(current, sol);
   const std::vector<int> fixed = fixed_nodes(current);
   std::vector<double> out{t.front()};
   for (std::size_t s = 0; s + 1 < fixed.size(); ++s) {
@@ -649,9 +649,10 @@ Summary solve_adaptive(const Problem& problem, const Options& requested, Traject
       if (round + 1 >= kMaxGrids || N_check > max_N) {
         outcome = "accuracy " + number(accuracy) + " reached on N = " + std::to_string(current.N) + " (estimate " +
                   number(estimate) + ") after " + std::to_string(sizes.size()) + " grid" +
-                  (sizes.size() == 1 ? "" : "s") + ", not checked on a second grid (" +
-                  (N_check > max_N ? "it would exceed accuracy_max_N" : "the last of " + std::to_string(kMaxGrids)) +
-                  "), which L's dependence on t asks for";
+                  (sizes.size() == 1 ? "" : "s") + ", not checked on a second grid, which L's dependence on t asks for (" +
+                  (N_check > max_N ? "it would exceed accuracy_max_N"
+                                   : "this was the last of the " + std::to_string(kMaxGrids) + " grids allowed") +
+                  ")";
         reached = true;
         break;
       }
