@@ -1,6 +1,7 @@
 // Runs the plotting scripts of the command line in a child process (see plot_runner.hpp).
 #include "plot_runner.hpp"
 
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -16,12 +17,46 @@ extern char** environ;
 
 namespace pardel::cli {
 
+namespace {
+
+volatile sig_atomic_t g_plot_signal = 0;  ///< SIGINT or SIGTERM received while a script ran
+extern "C" void on_plot_signal(int signal) { g_plot_signal = signal; }
+
+/** SIGINT and SIGTERM recorded (without SA_RESTART, so that waitpid returns) from construction
+ *  until destruction, which puts the previous actions back. */
+class RecordSignals {
+ public:
+  RecordSignals() {
+    struct sigaction record {};
+    record.sa_handler = on_plot_signal;
+    sigemptyset(&record.sa_mask);
+    g_plot_signal = 0;
+    ::sigaction(SIGINT, &record, &previous_int_);
+    ::sigaction(SIGTERM, &record, &previous_term_);
+  }
+  RecordSignals(const RecordSignals&) = delete;
+  RecordSignals& operator=(const RecordSignals&) = delete;
+  ~RecordSignals() {
+    ::sigaction(SIGINT, &previous_int_, nullptr);
+    ::sigaction(SIGTERM, &previous_term_, nullptr);
+  }
+
+ private:
+  struct sigaction previous_int_ {}, previous_term_ {};
+};
+
+}  // namespace
+
 bool run_plot_script(const std::string& script, const std::string& out_dir, const std::string& what) {
   std::vector<std::string> argv_strings = {config::python, script, out_dir};
   std::vector<char*> argv;
   for (auto& s : argv_strings) argv.push_back(s.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
+  // A signal that ends pardel during the plot step ends the script too (it would write pictures
+  // into the folder after pardel has gone, beside a later solve's outputs), then pardel.
+  int stopped_by = 0;
+  RecordSignals record_signals;
   const int spawn_error = ::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
   if (spawn_error != 0) {
     std::fprintf(stderr, "warning: %s not written: cannot run %s: %s\n", what.c_str(), config::python,
@@ -34,6 +69,16 @@ bool run_plot_script(const std::string& script, const std::string& out_dir, cons
       std::fprintf(stderr, "warning: %s not written: waitpid failed: %s\n", what.c_str(), std::strerror(errno));
       return false;
     }
+    if (g_plot_signal != 0 && stopped_by == 0) {
+      stopped_by = g_plot_signal;
+      ::kill(pid, SIGTERM);
+    }
+  }
+  if (stopped_by != 0) {
+    std::fprintf(stderr, "warning: %s not written: stopped by %s\n", what.c_str(),
+                 stopped_by == SIGTERM ? "SIGTERM" : "SIGINT");
+    ::signal(stopped_by, SIG_DFL);  // the signal's usual effect on pardel, once the script has ended
+    ::raise(stopped_by);
   }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     std::fprintf(stderr, "warning: %s not written: %s %s exited with status %d\n", what.c_str(), config::python,

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -132,6 +133,47 @@ TEST_F(HostileCliEdges, SignalWhileAModelCompilesStopsTheCompileAndEndsInterrupt
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     EXPECT_FALSE(process_naming(cache.string())) << "a program of the compile runs on";
   }
+}
+
+/** Whether a child of `parent` runs a command line that names `text`. */
+bool child_naming(pid_t parent, const std::string& text) {
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || !std::isdigit(static_cast<unsigned char>(name[0]))) continue;
+    const std::string stat = read_text(entry.path() / "stat");  // "PID (COMM) STATE PPID ..."
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 1));
+    std::string state;
+    long ppid = 0;
+    rest >> state >> ppid;
+    if (ppid != parent) continue;
+    std::string cmdline = read_text(entry.path() / "cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    if (cmdline.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST_F(HostileCliEdges, SigtermDuringThePlotStepEndsThePlotScriptToo) {
+  // SIGTERM to pardel while plot.py drew ended pardel (as documented) but left plot.py running,
+  // to write its pictures into the folder later, beside whatever came there next.
+  const fs::path out = dir_ / "plotted";
+  const pid_t pid = start_pardel({"solve", kScenes + "/fuel_nav.toml", "--set", "grid.N=20000", "--out", out.string()},
+                                 dir_ / "log");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (!child_naming(pid, "plot.py") && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_TRUE(child_naming(pid, "plot.py")) << "the plot step did not start";
+  ::kill(pid, SIGTERM);
+  const Outcome o = finish_pardel(pid, dir_ / "log", 60);
+  ASSERT_FALSE(o.timed_out) << o.output;
+  EXPECT_EQ(o.status, 128 + SIGTERM) << o.output;
+  EXPECT_NE(o.output.find("plots not written: stopped by SIGTERM"), std::string::npos) << o.output;
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_FALSE(process_naming(out.string())) << "plot.py runs on";
+  EXPECT_FALSE(fs::exists(out / "trajectory.png"));
+  EXPECT_FALSE(fs::exists(out / "convergence.png"));
 }
 
 // ---------------------------------------------------------------------------------------------
