@@ -153,7 +153,17 @@ const pardel_model* resolve_model_spec(const std::string& spec) {
 // pardel solve / check
 
 Scene load_scene_or_throw(const std::string& path, const std::vector<std::string>& sets) {
-  return load_scene(path, sets, resolve_model_spec, bundled_model_names());
+  try {
+    return load_scene(path, sets, resolve_model_spec, bundled_model_names());
+  } catch (const SceneError& error) {
+    // An error at a line of the scene that an override made wrong (--set model=... whose model has
+    // other coordinates than the scene's boundary values): the message says which overrides.
+    const std::string message = error.what();
+    if (sets.empty() || message.rfind("--set ", 0) == 0) throw;
+    std::string joined;
+    for (const std::string& set : sets) joined += (joined.empty() ? "" : " --set ") + set;
+    throw SceneError(message + " (the scene as changed by --set " + joined + ")");
+  }
 }
 
 struct SolveArgs {

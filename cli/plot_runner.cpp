@@ -22,8 +22,8 @@ namespace {
 volatile sig_atomic_t g_plot_signal = 0;  ///< SIGINT or SIGTERM received while a script ran
 extern "C" void on_plot_signal(int signal) { g_plot_signal = signal; }
 
-/** SIGINT and SIGTERM recorded (without SA_RESTART, so that waitpid returns) from construction
- *  until destruction, which puts the previous actions back. */
+/** SIGINT and SIGTERM recorded from construction until destruction, which puts the previous
+ *  actions back. */
 class RecordSignals {
  public:
   RecordSignals() {
@@ -64,19 +64,25 @@ bool run_plot_script(const std::string& script, const std::string& out_dir, cons
     return false;
   }
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) {
-      std::fprintf(stderr, "warning: %s not written: waitpid failed: %s\n", what.c_str(), std::strerror(errno));
-      return false;
-    }
+  for (;;) {  // polled, so that a signal that came before the wait is seen as well
     if (g_plot_signal != 0 && stopped_by == 0) {
       stopped_by = g_plot_signal;
       ::kill(pid, SIGTERM);
     }
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    if (done == pid) break;
+    if (done < 0 && errno != EINTR) {
+      std::fprintf(stderr, "warning: %s not written: waitpid failed: %s\n", what.c_str(), std::strerror(errno));
+      return false;
+    }
+    if (done == 0) ::usleep(10000);
   }
+  const bool killed = stopped_by != 0;
+  if (g_plot_signal != 0 && stopped_by == 0) stopped_by = g_plot_signal;  // after the script had ended
   if (stopped_by != 0) {
-    std::fprintf(stderr, "warning: %s not written: stopped by %s\n", what.c_str(),
-                 stopped_by == SIGTERM ? "SIGTERM" : "SIGINT");
+    if (killed)
+      std::fprintf(stderr, "warning: %s not written: stopped by %s\n", what.c_str(),
+                   stopped_by == SIGTERM ? "SIGTERM" : "SIGINT");
     ::signal(stopped_by, SIG_DFL);  // the signal's usual effect on pardel, once the script has ended
     ::raise(stopped_by);
   }
