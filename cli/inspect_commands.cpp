@@ -132,6 +132,7 @@ int run_kernels(const KernelArgs& args, const app::ModelResolver& resolve) {
   }
   std::vector<double> p(model->param_defaults, model->param_defaults + model->nparams);
   std::vector<std::string> names(model->param_names, model->param_names + model->nparams);
+  std::vector<std::string> given;  // each param once: a second --param of it is refused, not silently the one used
   for (const auto& assignment : args.params) {
     const auto eq = assignment.find('=');
     if (eq == std::string::npos) throw UsageError(fmt::format("--param: '{}' is not NAME=VALUE", assignment));
@@ -143,6 +144,9 @@ int run_kernels(const KernelArgs& args, const app::ModelResolver& resolve) {
                                    suggestion.empty() ? (names.empty() ? " (it has none)" : "")
                                                       : fmt::format("; did you mean '{}'?", suggestion)));
     }
+    if (std::find(given.begin(), given.end(), name) != given.end())
+      throw UsageError(fmt::format("--param: '{}' is given twice", name));
+    given.push_back(name);
     p[it - names.begin()] = finite(parse_number_option(assignment.substr(eq + 1), "--param " + name),
                                    assignment.substr(eq + 1), "--param " + name);
   }

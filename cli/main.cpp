@@ -467,7 +467,7 @@ int main(int argc, char** argv) {
   kernels->add_option("--t1", k.t1, "Time of the second node")->required();
   kernels->add_option("--q0", k.q0, "First node: order*ncoords values a,b,... [coords, coords', ...]")->required();
   kernels->add_option("--q1", k.q1, "Second node, same layout")->required();
-  kernels->add_option("--param", k.params, "NAME=VALUE, overrides a param's default (repeatable)")
+  kernels->add_option("--param", k.params, "NAME=VALUE, overrides a param's default (repeatable, once per param)")
       ->allow_extra_args(false);
 
   SolveArgs s;

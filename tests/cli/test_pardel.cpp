@@ -164,6 +164,8 @@ TEST(PardelKernels, BadOptionsNameTheOptionAndExitWith2) {
        "--param: model interp_fuel has no param 'cc'; did you mean 'c'?"},
       {"kernels --model interp_fuel --disc gauss2" + base + " --q0=0,0,0,0 --q1=1,1,1,1 --param c=three",
        "--param c: 'three' is not a number"},
+      {"kernels --model interp_fuel --disc gauss2" + base + " --q0=0,0,0,0 --q1=1,1,1,1 --param c=2 --param c=3",
+       "--param: 'c' is given twice"},
       {"kernels --model fuel_nav --disc trapezoid --q0=0,0 --q1=1,1", "--h"},
   };
   for (const auto& c : cases) {
