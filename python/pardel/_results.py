@@ -3,7 +3,7 @@ its Result), BatchResult (pardel.solve_batch), and SweepResult with its SweepVar
 SweepSolution (pardel.sweep)."""
 from __future__ import annotations
 
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -147,16 +147,22 @@ class Interrupted(KeyboardInterrupt):
     """A solve stopped by Ctrl-C (SIGINT) or by a KeyboardInterrupt raised in on_iteration: a
     KeyboardInterrupt that carries what the solve had reached. result: the Result of the stopped
     solve (status "interrupted" and its last iterate, or the status it had reached when the stop
-    came after it ended, e.g. during the point assessment of a converged solve); checkpoint: the
-    folder of the checkpoint it wrote (solve's or solve_scene's checkpoint argument, or resume's
-    folder), which pardel.resume continues, or None."""
+    came after it ended, e.g. during the point assessment of a converged solve), or for
+    solve_batch the BatchResult so far (the problems that had ended with their statuses, the others
+    "interrupted"); checkpoint: the folder of the checkpoint it wrote (solve's or solve_scene's
+    checkpoint argument, or resume's folder), which pardel.resume continues, or None."""
 
-    result: "Result"
+    result: Union["Result", "BatchResult"]
     checkpoint: Optional[str]
 
-    def __init__(self, where: str, result: "Result", checkpoint: Optional[str]) -> None:
-        text = "%s: interrupted at iteration %d (status %s, residual %s); the last iterate is this exception's .result" % (
-            where, result.iterations, result.status, _number_text(result.residual, "%.3g"))
+    def __init__(self, where: str, result: Union["Result", "BatchResult"], checkpoint: Optional[str]) -> None:
+        if isinstance(result, BatchResult):
+            stopped = int(np.sum(result.status == "interrupted"))
+            text = "%s: interrupted with %d of %d problems ended (%d converged); the batch so far is this exception's .result" % (
+                where, len(result) - stopped, len(result), int(np.sum(result.converged)))
+        else:
+            text = "%s: interrupted at iteration %d (status %s, residual %s); the last iterate is this exception's .result" % (
+                where, result.iterations, result.status, _number_text(result.residual, "%.3g"))
         if checkpoint is not None:
             text += "; checkpoint written to %s: continue with pardel.resume(%r)" % (checkpoint, checkpoint)
         super().__init__(text)

@@ -13,7 +13,7 @@ from ._checks import (_MAX_N, _check_array, _check_callback, _check_int, _check_
                       _checkpoint_path, _core_call, _is_real, _kind, _shown)
 from ._models import Model, _check_model, _model_spec
 from ._pardel import PardelError
-from ._results import BatchResult, Result, SweepResult, _finish
+from ._results import BatchResult, Interrupted, Result, SweepResult, _finish
 from ._types import ArrayLike, Guess, ModelLike, OnIteration, Params, PathArg
 
 
@@ -207,7 +207,9 @@ def solve_batch(model: ModelLike, q0: Optional[ArrayLike] = None, qN: Optional[A
     must agree. threads: problems solved at once (default all cores). T, N and the other keyword
     options are pardel.solve's and the same for every problem. Returns a BatchResult; a problem
     that fails has its own status (invalid_input too). Ctrl-C stops the batch and raises
-    KeyboardInterrupt; a batch whose estimated memory does not fit the machine raises PardelError.
+    pardel.Interrupted (a KeyboardInterrupt) whose .result is the BatchResult so far (the problems
+    that had ended, with their statuses; the others "interrupted"); a batch whose estimated memory
+    does not fit the machine raises PardelError.
     """
     return _solve_batch(model, q0, qN, T, N, params, guess, threads, options)
 
@@ -276,7 +278,10 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
             table[:, names.index(key)] = value
         params = table
     raw = _pardel.solve_batch_scene(scene._core, q0, qN, params, guess, threads)
-    return BatchResult(raw, m.coords)
+    result = BatchResult(raw, m.coords)
+    if raw["pending"] is not None:  # Ctrl-C: raised with the batch so far
+        raise Interrupted(where, result, None) from None
+    return result
 
 
 # What each required argument of pardel.solve is, for the message when it is missing.

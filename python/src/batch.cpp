@@ -79,8 +79,13 @@ py::dict solve_batch_scene(Scene scene, const py::object& q0, const py::object& 
   BatchSummary batch;
   std::unique_ptr<py::error_already_set> pending =
       watching_signals([&] { batch = pardel::solve_batch(scene.problem, scene.options, problems); }, stop);
-  if (pending) throw std::move(*pending);
-  if (!batch.refusal.empty()) throw InputError(fmt::format("{}: {}", scene.path, batch.refusal));
+  // An interruption (Ctrl-C) is raised by the package with the batch so far: the problems that
+  // ended, those stopped (interrupted) and those never started (their initial guesses).
+  if (pending && !pending->matches(PyExc_KeyboardInterrupt)) throw std::move(*pending);
+  if (!batch.refusal.empty()) {
+    if (pending) throw std::move(*pending);
+    throw InputError(fmt::format("{}: {}", scene.path, batch.refusal));
+  }
   py::list results;
   for (py::ssize_t i = 0; i < B; ++i) {
     BatchEntry& e = batch.entries[static_cast<std::size_t>(i)];
@@ -95,6 +100,7 @@ py::dict solve_batch_scene(Scene scene, const py::object& q0, const py::object& 
   out["results"] = results;
   out["threads"] = batch.threads;
   out["wall_seconds"] = batch.wall_seconds;
+  out["pending"] = pending && pending->value() ? pending->value() : py::none();
   return out;
 }
 

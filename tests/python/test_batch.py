@@ -134,7 +134,7 @@ def test_sigint_stops_the_batch_and_other_threads_run_meanwhile():
     timer.start()
     try:
         # 64 problems by jacobi-newton at N = 400, 10^8 sweeps each: hours unless stopped.
-        with pytest.raises(KeyboardInterrupt):
+        with pytest.raises(KeyboardInterrupt) as info:
             pardel.solve_batch(model, q0=[0, 0], qN=[0.5, 0.5], T=T, N=400, params={"w": np.linspace(0, 0.3, 64)},
                                method="jacobi-newton", max_iterations=100000000, threads=2)
     finally:
@@ -142,6 +142,16 @@ def test_sigint_stops_the_batch_and_other_threads_run_meanwhile():
         stop.set()
         counter.join()
     assert len(ticks) > 5
+    # The batch so far comes with the interruption: the problems that ended (the faint barriers
+    # converge in time) with their statuses, the others interrupted with their iterate (a stopped
+    # one) or their initial guess (one never started).
+    assert isinstance(info.value, pardel.Interrupted)
+    so_far = info.value.result
+    assert isinstance(so_far, pardel.BatchResult) and len(so_far) == 64
+    assert set(so_far.status) <= {"converged", "interrupted"} and "interrupted" in set(so_far.status)
+    assert so_far.q.shape == (64, 401, 2) and np.isfinite(so_far.q).all()
+    ended = int(np.sum(so_far.status != "interrupted"))
+    assert "interrupted with %d of 64 problems ended" % ended in str(info.value)
     after = pardel.solve_batch(model, q0=[0, 0], qN=[0.5, 0.5], T=T, N=20)
     assert after.converged.all()
 
