@@ -108,7 +108,7 @@ std::string shell_word(const std::string& text) {
 /** The message and status of a command whose model compile a signal stopped (`what`: the error
  *  that carried it out, which names the model). */
 int compile_interrupted(const char* what) {
-  std::fprintf(stderr, "pardel: %s (%s): nothing was solved\n", what,
+  std::fprintf(stderr, "pardel: %s (%s): stopped before any work\n", what,
                g_signal.load() == SIGTERM ? "SIGTERM" : "Ctrl-C");
   return exit_code(Termination::interrupted);
 }
@@ -523,8 +523,13 @@ int main(int argc, char** argv) {
       return run_solve(s);
     }
     if (*check) return run_check(c);
-    if (sweep_cmd.parsed()) return sweep_cmd.run(resolve_model_spec, bundled_model_names());
+    if (sweep_cmd.parsed()) {
+      const int code = sweep_cmd.run(resolve_model_spec, bundled_model_names());
+      // The sweep reported a model whose compile a signal stopped ("interrupted while compiling").
+      return g_compile_interrupted.load() ? fail(exit_code(Termination::interrupted)) : code;
+    }
   } catch (const UsageError& error) {
+    if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
     std::fprintf(stderr, "pardel: error: %s\n", error.what());
     return fail(kExitUsage);
   } catch (const SceneError& error) {

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -105,8 +106,10 @@ TEST_F(HostileCliEdges, SignalWhileAModelCompilesStopsTheCompileAndEndsInterrupt
   // temporary folder in the cache. Now the compile is stopped, the folder removed, and the
   // command ends with the interrupted status and a message.
   int round = 0;
-  for (const int signal : {SIGINT, SIGTERM}) {
-    SCOPED_TRACE(signal == SIGINT ? "SIGINT" : "SIGTERM");
+  const std::pair<int, const char*> cases[] = {{SIGINT, "solve"}, {SIGTERM, "solve"}, {SIGINT, "kernels"},
+                                               {SIGTERM, "sweep"}};
+  for (const auto& [signal, command] : cases) {
+    SCOPED_TRACE(std::string(command) + (signal == SIGINT ? " SIGINT" : " SIGTERM"));
     const fs::path cache = dir_ / ("cache" + std::to_string(round));
     const fs::path lag = dir_ / ("slow" + std::to_string(round) + ".lag");
     ++round;
@@ -117,8 +120,18 @@ TEST_F(HostileCliEdges, SignalWhileAModelCompilesStopsTheCompileAndEndsInterrupt
     const fs::path scene = dir_ / "slow.toml";
     write_text(scene, "model = \"" + lag.string() + "\"\ndiscretization = \"trapezoid\"\n[grid]\nT = 1\nN = 20\n"
                       "[boundary]\nq0 = [0, 0, 0, 0]\nqN = [1, 1, 1, 1]\n");
-    const pid_t pid = start_pardel({"solve", scene.string(), "--out", (dir_ / "out").string(), "--no-plot", "--quiet"},
-                                   dir_ / "log", {"PARDEL_CACHE_DIR=" + cache.string()});
+    const fs::path sweep = dir_ / "slow_sweep.toml";
+    write_text(sweep, "scene = \"" + scene.string() + "\"\n[[vary]]\nkey = \"grid.N\"\nvalues = [10, 20]\n");
+    const std::string name = command;
+    const std::vector<std::string> args =
+        name == "solve"     ? std::vector<std::string>{"solve", scene.string(), "--out", (dir_ / "out").string(),
+                                                       "--no-plot", "--quiet"}
+        : name == "kernels" ? std::vector<std::string>{"kernels", "--model", lag.string(), "--disc", "trapezoid", "--h",
+                                                       "0.1", "--t0", "0", "--t1", "0.1", "--q0", "0,0,0,0", "--q1",
+                                                       "1,1,1,1"}
+                            : std::vector<std::string>{"sweep", sweep.string(), "--out", (dir_ / "sweep_out").string(),
+                                                       "--no-plot", "--quiet"};
+    const pid_t pid = start_pardel(args, dir_ / "log", {"PARDEL_CACHE_DIR=" + cache.string()});
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (!temporary_entry_under(cache) && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
