@@ -55,10 +55,7 @@ std::string read_file(const fs::path& path) {
   return buf.str();
 }
 
-// Runs a program (no shell), its stdout and stderr appended to `log`; returns the exit status. The
-// program runs in a process group of its own, so that a Ctrl-C at the terminal (which signals the
-// whole foreground group) reaches this process, which decides what an interruption does, and not
-// the compiler in the middle of a cache entry.
+// What set_compile_interrupt set (guarded by its mutex; read once per program).
 std::mutex interrupt_mutex;
 std::function<bool()>& compile_interrupt() {
   static std::function<bool()> stop;
@@ -68,6 +65,11 @@ std::function<bool()>& compile_interrupt() {
 /** run_program's status for a program stopped by the compile interrupt (set_compile_interrupt). */
 constexpr int kStopped = -2;
 
+// Runs a program (no shell), its stdout and stderr appended to `log`; returns the exit status, or
+// kStopped where the compile interrupt asked to stop it. The program runs in a process group of
+// its own, so that a Ctrl-C at the terminal (which signals the whole foreground group) reaches
+// this process, which decides what an interruption does, and not the compiler in the middle of a
+// cache entry; a stop ends the whole group.
 int run_program(const std::vector<std::string>& argv, const fs::path& log) {
   std::function<bool()> stop;
   {

@@ -104,8 +104,8 @@ def _model_spec(spec, where="pardel.model", argument="spec"):
     if isinstance(spec, os.PathLike):
         spec = os.fspath(spec)
     if not isinstance(spec, str):
-        raise TypeError(where + ": " + argument + ": a name, a .lag path, .lag text or a pardel.Model was expected, got " +
-                        type(spec).__name__)
+        raise TypeError("%s: %s: a name, a .lag path, .lag text or a pardel.Model was expected, got %s" % (
+            where, argument, _kind(spec)))
     if "\n" in spec:
         return _lag_text_file(spec)
     if spec.endswith(".lag") or "/" in spec:

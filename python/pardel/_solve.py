@@ -279,8 +279,8 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
         params = table
     raw = _pardel.solve_batch_scene(scene._core, q0, qN, params, guess, threads)
     result = BatchResult(raw, m.coords)
-    if raw["pending"] is not None:  # Ctrl-C: raised with the batch so far
-        raise Interrupted(where, result, None) from None
+    if raw["pending"] is not None:  # Ctrl-C (the core raises any other exception itself), as _finish raises it
+        raise Interrupted(where, result, None) from raw["pending"]
     return result
 
 
