@@ -44,6 +44,7 @@
 #include "pardel_cli/config.hpp"
 #include "plot_runner.hpp"
 #include "progress.hpp"
+#include "signals.hpp"
 #include "sweep_command.hpp"
 #ifdef PARDEL_HAVE_MODEL_LOADER
 #include "pardel/model_loader.hpp"
@@ -62,35 +63,8 @@ const char* const kExitCodesHelp =
     "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate),\n"
     "7 stalled (no progress at the round-off level of the problem: tol is unattainable).";
 
-std::atomic<bool> g_interrupted{false};
-std::atomic<int> g_signal{0};  ///< the signal that set g_interrupted
 /** A signal stopped the compile of a .lag model (resolve_model_spec): the command ends interrupted. */
 std::atomic<bool> g_compile_interrupted{false};
-extern "C" void on_sigint(int signal) {
-  g_signal.store(signal);
-  g_interrupted.store(true);
-}
-
-/** SIGINT and SIGTERM set g_interrupted from construction until restore() (or destruction), which
- *  puts the previous handlers back. */
-class StopOnSignals {
- public:
-  StopOnSignals() : previous_int_(std::signal(SIGINT, on_sigint)), previous_term_(std::signal(SIGTERM, on_sigint)) {}
-  StopOnSignals(const StopOnSignals&) = delete;
-  StopOnSignals& operator=(const StopOnSignals&) = delete;
-  ~StopOnSignals() { restore(); }
-  void restore() {
-    if (!installed_) return;
-    installed_ = false;
-    std::signal(SIGINT, previous_int_);
-    std::signal(SIGTERM, previous_term_);
-  }
-
- private:
-  void (*previous_int_)(int);
-  void (*previous_term_)(int);
-  bool installed_ = true;
-};
 
 /** `text` as one word of a POSIX shell: as it is where it holds only characters no shell treats
  *  specially, else in single quotes (each ' written as '\''), so that a suggested command pastes
@@ -109,7 +83,7 @@ std::string shell_word(const std::string& text) {
  *  that carried it out, which names the model). */
 int compile_interrupted(const char* what) {
   std::fprintf(stderr, "pardel: %s (%s): stopped before any work\n", what,
-               g_signal.load() == SIGTERM ? "SIGTERM" : "Ctrl-C");
+               caught_signal() == SIGTERM ? "SIGTERM" : "Ctrl-C");
   return exit_code(Termination::interrupted);
 }
 
@@ -123,17 +97,17 @@ bool looks_like_path(const std::string& spec) {
 const pardel_model* resolve_model_spec(const std::string& spec) {
   if (!looks_like_path(spec)) return find_model(spec);
 #ifdef PARDEL_HAVE_MODEL_LOADER
-  // Ctrl-C or SIGTERM while a .lag compiles stops the compile (the loader polls g_interrupted,
+  // Ctrl-C or SIGTERM while a .lag compiles stops the compile (the loader polls interrupted(),
   // set_compile_interrupt in main) and ends the command with the interrupted status.
   static std::mutex resolving;
   std::lock_guard<std::mutex> lock(resolving);
   const pardel_model* model = nullptr;
   {
-    StopOnSignals stop_on_signals;
+    CatchSignals catch_signals;
     try {
       model = pardel::resolve_model(spec);
     } catch (...) {
-      if (g_interrupted.load()) g_compile_interrupted.store(true);
+      if (interrupted().load()) g_compile_interrupted.store(true);
       throw;
     }
   }
@@ -239,21 +213,17 @@ int run_solve_unguarded(const SolveArgs& args) {
   ProgressLine progress(root && !args.quiet, scene.options.tol);
   request.on_iteration = [&progress, root](const IterationRecord& record) {
     if (root) progress.update(record);
-    return !g_interrupted.load();
+    return !interrupted().load();
   };
-  request.keep_going = [] { return !g_interrupted.load(); };
-  request.stopped_by = [] {
-    const int signal = g_signal.load();
-    return signal == SIGINT ? std::string("SIGINT (Ctrl-C)") : signal == SIGTERM ? std::string("SIGTERM") : std::string();
-  };
+  request.keep_going = [] { return !interrupted().load(); };
+  request.stopped_by = [] { return signal_name(caught_signal()); };
   // Ctrl-C and SIGTERM stop the solve (it ends interrupted, with a checkpoint); once it has
   // ended they have their usual effect again, also while the outputs are written.
-  g_interrupted.store(false);
-  StopOnSignals stop_on_signals;
+  CatchSignals catch_signals;
   // The outputs (rank 0) are written before the checkpoint, which comes last.
   SolveOutputs outputs;
   request.outputs = [&](const Summary& summary, const Trajectory& trajectory) {
-    stop_on_signals.restore();
+    catch_signals.restore();
     progress.finish();
     if (!root) return;
     nlohmann::ordered_json extra = nlohmann::ordered_json::object();
@@ -271,7 +241,7 @@ int run_solve_unguarded(const SolveArgs& args) {
   } catch (const MemoryRefused& refused) {
     throw UsageError(fmt::format("{}: {} (--no-memory-check skips this check)", scene_path, refused.reason()));
   }
-  stop_on_signals.restore();
+  catch_signals.restore();
   progress.finish();
   const Summary& summary = run.summary;
   // A checkpoint that does not fit is refused before anything in the folder is overwritten (under
@@ -505,7 +475,7 @@ int main(int argc, char** argv) {
   }
 
 #ifdef PARDEL_HAVE_MODEL_LOADER
-  pardel::set_compile_interrupt([] { return g_interrupted.load(); });
+  pardel::set_compile_interrupt([] { return interrupted().load(); });
   // A .lag file's first use compiles it (seconds, minutes for a large model under a high-order
   // discretization): said on a terminal, as the progress line is, unless --quiet.
   const bool quiet = (*solve_cmd && s.quiet) || (sweep_cmd.parsed() && sweep_cmd.quiet());

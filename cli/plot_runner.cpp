@@ -12,40 +12,11 @@
 #include <vector>
 
 #include "pardel_cli/config.hpp"
+#include "signals.hpp"
 
 extern char** environ;
 
 namespace pardel::cli {
-
-namespace {
-
-volatile sig_atomic_t g_plot_signal = 0;  ///< SIGINT or SIGTERM received while a script ran
-extern "C" void on_plot_signal(int signal) { g_plot_signal = signal; }
-
-/** SIGINT and SIGTERM recorded from construction until destruction, which puts the previous
- *  actions back. */
-class RecordSignals {
- public:
-  RecordSignals() {
-    struct sigaction record {};
-    record.sa_handler = on_plot_signal;
-    sigemptyset(&record.sa_mask);
-    g_plot_signal = 0;
-    ::sigaction(SIGINT, &record, &previous_int_);
-    ::sigaction(SIGTERM, &record, &previous_term_);
-  }
-  RecordSignals(const RecordSignals&) = delete;
-  RecordSignals& operator=(const RecordSignals&) = delete;
-  ~RecordSignals() {
-    ::sigaction(SIGINT, &previous_int_, nullptr);
-    ::sigaction(SIGTERM, &previous_term_, nullptr);
-  }
-
- private:
-  struct sigaction previous_int_ {}, previous_term_ {};
-};
-
-}  // namespace
 
 bool run_plot_script(const std::string& script, const std::string& out_dir, const std::string& what) {
   std::vector<std::string> argv_strings = {config::python, script, out_dir};
@@ -56,7 +27,7 @@ bool run_plot_script(const std::string& script, const std::string& out_dir, cons
   // A signal that ends pardel during the plot step ends the script too (it would write pictures
   // into the folder after pardel has gone, beside a later solve's outputs), then pardel.
   int stopped_by = 0;
-  RecordSignals record_signals;
+  CatchSignals catch_signals;
   const int spawn_error = ::posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ);
   if (spawn_error != 0) {
     std::fprintf(stderr, "warning: %s not written: cannot run %s: %s\n", what.c_str(), config::python,
@@ -65,8 +36,8 @@ bool run_plot_script(const std::string& script, const std::string& out_dir, cons
   }
   int status = 0;
   for (;;) {  // polled, so that a signal that came before the wait is seen as well
-    if (g_plot_signal != 0 && stopped_by == 0) {
-      stopped_by = g_plot_signal;
+    if (caught_signal() != 0 && stopped_by == 0) {
+      stopped_by = caught_signal();
       ::kill(pid, SIGTERM);
     }
     const pid_t done = ::waitpid(pid, &status, WNOHANG);
@@ -78,7 +49,7 @@ bool run_plot_script(const std::string& script, const std::string& out_dir, cons
     if (done == 0) ::usleep(10000);
   }
   const bool killed = stopped_by != 0;
-  if (g_plot_signal != 0 && stopped_by == 0) stopped_by = g_plot_signal;  // after the script had ended
+  if (caught_signal() != 0 && stopped_by == 0) stopped_by = caught_signal();  // after the script had ended
   if (stopped_by != 0) {
     if (killed)
       std::fprintf(stderr, "warning: %s not written: stopped by %s\n", what.c_str(),

@@ -6,9 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -20,6 +18,7 @@
 #include "pardel/mpi_session.hpp"
 #include "pardel_cli/config.hpp"
 #include "plot_runner.hpp"
+#include "signals.hpp"
 
 #ifdef PARDEL_HAVE_MPI
 #include <mpi.h>
@@ -37,9 +36,6 @@ const char* const kSweepExitCodesHelp =
     "(e.g. an output file cannot be written), 2 invalid input (bad sweep file, scene or option, or\n"
     "every variant refused as invalid input),\n"
     "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the variants done), 8 no variant converged.";
-
-std::atomic<bool> g_sweep_interrupted{false};
-extern "C" void on_sweep_signal(int) { g_sweep_interrupted.store(true); }
 
 /** Threads per variant: --threads when given (0: all cores); under several ranks on a node, the
  *  scene's "all cores" (0) becomes the node's cores shared among its ranks. -1 keeps the scene's
@@ -101,9 +97,7 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
   const int threads = threads_per_variant(args_, sweep, size);
   const auto start = std::chrono::steady_clock::now();
   const bool show_progress = !args_.quiet && rank == 0 && ::isatty(STDERR_FILENO);
-  g_sweep_interrupted.store(false);
-  auto previous_int = std::signal(SIGINT, on_sweep_signal);
-  auto previous_term = std::signal(SIGTERM, on_sweep_signal);
+  CatchSignals catch_signals;
   std::vector<VariantResult> results = run_variants_over_ranks(
       sweep, threads, rank, size,
       [show_progress, size](int done, int mine) {
@@ -111,9 +105,8 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
         std::fprintf(stderr, "\rsweep: %d of %d variants%s", done, mine, size > 1 ? " on rank 0" : "");
         if (done == mine) std::fprintf(stderr, "\n");
       },
-      &g_sweep_interrupted, /*keep_trajectories=*/false);
-  std::signal(SIGINT, previous_int);
-  std::signal(SIGTERM, previous_term);
+      &interrupted(), /*keep_trajectories=*/false);
+  catch_signals.restore();
   int code = 0;
   if (rank == 0) {
     try {
@@ -145,11 +138,11 @@ int SweepCommand::run(const app::ModelResolver& resolve, const std::vector<std::
         std::fprintf(stderr, "pardel sweep: %d variant%s not solved (first: variant %d): %s\n", seen.first,
                      seen.first == 1 ? "" : "s", seen.second, message.c_str());
       }
-      const bool interrupted =
+      const bool stopped =
           results.size() < static_cast<std::size_t>(sweep.variant_count()) ||
           std::any_of(results.begin(), results.end(),
                       [](const VariantResult& r) { return r.status == to_string(Termination::interrupted); });
-      if (interrupted) {
+      if (stopped) {
         const std::size_t total = static_cast<std::size_t>(sweep.variant_count());
         std::fprintf(stderr, "pardel sweep: interrupted; %s holds the variants done (%zu of %zu; %zu not started)\n",
                      out_dir.c_str(), results.size(), total, total - std::min(results.size(), total));
