@@ -83,16 +83,19 @@ SolveRun run_solve(const Scene& scene, Trajectory& trajectory, const SolveReques
     throw out_of_memory();
   }
   if (run.summary.termination == Termination::invalid_input) return run;
-  if (run.summary.termination == Termination::interrupted && request.stopped_by) {
-    const std::string who = request.stopped_by();
-    const std::string runtime_words = "by on_iteration";
-    const std::size_t at = run.summary.message.find(runtime_words);
-    if (!who.empty() && at != std::string::npos) run.summary.message.replace(at, runtime_words.size(), "by " + who);
-  }
+  if (run.summary.termination == Termination::interrupted && request.stopped_by)
+    name_interruption(run.summary, request.stopped_by());
   if (request.outputs) request.outputs(run.summary, trajectory);
   if (!request.checkpoint.dir.empty() && mpi::world_rank() == 0)
     run.checkpoint_written = write_checkpoint_of(request.checkpoint, scene, run.summary, digest);
   return run;
+}
+
+void name_interruption(Summary& summary, const std::string& who) {
+  if (summary.termination != Termination::interrupted || who.empty()) return;
+  const std::string runtime_words = "by on_iteration";
+  const std::size_t at = summary.message.find(runtime_words);
+  if (at != std::string::npos) summary.message.replace(at, runtime_words.size(), "by " + who);
 }
 
 Summary solve_scene(const Scene& scene, Trajectory& trajectory) {

@@ -146,7 +146,12 @@ class Model:
     lag_text: Optional[str]
 
     def __init__(self, spec: ModelLike) -> None:
-        _check_model("pardel.model", "spec", spec)
+        self._load("pardel.model", spec)
+
+    def _load(self, where, spec):
+        """Loads `spec`; `where` names the calling function in the refusal of a name that is no
+        bundled model's (the generator's FILE:LINE:COL messages name the file instead)."""
+        _check_model(where, "spec", spec)
         if isinstance(spec, Model):
             self.lag_text = spec.lag_text
         elif isinstance(spec, str) and "\n" in spec:
@@ -154,7 +159,12 @@ class Model:
         else:
             self.lag_text = None
         self.spec = _model_spec(spec)
-        self._handle = _pardel.load_model(os.fsencode(self.spec))  # a path's bytes, also when not UTF-8
+        try:
+            self._handle = _pardel.load_model(os.fsencode(self.spec))  # a path's bytes, also when not UTF-8
+        except ModelError as error:
+            if self.spec.endswith(".lag") or "/" in self.spec:
+                raise
+            raise ModelError("%s: %s" % (where, error)) from None
         info = self._handle.info()
         self.name = info["name"]
         self.source = info["source"]
@@ -174,6 +184,15 @@ class Model:
     def __reduce__(self) -> Tuple[Any, Tuple[str]]:
         # What it was built from; the compiled handle is this process's alone.
         return (Model, (self.spec if self.lag_text is None else self.lag_text,))
+
+
+def _model_of(where, spec):
+    """The Model of a model argument of `where` (a Model as it is), refusals naming `where`."""
+    if isinstance(spec, Model):
+        return spec
+    made = Model.__new__(Model)
+    made._load(where, spec)
+    return made
 
 
 def model(spec: ModelLike) -> Model:

@@ -1,9 +1,9 @@
-"""What pardel's solves return: Result (one solve), Interrupted (a solve stopped by Ctrl-C, carrying
-its Result), BatchResult (pardel.solve_batch), and SweepResult with its SweepVariant and
-SweepSolution (pardel.sweep)."""
+"""What pardel's solves return: Result (one solve), Interrupted (a solve, batch or sweep stopped by
+Ctrl-C, carrying what it had reached), BatchResult (pardel.solve_batch), and SweepResult with its
+SweepVariant and SweepSolution (pardel.sweep)."""
 from __future__ import annotations
 
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 
@@ -147,19 +147,27 @@ class Interrupted(KeyboardInterrupt):
     """A solve stopped by Ctrl-C (SIGINT) or by a KeyboardInterrupt raised in on_iteration: a
     KeyboardInterrupt that carries what the solve had reached. result: the Result of the stopped
     solve (status "interrupted" and its last iterate, or the status it had reached when the stop
-    came after it ended, e.g. during the point assessment of a converged solve), or for
-    solve_batch the BatchResult so far (the problems that had ended with their statuses, the others
-    "interrupted"); checkpoint: the folder of the checkpoint it wrote (solve's or solve_scene's
-    checkpoint argument, or resume's folder), which pardel.resume continues, or None."""
+    came after it ended, e.g. during the point assessment of a converged solve), for solve_batch
+    the BatchResult so far (the problems that had ended with their statuses, the others
+    "interrupted"), for sweep the SweepResult so far (the variants started: those that had ended,
+    the running one "interrupted"; summary["not_started"] counts the others); checkpoint: the
+    folder of the checkpoint it wrote (solve's or solve_scene's checkpoint argument, or resume's
+    folder), which pardel.resume continues, or None."""
 
-    result: Union["Result", "BatchResult"]
+    result: Union["Result", "BatchResult", "SweepResult"]
     checkpoint: Optional[str]
 
-    def __init__(self, where: str, result: Union["Result", "BatchResult"], checkpoint: Optional[str]) -> None:
+    def __init__(self, where: str, result: Union["Result", "BatchResult", "SweepResult"],
+                 checkpoint: Optional[str]) -> None:
         if isinstance(result, BatchResult):
             stopped = int(np.sum(result.status == "interrupted"))
             text = "%s: interrupted with %d of %d problems ended (%d converged); the batch so far is this exception's .result" % (
                 where, len(result) - stopped, len(result), int(np.sum(result.converged)))
+        elif isinstance(result, SweepResult):  # its variants are those started; sweep.json counts the rest
+            stopped = sum(v.status == "interrupted" for v in result.variants)
+            text = ("%s: interrupted with %d of %d variants ended (%d converged, %d not started); the sweep so far "
+                    "is this exception's .result" % (where, len(result.variants) - stopped, result.summary["variants"],
+                                                     result.converged, result.summary.get("not_started", 0)))
         else:
             text = "%s: interrupted at iteration %d (status %s, residual %s); the last iterate is this exception's .result" % (
                 where, result.iterations, result.status, _number_text(result.residual, "%.3g"))
@@ -197,11 +205,13 @@ def _finish(where, raw, coords, checkpoint):
 
 
 class BatchResult:
-    """What pardel.solve_batch returned: results (a Result per problem, in order; len() and
-    indexing reach them too), and over the batch: status (array of str), converged (array of
+    """What pardel.solve_batch returned: results (a Result per problem, in order; len(), iteration
+    and b[i] reach them too), and over the batch: status (array of str), converged (array of
     bool), iterations, residual, action and cost (arrays), t and q (arrays of shape (B, N+1) and
-    (B, N+1, dim); NaN rows for a problem whose trajectory is on another grid), threads (problems
-    solved at once) and wall_seconds. Pickles whole."""
+    (B, N+1, dim), N the largest grid's; all NaN in t[i] and q[i] for a problem whose trajectory is
+    on another grid, which is in b[i]), threads (problems solved at once) and wall_seconds.
+    b[key] with a slice, a boolean mask (b[b.converged]) or integers is a BatchResult of those
+    problems. Pickles whole."""
 
     results: List[Result]
     status: np.ndarray
@@ -239,8 +249,41 @@ class BatchResult:
     def __len__(self) -> int:
         return len(self.results)
 
-    def __getitem__(self, i: int) -> Result:
-        return self.results[i]
+    @overload
+    def __getitem__(self, key: Union[int, np.integer]) -> Result: ...
+
+    @overload
+    def __getitem__(self, key: Union[slice, Sequence[int], Sequence[bool], np.ndarray]) -> BatchResult: ...
+
+    def __getitem__(self, key: Any) -> Union[Result, BatchResult]:
+        """b[i]: problem i's Result. b[key] with a slice, a boolean mask of length B (b[b.converged])
+        or a list or 1-D array of ints: a BatchResult of those problems, in that order, whose
+        arrays are the batch's indexed by key (b[key].q is b.q[key]: the batch's grid) and whose
+        threads and wall_seconds are the batch's."""
+        where = "pardel.BatchResult"
+        if isinstance(key, (int, np.integer)) and not isinstance(key, (bool, np.bool_)):
+            return self.results[key]
+        if isinstance(key, slice):
+            chosen = np.arange(len(self.results))[key]
+        else:
+            array = np.asarray(key) if isinstance(key, (list, range, np.ndarray)) else None
+            if array is not None and array.size == 0 and array.dtype == float:
+                array = array.astype(np.intp)  # [] chooses none, as in NumPy
+            if array is None or array.ndim != 1 or not (array.dtype == bool or np.issubdtype(array.dtype, np.integer)):
+                shown = "%s %.60r" % (type(key).__name__, key) if array is None else \
+                    "%s of shape %s and dtype %s" % (type(key).__name__, array.shape, array.dtype)
+                raise TypeError("%s: an index must be an int, a slice, a boolean mask of length %d, or a list or 1-D "
+                                "array of ints, got %s" % (where, len(self.results), shown))
+            try:
+                chosen = np.arange(len(self.results))[array]
+            except IndexError as error:
+                raise IndexError("%s: %s" % (where, error)) from None
+        part = BatchResult.__new__(BatchResult)
+        part.results = [self.results[i] for i in chosen]
+        for name in ("status", "converged", "iterations", "residual", "action", "cost", "t", "q"):
+            setattr(part, name, getattr(self, name)[chosen])
+        part.threads, part.wall_seconds = self.threads, self.wall_seconds
+        return part
 
     def __iter__(self) -> Iterator[Result]:
         return iter(self.results)

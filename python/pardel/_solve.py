@@ -11,7 +11,7 @@ from . import _pardel
 from ._checks import (_MAX_N, _check_array, _check_callback, _check_int, _check_number, _check_option,
                       _check_overrides, _check_params, _check_path, _check_string, _check_vector, _checked_options,
                       _checkpoint_path, _core_call, _is_real, _kind, _shown)
-from ._models import Model, _check_model, _model_spec
+from ._models import Model, _check_model, _model_of, _model_spec
 from ._pardel import PardelError
 from ._results import BatchResult, Interrupted, Result, SweepResult, _finish
 from ._types import ArrayLike, Guess, ModelLike, OnIteration, Params, PathArg
@@ -245,7 +245,7 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
 
     if B == 0:
         raise PardelError("%s: an empty batch (B = 0)" % where)
-    m = model if isinstance(model, Model) else Model(model)
+    m = _model_of(where, model)
     for name, array, size, has in (("q0", q0, m.dim, "dim %d"), ("qN", qN, m.dim, "dim %d"),
                                     ("guess", guess, m.dim, "dim %d"), ("params", params, len(m.params), "%d params")):
         if isinstance(array, np.ndarray) and array.shape[-1] != size:
@@ -330,8 +330,10 @@ def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int
     threads per variant (0: all cores; None: the scene's solver.threads). out: a folder
     to write solutions.csv, variants.csv, sweep.json and solution_<id>.csv into (no sweep.png;
     None: no files). A bad sweep file raises SceneError with the command line's FILE:LINE:COL message.
-    Ctrl-C stops the running solve; the outputs (when out is given) hold what was done, and
-    KeyboardInterrupt is raised.
+    Ctrl-C stops the running solve and raises pardel.Interrupted (a KeyboardInterrupt) whose
+    .result is the SweepResult so far (its variants those started: the ones that had ended, the
+    running one "interrupted"; summary["not_started"] counts the others); the outputs (when out is
+    given) hold the same.
     """
     where = "pardel.sweep"
     _check_path(where, "path", path)
@@ -345,14 +347,17 @@ def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int
         raise PardelError(where + ": out: a folder was expected, got ''")
     raw = _pardel.run_sweep(os.fsencode(path), list(overrides), -1 if threads is None else int(threads),
                             os.fsencode(out or ""))  # bytes: paths need not be UTF-8
-    return SweepResult(raw, out)
+    result = SweepResult(raw, out)
+    if raw["pending"] is not None:  # Ctrl-C (the core raises any other exception itself), as _finish raises it
+        raise Interrupted(where, result, None) from raw["pending"]
+    return result
 
 
 def check(scene: Scene, q: Guess = None) -> Dict[str, Any]:
     """`pardel check`: the seed's convergence certificate at a trajectory (q an array or a Result;
-    None: the scene's initial guess), as the dictionary of `pardel check --json`; its "certificate"
-    also holds free_components, intervals_violating, residual, tol, error and report (the text of
-    `pardel check`), the members of pardel::Certificate that --json leaves out."""
+    None: the scene's initial guess), as the dictionary of `pardel check --json` (trajectory, N,
+    residual, action, certificate); its "certificate" also holds report, the text `pardel check`
+    prints, which --json leaves out."""
     _check_scene("pardel.check", "scene", scene)
     arr, t = _guess_arrays(q, "pardel.check", "q")
     return _core_call("pardel.check", _pardel.check_scene, scene._core, arr, t)
@@ -376,7 +381,7 @@ def _kernels(model, discretization, h, t0, t1, q0, q1, params):
     q0, q1 = _check_vector(where, "q0", q0), _check_vector(where, "q1", q1)
     if params is not None:
         params = _check_params(where, "params", params)
-    m = model if isinstance(model, Model) else Model(model)
+    m = _model_of(where, model)
     if discretization not in m.discretizations:
         raise PardelError("%s: unknown discretization '%s' for model %s (it has: %s)" % (
             where, discretization, m.name, ", ".join(m.discretizations)))

@@ -8,16 +8,16 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
+# Imported at run time (not for type checkers alone) so that typing.get_type_hints resolves the
+# functions' `result: Result` from this module's globals.
+from ._results import Result
+
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
-
-    from . import Result
 
 
 def _check_result(where, result):
     """A pardel.Result, else TypeError naming the argument (as the package's own checks)."""
-    from . import Result
-
     if not isinstance(result, Result):
         shown = "None" if result is None else "%s %.60r" % (type(result).__name__, result)
         raise TypeError("%s: result must be a pardel.Result, got %s" % (where, shown))

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "pardel/app/solve.hpp"
+
 namespace pardel::python {
 
 namespace {
@@ -41,7 +43,8 @@ py::array_t<double, py::array::c_style | py::array::forcecast> batch_array(const
  * scene's guess), solved by pardel::solve_batch with the GIL released while this thread watches for
  * Ctrl-C (which stops the batch and is raised once it has stopped). `threads`: problems at once.
  * A batch refused as a whole (memory) raises PardelError; each problem's result is solve_scene's,
- * a problem never started (interrupted) holding its initial guess.
+ * a problem never started (interrupted) holding its initial guess, its N that guess's grid; the
+ * messages of the solves Ctrl-C stopped name it (app::name_interruption).
  */
 py::dict solve_batch_scene(Scene scene, const py::object& q0, const py::object& qN, const py::object& params,
                            const py::object& guess, const py::object& threads) {
@@ -90,9 +93,12 @@ py::dict solve_batch_scene(Scene scene, const py::object& q0, const py::object& 
   for (py::ssize_t i = 0; i < B; ++i) {
     BatchEntry& e = batch.entries[static_cast<std::size_t>(i)];
     const Scene& s = scenes[static_cast<std::size_t>(i)];
-    if (e.trajectory.N == 0) {  // never started: its initial guess
+    // Only Ctrl-C stops a batch (it takes no on_iteration): the stopped solves' messages say so.
+    if (pending) app::name_interruption(e.summary, kStoppedByCtrlC);
+    if (e.trajectory.N == 0) {  // never started (or refused): its initial guess, and N that guess's grid
       const BatchProblem& b = problems[static_cast<std::size_t>(i)];
       e.trajectory = b.guess.N > 0 ? b.guess : linear_guess(s.problem);
+      e.summary.N = e.trajectory.N;
     }
     results.append(result_dict(s, e.summary, e.trajectory, false));
   }

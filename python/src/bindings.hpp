@@ -44,6 +44,10 @@ extern PyObject* g_model_warning;
 /** How often, at most, a solve, a sweep or a model compile looks at Python's signals. */
 constexpr std::chrono::milliseconds kSignalCheckPeriod(50);
 
+/** What stopped a solve that Ctrl-C (a KeyboardInterrupt) stopped, in the words of its message
+ *  (app::name_interruption). */
+constexpr const char* kStoppedByCtrlC = "Ctrl-C (KeyboardInterrupt)";
+
 // ---------------------------------------------------------------------------------------------
 // Models (models.cpp)
 

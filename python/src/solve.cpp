@@ -65,7 +65,7 @@ py::dict run_solve(const Scene& scene, Trajectory trajectory, const py::object& 
   std::unique_ptr<py::error_already_set> pending;
   bool stopped_by_callback = false;
   bool by_ctrl_c = false;  // a signal raised KeyboardInterrupt: the message names it, not on_iteration
-  request.stopped_by = [&by_ctrl_c] { return by_ctrl_c ? std::string("Ctrl-C (KeyboardInterrupt)") : std::string(); };
+  request.stopped_by = [&by_ctrl_c] { return by_ctrl_c ? std::string(kStoppedByCtrlC) : std::string(); };
   auto last_check = std::chrono::steady_clock::now();
   request.on_iteration = [&](const IterationRecord& record) {
     const auto now = std::chrono::steady_clock::now();

@@ -22,9 +22,10 @@ namespace pardel::python {
  * every variant with pardel::app's run_variants_over_ranks (one rank) on a worker thread, the GIL
  * released, while this thread checks Python's signals every 50 ms; a pending exception
  * (KeyboardInterrupt) stops the running solve, the variants not yet started end "interrupted", and
- * it is raised once the results are grouped (and written to `out` when given). The results come
- * back as plain values, sweep.json's dictionary as a dict, and the trajectories of the converged
- * variants as arrays.
+ * once the results are grouped (and written to `out` when given) a KeyboardInterrupt comes back as
+ * "pending" with them (the package raises it, carrying the sweep so far), any other exception is
+ * raised. The results come back as plain values, sweep.json's dictionary as a dict, and the
+ * trajectories of the converged variants as arrays.
  */
 py::dict run_sweep(const std::string& path, const std::vector<std::string>& overrides, int threads,
                    const std::string& out) {
@@ -42,7 +43,9 @@ py::dict run_sweep(const std::string& path, const std::vector<std::string>& over
   std::vector<int> solution_of;
   const std::vector<app::Solution> solutions = app::group_solutions(results, sweep.grouping, &solution_of);
   if (!out.empty()) app::write_sweep_outputs(sweep, results, solutions, solution_of, info, out);
-  if (pending) throw std::move(*pending);
+  // A KeyboardInterrupt (Ctrl-C) is raised by the package with the sweep so far; any other
+  // exception a signal handler raised is raised here.
+  if (pending && !pending->matches(PyExc_KeyboardInterrupt)) throw std::move(*pending);
 
   py::list variants;
   for (std::size_t i = 0; i < results.size(); ++i) {
@@ -95,6 +98,7 @@ py::dict run_sweep(const std::string& path, const std::vector<std::string>& over
   result["configuration_values"] = sweep.configuration_values;
   result["variants"] = variants;
   result["solutions"] = groups;
+  result["pending"] = pending && pending->value() ? pending->value() : py::none();
   return result;
 }
 

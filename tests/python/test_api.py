@@ -63,7 +63,7 @@ def test_public_functions_and_methods_are_annotated_and_resolve():
             assert parameter.annotation is not inspect.Parameter.empty, "%s: %s" % (qualified, parameter.name)
         assert signature.return_annotation is not inspect.Signature.empty, qualified
         # Names imported for type checkers alone (typing.TYPE_CHECKING): SymPy, matplotlib's Axes.
-        names = dict(function.__globals__, sympy=sympy, Axes=axes.Axes, Result=pardel.Result)
+        names = dict(function.__globals__, sympy=sympy, Axes=axes.Axes)
         hints = typing.get_type_hints(function, globalns=names)
         assert "return" in hints, qualified
 

@@ -108,6 +108,13 @@ struct SolveRun {
  */
 SolveRun run_solve(const Scene& scene, Trajectory& trajectory, const SolveRequest& request);
 
+/** An interrupted solve's message with the runtime's words for its stop, "by on_iteration", made
+ *  "by WHO" (what stopped it: "Ctrl-C (KeyboardInterrupt)"); unchanged where `who` is empty, the
+ *  summary did not end interrupted, or the message does not hold those words. run_solve applies
+ *  it with request.stopped_by; a front end that calls the runtime itself (a batch) applies it to
+ *  each of its summaries. */
+void name_interruption(Summary& summary, const std::string& who);
+
 /** run_solve with the default request (the memory check, the scene's own callbacks, no
  *  checkpoint), returning the summary. */
 Summary solve_scene(const Scene& scene, Trajectory& trajectory);
