@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include "arguments.hpp"
@@ -58,9 +59,10 @@ using namespace pardel::cli;
 namespace fs = std::filesystem;
 
 const char* const kExitCodesHelp =
-    "Exit codes: 0 converged (or success), 1 internal error (e.g. an output file cannot be written),\n"
-    "2 invalid input (bad scene, option or model), 3 max_iterations, 4 diverged, 5 non_finite,\n"
-    "6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate),\n"
+    "Exit codes: 0 converged (or success), 1 internal error (e.g. an output file or standard output\n"
+    "cannot be written), 2 invalid input (bad scene, option or model), 3 max_iterations, 4 diverged,\n"
+    "5 non_finite, 6 interrupted (Ctrl-C or SIGTERM; the outputs hold the last iterate; pardel check\n"
+    "stops once the step under way is done, a second Ctrl-C at once),\n"
     "7 stalled (no progress at the round-off level of the problem: tol is unattainable).";
 
 /** A signal stopped the compile of a .lag model (resolve_model_spec): the command ends interrupted. */
@@ -85,6 +87,64 @@ int compile_interrupted(const char* what) {
   std::fprintf(stderr, "pardel: %s (%s): stopped before any work\n", what,
                caught_signal() == SIGTERM ? "SIGTERM" : "Ctrl-C");
   return exit_code(Termination::interrupted);
+}
+
+/**
+ * Where fd 0, 1 or 2 is closed when pardel starts (`pardel kernels ... >&-`), /dev/null opened on
+ * it the wrong way round (stdout read-only), so that writing to stdout fails (EBADF) and is
+ * reported, instead of the first file pardel opens taking fd 1 and receiving the output.
+ */
+void occupy_closed_standard_fds() {
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) != -1 || errno != EBADF) continue;
+    const int opened = ::open("/dev/null", fd == 0 ? O_WRONLY : O_RDONLY);
+    if (opened >= 0 && opened != fd) ::close(opened);
+  }
+}
+
+/**
+ * `code` once stdout is flushed; where what a command printed there could not be written (a full
+ * disk, a closed stdout), says so on stderr and returns the internal-error status (1) unless the
+ * command already ended with another failure. The one check of stdout for every subcommand (the
+ * JSON of kernels and check --json, the list of models, the reports of solve and sweep, --help).
+ */
+int checked_standard_output(int code) {
+  errno = 0;
+  std::cout.flush();  // synchronized with stdio: fflush(stdout), whose errno says why it failed
+  int error = errno;
+  const bool flushed = std::fflush(stdout) == 0;
+  if (error == 0) error = errno;
+  if (flushed && std::cout && std::ferror(stdout) == 0) return code;
+  std::fprintf(stderr, "pardel: error: cannot write to standard output: %s\n",
+               error != 0 ? std::strerror(error) : "a write failed; the output is incomplete");
+  return code == 0 ? kExitInternal : code;
+}
+
+/** An empty value of an option whose absence means a default (--out '', --trajectory ''): refused
+ *  (exit 2) rather than taken for that default. A CLI11 check: the message, or "" to accept. */
+std::string refuse_empty(const std::string& text) {
+  return text.empty() ? "must not be empty (leave the option out for its default)" : "";
+}
+
+/**
+ * Where the command line names no subcommand but its first word is none (`pardel solv`), the
+ * message that names the word and the nearest subcommand; "" otherwise (CLI11's own message then).
+ */
+std::string unknown_subcommand_message(const CLI::App& app, int argc, char** argv) {
+  if (!app.get_subcommands().empty()) return "";
+  std::vector<std::string> names;
+  for (const CLI::App* command : app.get_subcommands({})) names.push_back(command->get_name());
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') continue;  // pardel's own options take no value
+    if (std::find(names.begin(), names.end(), word) != names.end()) return "";
+    const std::string suggestion = nearest_name(word, names);
+    std::string all;
+    for (const std::string& name : names) all += (all.empty() ? "" : ", ") + name;
+    return fmt::format("pardel: error: unknown subcommand '{}'{} (the subcommands: {})", word,
+                       suggestion.empty() ? "" : fmt::format("; did you mean '{}'?", suggestion), all);
+  }
+  return "";
 }
 
 bool looks_like_path(const std::string& spec) {
@@ -296,8 +356,22 @@ struct CheckArgs {
   bool json = false;
 };
 
+/** Whether a signal came (CatchSignals) before or during `step` of pardel check; if so, says so on
+ *  stderr: check then ends with the interrupted status and prints nothing. */
+bool check_stopped(const char* step) {
+  if (!interrupted().load()) return false;
+  std::fprintf(stderr, "pardel check: stopped by %s %s; nothing printed\n", signal_name(caught_signal()).c_str(),
+               step);
+  return true;
+}
+
 int run_check(const CheckArgs& args) {
+  // None of check's steps polls a stop: Ctrl-C or SIGTERM ends it after the step under way (the
+  // certificate of a large grid takes seconds) with the interrupted status and a message; the same
+  // signal a second time ends it at once. A .lag compile stops at once (resolve_model_spec).
+  CatchSignals catch_signals(CatchSignals::Again::ends_process);
   Scene scene = load_scene_or_throw(args.scene, args.sets);
+  if (check_stopped("while reading the scene")) return exit_code(Termination::interrupted);
   Trajectory trajectory;
   if (args.trajectory.empty()) {
     trajectory = make_initial_guess(scene);
@@ -310,9 +384,13 @@ int run_check(const CheckArgs& args) {
     const std::string mismatch = fit_to_path(scene, trajectory);
     if (!mismatch.empty()) throw UsageError(fmt::format("--trajectory {}: {}", args.trajectory, mismatch));
   }
+  if (check_stopped("while reading the trajectory")) return exit_code(Termination::interrupted);
   const Certificate certificate = certify(scene.problem, trajectory, scene.options.threads);
+  if (check_stopped("while computing the certificate")) return exit_code(Termination::interrupted);
   const double residual = residual_norm(scene.problem, trajectory);
   const double action = discrete_action(scene.problem, trajectory);
+  if (check_stopped("while computing the residual and the action")) return exit_code(Termination::interrupted);
+  catch_signals.restore();
   if (args.json) {
     nlohmann::ordered_json j;
     j["trajectory"] = args.trajectory.empty() ? "initial guess" : args.trajectory;
@@ -414,6 +492,7 @@ CLI::App* add_solve_command(CLI::App& app, SolveArgs& s) {
 
 int main(int argc, char** argv) {
   prefer_passive_openmp_wait(argv);
+  occupy_closed_standard_fds();
 #ifdef PARDEL_HAVE_CUDA
   pardel::enable_cuda();  // solver.device = "cuda"
 #endif
@@ -457,6 +536,10 @@ int main(int argc, char** argv) {
   for (CLI::App* command : {solve_cmd, check, app.get_subcommand("sweep")}) {
     command->get_option("--set")->transform(checked_set_text);
   }
+  for (CLI::Option* option : {solve_cmd->get_option("--out"), solve_cmd->get_option("--resume"),
+                              check->get_option("--trajectory"), app.get_subcommand("sweep")->get_option("--out")}) {
+    option->check(refuse_empty);
+  }
 
   // Under mpirun with more than one rank, an error seen by some ranks only would leave the others
   // waiting for them: every error ends the whole job (the message is printed first).
@@ -467,8 +550,14 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
-    const int code = app.exit(error);
-    return code == 0 ? 0 : fail(kExitUsage);
+    const std::string unknown = unknown_subcommand_message(app, argc, argv);
+    if (!unknown.empty()) {
+      std::fprintf(stderr, "%s\n", unknown.c_str());
+      return fail(kExitUsage);
+    }
+    if (app.exit(error) != 0) return fail(kExitUsage);
+    const int checked = checked_standard_output(0);  // --help and --version print to stdout
+    return checked == 0 ? 0 : fail(checked);
   } catch (const SceneError& error) {  // a value checked as its scene key is (--threads)
     std::fprintf(stderr, "%s\n", error.what());
     return fail(kExitUsage);
@@ -485,40 +574,46 @@ int main(int argc, char** argv) {
                 << std::flush;
     });
 #endif
-  try {
-    if (*models) return run_models(models_json);
-    if (*kernels) return run_kernels(k, resolve_model_spec);
-    if (*solve_cmd) {
-      if (!s.device.empty()) s.sets.push_back("solver.device=" + s.device);
-      return run_solve(s);
+  // The command; then its output on stdout, checked once for every command.
+  const auto run_command = [&]() -> int {
+    try {
+      if (*models) return run_models(models_json);
+      if (*kernels) return run_kernels(k, resolve_model_spec);
+      if (*solve_cmd) {
+        if (!s.device.empty()) s.sets.push_back("solver.device=" + s.device);
+        return run_solve(s);
+      }
+      if (*check) return run_check(c);
+      if (sweep_cmd.parsed()) {
+        const int code = sweep_cmd.run(resolve_model_spec, bundled_model_names());
+        // The sweep reported a model whose compile a signal stopped ("interrupted while compiling").
+        return g_compile_interrupted.load() ? fail(exit_code(Termination::interrupted)) : code;
+      }
+    } catch (const UsageError& error) {
+      if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
+      std::fprintf(stderr, "pardel: error: %s\n", error.what());
+      return fail(kExitUsage);
+    } catch (const SceneError& error) {
+      if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
+      std::fprintf(stderr, "%s\n", error.what());
+      return fail(kExitUsage);
+    } catch (const CheckpointWriteError& error) {  // the outputs are written; the checkpoint could not be
+      std::fprintf(stderr, "%s\n", error.what());
+      return fail(kExitInternal);
+    } catch (const CheckpointError& error) {
+      std::fprintf(stderr, "%s\n", error.what());
+      return fail(kExitUsage);
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "pardel: error: out of memory (std::bad_alloc)\n");
+      return fail(kExitInternal);
+    } catch (const std::exception& error) {
+      if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
+      std::fprintf(stderr, "pardel: error: %s\n", error.what());
+      return fail(kExitInternal);
     }
-    if (*check) return run_check(c);
-    if (sweep_cmd.parsed()) {
-      const int code = sweep_cmd.run(resolve_model_spec, bundled_model_names());
-      // The sweep reported a model whose compile a signal stopped ("interrupted while compiling").
-      return g_compile_interrupted.load() ? fail(exit_code(Termination::interrupted)) : code;
-    }
-  } catch (const UsageError& error) {
-    if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
-    std::fprintf(stderr, "pardel: error: %s\n", error.what());
     return fail(kExitUsage);
-  } catch (const SceneError& error) {
-    if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
-    std::fprintf(stderr, "%s\n", error.what());
-    return fail(kExitUsage);
-  } catch (const CheckpointWriteError& error) {  // the outputs are written; the checkpoint could not be
-    std::fprintf(stderr, "%s\n", error.what());
-    return fail(kExitInternal);
-  } catch (const CheckpointError& error) {
-    std::fprintf(stderr, "%s\n", error.what());
-    return fail(kExitUsage);
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "pardel: error: out of memory (std::bad_alloc)\n");
-    return fail(kExitInternal);
-  } catch (const std::exception& error) {
-    if (g_compile_interrupted.load()) return fail(compile_interrupted(error.what()));
-    std::fprintf(stderr, "pardel: error: %s\n", error.what());
-    return fail(kExitInternal);
-  }
-  return fail(kExitUsage);
+  };
+  const int code = run_command();
+  const int checked = checked_standard_output(code);
+  return checked == code ? code : fail(checked);
 }

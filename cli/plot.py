@@ -15,7 +15,9 @@ Whatever the solve's status, each plot is drawn or skipped with a line on stderr
 ("plot.py: trajectory.png skipped: REASON"), and the exit status is 0: trajectory.png is skipped
 (and an older one removed) when trajectory.csv has no rows or a value that is not finite; the wind
 field is left out, with a note, when the path reaches beyond FIELD_LIMIT (a diverged solve), where
-matplotlib's arrows never finish drawing.
+matplotlib's arrows never finish drawing, or when W1 or W2 cannot be read or evaluated here (the note
+names the let); an error this script did not foresee skips only the plot it met it in, with its
+reason (a trajectory is then drawn once more without the wind field), never with a traceback.
 """
 import csv
 import json
@@ -37,7 +39,10 @@ FUNCTIONS = {
     "asin": sympy.asin, "acos": sympy.acos, "atan": sympy.atan, "atan2": sympy.atan2,
     "pow": sympy.Pow,
 }
-IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*'*")
+# A number as pardel-gen reads it (digits with a point, an exponent: 5e-1, 1E5, .5, 2.) or a name
+# with its primes: a number is matched first, so that the exponent of 5e-1 is no name "e".
+TOKEN = re.compile(r"(?P<number>(?:[0-9][0-9.]*|\.[0-9][0-9.]*)(?:[eE][+-]?[0-9]+)?)"
+                   r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*'*)")
 # The wind field is drawn only while the path stays within this distance of the origin (in the
 # model's units): at 10^12 matplotlib 3.6 does not finish drawing the arrows of a streamplot.
 FIELD_LIMIT = 1e6
@@ -45,6 +50,17 @@ FIELD_LIMIT = 1e6
 
 def skip(png, reason):
     print("plot.py: %s skipped: %s" % (png, reason), file=sys.stderr)
+
+
+def unforeseen(path, error):
+    """An error this script did not foresee while drawing the plot at path: the plot is skipped with
+    it (and an older solve's picture removed), the other plot still drawn."""
+    skip(os.path.basename(path), "an error while drawing it: %s: %s" % (type(error).__name__, error))
+    plt.close("all")
+    try:
+        os.remove(path)
+    except OSError:
+        pass
 
 
 def number_text(value, spec="%.3g"):
@@ -74,6 +90,10 @@ def read_lag(path):
     return coords, params, lets
 
 
+class FieldUnreadable(Exception):
+    """A let of the wind field that this script cannot turn into an expression."""
+
+
 class LagExpressions:
     """Evaluates let definitions of a .lag symbolically, params replaced by their values."""
 
@@ -87,7 +107,13 @@ class LagExpressions:
 
     def let(self, name):
         if name not in self.cache:
-            self.cache[name] = self.parse(self.lets[name])
+            try:
+                self.cache[name] = self.parse(self.lets[name])
+            except FieldUnreadable:
+                raise
+            except Exception as error:  # SymPy's SympifyError, SyntaxError, TypeError, ...: text it cannot read
+                raise FieldUnreadable("let %s = %s cannot be read (%s: %s)"
+                                      % (name, self.lets[name], type(error).__name__, error)) from None
         return self.cache[name]
 
     def parse(self, text):
@@ -95,12 +121,14 @@ class LagExpressions:
         renamed = {}
 
         def rename(match):
-            word = match.group(0)
+            word = match.group("name")
+            if word is None:
+                return match.group("number")
             key = "v_%d" % len(renamed) if word not in renamed else renamed[word]
             renamed.setdefault(word, key)
             return renamed[word]
 
-        body = IDENT.sub(rename, text).replace("^", "**")
+        body = TOKEN.sub(rename, text).replace("^", "**")
         for word, key in renamed.items():
             if word in FUNCTIONS:
                 local[key] = FUNCTIONS[word]
@@ -127,8 +155,11 @@ class LagExpressions:
         free = (w1.free_symbols | w2.free_symbols) - {x, y, self.t}
         if free:
             return None
-        f1 = sympy.lambdify((x, y, self.t), w1, "numpy")
-        f2 = sympy.lambdify((x, y, self.t), w2, "numpy")
+        try:
+            f1 = sympy.lambdify((x, y, self.t), w1, "numpy")
+            f2 = sympy.lambdify((x, y, self.t), w2, "numpy")
+        except Exception as error:
+            raise FieldUnreadable("W1, W2 cannot be evaluated (%s: %s)" % (type(error).__name__, error)) from None
 
         def evaluate(xs, ys, t):
             u = np.broadcast_to(np.asarray(f1(xs, ys, t), dtype=float), np.shape(xs))
@@ -221,7 +252,11 @@ def plot_trajectory(summary, traj, coords, lag, out_path):
         save(fig, out_path)
         return
     xs, ys = traj[coords[0]], traj[coords[1]]
-    field = lag.field() if lag else None
+    try:
+        field = lag.field() if lag else None
+    except FieldUnreadable as error:
+        print("plot.py: trajectory.png: the wind field is not drawn: %s" % error, file=sys.stderr)
+        field = None
     reach = max(np.max(np.abs(xs)), np.max(np.abs(ys)))
     if field is not None and reach > FIELD_LIMIT:
         print("plot.py: trajectory.png: the wind field is not drawn: the path reaches %.3g, beyond %.0e"
@@ -355,8 +390,23 @@ def main(argv):
         if os.path.exists(trajectory_png):
             os.remove(trajectory_png)  # an older solve's picture would be taken for this one's
     else:
-        plot_trajectory(summary, traj, coords, lag, trajectory_png)
-    plot_convergence(summary, conv, os.path.join(out, "convergence.png"))
+        try:
+            plot_trajectory(summary, traj, coords, lag, trajectory_png)
+        except Exception as error:  # reported; the path is drawn once more without the model's extras
+            if lag is None:
+                unforeseen(trajectory_png, error)
+            else:
+                print("plot.py: trajectory.png: drawn without the wind field and the model's extras: %s: %s"
+                      % (type(error).__name__, error), file=sys.stderr)
+                try:
+                    plot_trajectory(summary, traj, coords, None, trajectory_png)
+                except Exception as again:
+                    unforeseen(trajectory_png, again)
+    convergence_png = os.path.join(out, "convergence.png")
+    try:
+        plot_convergence(summary, conv, convergence_png)
+    except Exception as error:
+        unforeseen(convergence_png, error)
     return 0
 
 

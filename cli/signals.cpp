@@ -18,12 +18,12 @@ extern "C" void on_caught_signal(int signal) {
 
 }  // namespace
 
-CatchSignals::CatchSignals() : outer_signal_(g_signal.exchange(0)) {
+CatchSignals::CatchSignals(Again again) : outer_signal_(g_signal.exchange(0)) {
   g_interrupted.store(false);
   struct sigaction record {};
   record.sa_handler = on_caught_signal;
   sigemptyset(&record.sa_mask);
-  record.sa_flags = SA_RESTART;
+  record.sa_flags = SA_RESTART | (again == Again::ends_process ? SA_RESETHAND : 0);
   ::sigaction(SIGINT, &record, &previous_int_);
   ::sigaction(SIGTERM, &record, &previous_term_);
 }

@@ -15,7 +15,11 @@ namespace pardel::cli {
  *  scope outside. */
 class CatchSignals {
  public:
-  CatchSignals();
+  /** What the signal caught does when it comes again: nothing more (recorded), or its usual
+   *  effect (ends_process, SA_RESETHAND): a second Ctrl-C ends at once a command that polls only
+   *  between long steps. */
+  enum class Again { recorded, ends_process };
+  explicit CatchSignals(Again again = Again::recorded);
   CatchSignals(const CatchSignals&) = delete;
   CatchSignals& operator=(const CatchSignals&) = delete;
   ~CatchSignals() { restore(); }

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstdlib>
 
 #include "signals.hpp"
 
@@ -57,6 +58,28 @@ TEST(CatchSignals, RestorePutsThePreviousActionBack) {
   ::sigaction(SIGTERM, &before, nullptr);
   EXPECT_EQ(signal_name(0), "");
   EXPECT_EQ(signal_name(SIGINT), "SIGINT (Ctrl-C)");
+}
+
+TEST(CatchSignals, UnderEndsProcessTheSameSignalAgainTakesItsUsualEffect) {
+  // pardel check polls only between long steps: its first Ctrl-C is recorded, a second one ends it.
+  EXPECT_EXIT(
+      {
+        CatchSignals catch_signals(CatchSignals::Again::ends_process);
+        std::raise(SIGINT);
+        if (!interrupted().load() || caught_signal() != SIGINT) std::_Exit(3);
+        std::raise(SIGINT);
+        std::_Exit(0);
+      },
+      ::testing::KilledBySignal(SIGINT), "");
+  // By default it is only recorded.
+  EXPECT_EXIT(
+      {
+        CatchSignals catch_signals;
+        std::raise(SIGINT);
+        std::raise(SIGINT);
+        std::_Exit(interrupted().load() ? 0 : 3);
+      },
+      ::testing::ExitedWithCode(0), "");
 }
 
 }  // namespace
