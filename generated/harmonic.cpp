@@ -334,6 +334,12 @@ extern "C" void harmonic_galerkin_lobatto_s_2_grad_extended(double h, double t0,
 }
 #endif
 
+// d2S/dz2 at the interval's interior values (pardel_interior_hessian_kernel)
+extern "C" void harmonic_galerkin_lobatto_s_2_interval_hessian(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* H) {
+  pardel_condensation::interior_hessian<1, 1, 1>(harmonic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, H);
+}
+
 extern "C" void harmonic_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   pardel_condensation::condensed<1, 1, 1>(harmonic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
@@ -659,6 +665,12 @@ extern "C" void harmonic_galerkin_gauss_s_4_grad_extended(double h, double t0, d
 }
 #endif
 
+// d2S/dz2 at the interval's interior values (pardel_interior_hessian_kernel)
+extern "C" void harmonic_galerkin_gauss_s_4_interval_hessian(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* H) {
+  pardel_condensation::interior_hessian<1, 1, 3>(harmonic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, H);
+}
+
 extern "C" void harmonic_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   pardel_condensation::condensed<1, 1, 3>(harmonic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
@@ -696,10 +708,10 @@ static const double harmonic_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization harmonic_discretizations[] = {
-    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, PD_EXTENDED(harmonic_trapezoid_grad_extended), nullptr, "trapezoid"},
-    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, PD_EXTENDED(harmonic_midpoint_grad_extended), nullptr, "midpoint"},
-    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, PD_EXTENDED(harmonic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr},
-    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, PD_EXTENDED(harmonic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr},
+    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, PD_EXTENDED(harmonic_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
+    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, PD_EXTENDED(harmonic_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
+    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, PD_EXTENDED(harmonic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 1, harmonic_galerkin_lobatto_s_2_interval_hessian},
+    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, PD_EXTENDED(harmonic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 3, harmonic_galerkin_gauss_s_4_interval_hessian},
 };
 
 extern "C" const pardel_model harmonic_model = {

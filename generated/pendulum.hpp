@@ -46,6 +46,8 @@ void pendulum_galerkin_lobatto_s_2_sweep(double h, double t0, double t1, const d
 void pendulum_galerkin_lobatto_s_2_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double pendulum_galerkin_lobatto_s_2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void pendulum_galerkin_lobatto_s_2_interval_hessian(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* H);
 #if !defined(__CUDACC__)
 void pendulum_galerkin_lobatto_s_2_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
@@ -59,6 +61,8 @@ void pendulum_galerkin_gauss_s_4_sweep(double h, double t0, double t1, const dou
 void pendulum_galerkin_gauss_s_4_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 double pendulum_galerkin_gauss_s_4_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+void pendulum_galerkin_gauss_s_4_interval_hessian(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* H);
 #if !defined(__CUDACC__)
 void pendulum_galerkin_gauss_s_4_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);

@@ -638,6 +638,12 @@ extern "C" void sphere_geodesic_galerkin_lobatto_s_2_grad_extended(double h, dou
 }
 #endif
 
+// d2S/dz2 at the interval's interior values (pardel_interior_hessian_kernel)
+extern "C" void sphere_geodesic_galerkin_lobatto_s_2_interval_hessian(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* H) {
+  pardel_condensation::interior_hessian<2, 2, 2>(sphere_geodesic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, H);
+}
+
 extern "C" void sphere_geodesic_galerkin_lobatto_s_2_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   pardel_condensation::condensed<2, 2, 2>(sphere_geodesic_galerkin_lobatto_s_2_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
@@ -1358,6 +1364,12 @@ extern "C" void sphere_geodesic_galerkin_gauss_s_4_grad_extended(double h, doubl
 }
 #endif
 
+// d2S/dz2 at the interval's interior values (pardel_interior_hessian_kernel)
+extern "C" void sphere_geodesic_galerkin_gauss_s_4_interval_hessian(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p, double* H) {
+  pardel_condensation::interior_hessian<2, 2, 6>(sphere_geodesic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, H);
+}
+
 extern "C" void sphere_geodesic_galerkin_gauss_s_4_full(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   pardel_condensation::condensed<2, 2, 6>(sphere_geodesic_galerkin_gauss_s_4_interval, h, t0, t1, q0, q1, p, Ld, D1, D2, D11, D12, D22);
@@ -1390,10 +1402,10 @@ static const char* const sphere_geodesic_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization sphere_geodesic_discretizations[] = {
-    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action, PD_EXTENDED(sphere_geodesic_trapezoid_grad_extended), nullptr, "trapezoid"},
-    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action, PD_EXTENDED(sphere_geodesic_midpoint_grad_extended), nullptr, "midpoint"},
-    {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action, PD_EXTENDED(sphere_geodesic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr},
-    {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action, PD_EXTENDED(sphere_geodesic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr},
+    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action, PD_EXTENDED(sphere_geodesic_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
+    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action, PD_EXTENDED(sphere_geodesic_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
+    {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action, PD_EXTENDED(sphere_geodesic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 2, sphere_geodesic_galerkin_lobatto_s_2_interval_hessian},
+    {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action, PD_EXTENDED(sphere_geodesic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 6, sphere_geodesic_galerkin_gauss_s_4_interval_hessian},
 };
 
 extern "C" const pardel_model sphere_geodesic_model = {

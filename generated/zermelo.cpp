@@ -1620,8 +1620,8 @@ static const double zermelo_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization zermelo_discretizations[] = {
-    {"trapezoid", 2, zermelo_trapezoid_full, zermelo_trapezoid_sweep, zermelo_trapezoid_grad, zermelo_trapezoid_action, PD_EXTENDED(zermelo_trapezoid_grad_extended), nullptr, "trapezoid"},
-    {"midpoint", 2, zermelo_midpoint_full, zermelo_midpoint_sweep, zermelo_midpoint_grad, zermelo_midpoint_action, PD_EXTENDED(zermelo_midpoint_grad_extended), nullptr, "midpoint"},
+    {"trapezoid", 2, zermelo_trapezoid_full, zermelo_trapezoid_sweep, zermelo_trapezoid_grad, zermelo_trapezoid_action, PD_EXTENDED(zermelo_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
+    {"midpoint", 2, zermelo_midpoint_full, zermelo_midpoint_sweep, zermelo_midpoint_grad, zermelo_midpoint_action, PD_EXTENDED(zermelo_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
 };
 
 extern "C" const pardel_model zermelo_model = {

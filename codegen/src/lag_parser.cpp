@@ -34,6 +34,16 @@ LagModel Reader::read() {
   if (model_line_ == 0) missing("'model NAME' line");
   if (coords_line_ == 0) missing("'coords' line (the generalized coordinates)");
   if (!lagrangian_line_) missing("'L = ...' line (the Lagrangian)");
+  // The kernels are dense in the point's dimension (3 dim^2 second derivatives a discretization,
+  // each with its own expression): the generator's time grows faster than dim^2, past minutes and
+  // gigabytes at dim = 1000, and the C++ compile of the emitted source with it.
+  const std::size_t dim = static_cast<std::size_t>(model_.order) * model_.coords.size();
+  if (dim > kMaxDimension)
+    fail(coords_line_, 1,
+         std::to_string(model_.coords.size()) + " coordinates" +
+             (model_.order > 1 ? " of order " + std::to_string(model_.order) : std::string()) +
+             " make a point of dimension " + std::to_string(dim) + "; pardel-gen writes dense kernels (3 dim^2 second "
+             "derivatives each) and takes dimensions up to " + std::to_string(kMaxDimension));
 
   model_.coord_symbols.resize(static_cast<std::size_t>(model_.order) + 1);
   for (int k = 0; k <= model_.order; ++k) {

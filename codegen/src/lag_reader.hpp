@@ -27,6 +27,9 @@ bool is_function_name(const std::string& s);
 /** t, pi and the function names. */
 bool is_reserved_name(const std::string& s);
 
+/** The largest dimension of a point (order x coordinates) the generator takes (lag_parser.cpp). */
+constexpr std::size_t kMaxDimension = 128;
+
 enum class Tok { ident, number, op, end };
 
 struct Token {

@@ -414,6 +414,11 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
                       "most %.3g) to at most %.3g",
                       out.lambda_min, out.lambda_next, out.lambda_max);
   }
+  // A lowest mode of multiplicity two or more (an isotropic oscillator at a conjugate time): the
+  // gap that would show a nearly degenerate minimum lies above lambda_next, which is not computed.
+  if (!out.nearly_degenerate && out.positive >= 2 && out.lambda_next > 0 && out.lambda_next < 2 * out.lambda_min)
+    out.note += "; the two smallest eigenvalues are nearly equal (a repeated lowest mode), so their ratio does not "
+                "tell whether the minimum is nearly degenerate: compare lambda_min with the problem's own scales";
   if (!out.lambda_settled)
     out.note += format("; the two smallest are upper bounds: Ritz values of %.0f Lanczos steps that had not "
                        "settled",
@@ -553,6 +558,74 @@ bool classify_indefinite(PointAssessment& out) {
   return false;
 }
 
+Inertia interior_inertia(const Context& ctx, int first, int count) {
+  Inertia total;
+  const int M = ctx.disc ? ctx.disc->interior_size : 0;
+  const pardel_interior_hessian_kernel kernel = ctx.disc ? ctx.disc->interior_hessian : nullptr;
+  if (M <= 0 || !kernel || count <= 0) return total;
+  long positive = 0, negative = 0, zero = 0;
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  const double* p = ctx.p();
+#pragma omp parallel if (ctx.parallel(count)) num_threads(ctx.threads) reduction(+ : positive, negative, zero)
+  {
+    // One block and eigensolver a thread, sized once.
+    Eigen::MatrixXd H(M, M);
+    Eigen::VectorXd J(M);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(M);
+#pragma omp for schedule(static)
+    for (int i = 0; i < count; ++i) {
+      const std::size_t k = static_cast<std::size_t>(first + i);
+      kernel(ctx.hk[k], ctx.t[k], ctx.t[k + 1], ctx.q.data() + k * d, ctx.q.data() + (k + 1) * d, p, H.data());
+      if (!H.allFinite()) {
+        zero += M;
+        continue;
+      }
+      // Row-major or column-major alike: H is symmetric. The congruence J H J keeps its inertia.
+      for (int a = 0; a < M; ++a) J[a] = jacobi_scale(H(a, a));
+      H = J.asDiagonal() * H * J.asDiagonal();
+      const double tiny = zero_threshold(H.cwiseAbs().rowwise().sum().maxCoeff());
+      eigen.compute(H, Eigen::EigenvaluesOnly);
+      if (eigen.info() != Eigen::Success) {
+        zero += M;
+        continue;
+      }
+      for (int a = 0; a < M; ++a) {
+        const double v = eigen.eigenvalues()[a];
+        if (v > tiny)
+          ++positive;
+        else if (v < -tiny)
+          ++negative;
+        else
+          ++zero;
+      }
+    }
+  }
+  total.positive = positive;
+  total.negative = negative;
+  total.zero = zero;
+  return total;
+}
+
+void add_interior_inertia(const Inertia& interior, PointAssessment& out) {
+  if (out.kind == PointKind::unknown) return;  // not assessed
+  out.positive += interior.positive;
+  if (interior.negative == 0 && interior.zero == 0) return;
+  const bool was_minimum = out.kind == PointKind::minimum;
+  const long negative = out.negative + interior.negative, zero = out.zero + interior.zero;
+  const double lambda_max = out.lambda_max;
+  const long positive = out.positive;
+  out = PointAssessment{};
+  out.positive = positive;
+  out.negative = negative;
+  out.zero = zero;
+  out.lambda_max = lambda_max;
+  classify_indefinite(out);
+  out.note += format("; %.0f negative and %.0f zero of them in the intervals' interior values (the Hessian over "
+                     "nodes and interior values",
+                     static_cast<double>(interior.negative), static_cast<double>(interior.zero));
+  out.note += was_minimum ? std::string(", whose node part, the condensed action's, is positive definite)") : ")";
+}
+
 void note_residual_caveats(double residual, double floor, double scale, PointAssessment& out) {
   // Where round-off in the DEL terms is as large as the terms (high orders at large N), the
   // elimination's negative pivots need not be the Hessian's: a minimum's note gives its
@@ -670,6 +743,7 @@ PointAssessment assess_point(const Problem& problem, const Trajectory& trajector
     return out;
   }
   detail::assess(ctx, out);
+  detail::add_interior_inertia(detail::interior_inertia(ctx, 0, ctx.N), out);
   return out;
 }
 

@@ -170,6 +170,18 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
  *  (engine.hpp's, 1 where not known) qualifies the note's round-off bound. */
 void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out, double diagonal_spread = 1);
 
+/** The inertia of the interior blocks d2S/dz2 of the intervals first .. first + count - 1 of ctx at
+ *  ctx.q (pardel_discretization::interior_hessian: Galerkin discretizations with interior values;
+ *  zero counts for any other), each block under the zero rule of inertia.hpp in its own Jacobi
+ *  scaling; a block that is not finite counts all its eigenvalues as zero. */
+Inertia interior_inertia(const Context& ctx, int first, int count);
+
+/** The assessment of the node Hessian `out` (the condensed action's) made that of the action over
+ *  nodes and interior values: by Haynsworth's inertia additivity its inertia is the node Hessian's
+ *  plus `interior` (all intervals'), so that interior blocks with negative or zero eigenvalues make
+ *  a minimum of the condensed action a saddle (or a degenerate point) of the whole one. */
+void add_interior_inertia(const Inertia& interior, PointAssessment& out);
+
 /** Adds to a converged point's note what its residual says about it: a saddle where round-off in
  *  the DEL terms (`floor`) is as large as their `scale` (its negative eigenvalues are not
  *  resolved); a degenerate point whose `residual` is far above `floor` (the tolerance, relative to

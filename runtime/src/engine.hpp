@@ -338,6 +338,31 @@ inline double component_floor(const Context& ctx, int i) {
   return ctx.comp_floor_measured.empty() ? estimated : std::max(estimated, ctx.comp_floor_measured[ii]);
 }
 
+/** Whether the residual is at the round-off level in every component (component_floor), not only
+ *  against the largest terms (at_round_off): a coordinate whose terms are 1e-14 of another's has an
+ *  unsolved residual far below the other's rounding. The overall test alone where the
+ *  per-component sizes are not known. */
+/** The name of the first component whose residual lies far above its own round-off level while the
+ *  whole residual is at the largest terms' (at_round_off, not residual_at_round_off); empty where
+ *  there is none. */
+inline std::string unsolved_component(const Context& ctx) {
+  if (!at_round_off(ctx.residual, ctx.residual_floor)) return {};
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  if (ctx.comp_residual.size() != d || ctx.comp_scale.size() != d || ctx.comp_hq.size() != d) return {};
+  for (std::size_t i = 0; i < d; ++i)
+    if (!(ctx.comp_residual[i] <= kRoundOffResidual * component_floor(ctx, static_cast<int>(i))))
+      return component_name(ctx, static_cast<int>(i));
+  return {};
+}
+
+/** Whether the residual is at the round-off level in every component (component_floor), not only
+ *  against the largest terms (at_round_off): a coordinate whose terms are 1e-14 of another's has an
+ *  unsolved residual far below the other's rounding. The overall test alone where the
+ *  per-component sizes are not known. */
+inline bool residual_at_round_off(const Context& ctx) {
+  return at_round_off(ctx.residual, ctx.residual_floor) && unsolved_component(ctx).empty();
+}
+
 /**
  * The residual that counts as resolved for component i at the context's iterate: Options::tol when
  * set; else max(rtol x the component's own scale, 10 x its round-off level, 10 x the round-off level

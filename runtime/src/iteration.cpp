@@ -496,6 +496,7 @@ void Iteration::summarize() {
   }
   s_.final_time = partition_.final_time(ctx_);
   s_.residual_floor = ctx_.residual_floor;
+  s_.residual_at_round_off = residual_at_round_off(ctx_);
   s_.tolerance = target_residual();
   if (s_.history.empty() || s_.history.back().iteration != iteration_ || s_.history.back().N != s_.N) {
     IterationRecord rec;

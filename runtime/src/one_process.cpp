@@ -66,4 +66,6 @@ void OneProcess::refine(const Options& options, Summary& summary) { refine_solut
 
 void OneProcess::assess(const Options&, PointAssessment& out) { detail::assess(ctx_, out); }
 
+void OneProcess::interior_inertia(Inertia& out) { out = detail::interior_inertia(ctx_, 0, ctx_.N); }
+
 }  // namespace pardel::detail

@@ -51,6 +51,7 @@ class StationaryNewton : public Method_ {
     const std::size_t o = space_.offset();
     for (std::size_t i = 0; i < rhs_.size(); ++i) rhs_[i] = -ctx.res[o + i];
     const double phi0 = merit(ctx);
+    const std::string unsolved = unsolved_component(ctx);  // at q, before a trial's evaluation
     double slope = 0;
     if (!direction(ctx, phi0, &slope)) {
       return failure(Termination::stalled,
@@ -82,7 +83,16 @@ class StationaryNewton : public Method_ {
       for (double& v : p_) v *= 0.5;
     }
     char buf[640];
-    if (at_round_off(r0, ctx.residual_floor)) {  // as the trust region's stall (newton_stalled)
+    if (at_round_off(r0, ctx.residual_floor) && !unsolved.empty()) {  // as newton_stalled
+      std::snprintf(buf, sizeof buf,
+                    "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of "
+                    "it, reduces the DEL residual %.3g, which is at the round-off level of the largest DEL terms "
+                    "(estimate %.3g) but far above that of component %s, whose terms are too small against the "
+                    "others' for the residual's norm to show its steps: Jacobi-Newton (solver.method = "
+                    "\"jacobi-newton\"), whose node steps are in each coordinate's own units, or coordinates in "
+                    "comparable units may reach the solution",
+                    iteration, 2 * alpha, r0, ctx.residual_floor, unsolved.c_str());
+    } else if (at_round_off(r0, ctx.residual_floor)) {  // as the trust region's stall (newton_stalled)
       std::snprintf(buf, sizeof buf,
                     "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of "
                     "it, reduces the DEL residual %.3g, which is at the round-off level of this problem (estimate "

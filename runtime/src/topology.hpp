@@ -20,6 +20,8 @@
 
 namespace pardel::detail {
 
+struct Inertia;
+
 /** Where the nodes of one solve live; made fresh for each solve (it owns the solve's context). */
 class Topology : public Partition {
  public:
@@ -85,6 +87,9 @@ class Topology : public Partition {
   /** The point assessment at the context's iterate from a new factorization (the method's storage
    *  released before). Collective. */
   virtual void assess(const Options& options, PointAssessment& out) = 0;
+  /** The inertia of the interior blocks of all intervals at the context's iterate (assessment.hpp's
+   *  interior_inertia over this process's intervals, summed over processes). Collective. */
+  virtual void interior_inertia(Inertia& out) = 0;
 };
 
 /** Makes a fresh topology for each solve that pardel::solve makes (the attempts, the coarse solve
@@ -118,6 +123,7 @@ class OneProcess final : public Topology {
   void gather(bool everywhere, Trajectory& out) override;
   void refine(const Options& options, Summary& summary) override;
   void assess(const Options& options, PointAssessment& out) override;
+  void interior_inertia(Inertia& out) override;
 
  private:
   Context ctx_;

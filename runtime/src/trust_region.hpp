@@ -65,7 +65,7 @@ namespace pardel::detail {
  * round-off level of the action.
  */
 inline StepOutcome newton_stalled(long iteration, double residual, double residual_floor, double diagonal_spread = 1,
-                                  double largest = 0) {
+                                  double largest = 0, const std::string& unsolved = std::string()) {
   StepOutcome out;
   char buf[640];
   out.failure = Termination::stalled;
@@ -85,6 +85,16 @@ inline StepOutcome newton_stalled(long iteration, double residual, double residu
                   "largest double: their sums overflow or lose the steps' changes at this size; in other units "
                   "(rescaled time or coordinates) that keep them far below 1e300 the problem can be solved",
                   iteration, residual, largest);
+  } else if (at_round_off(residual, residual_floor) && !unsolved.empty()) {
+    // Below the largest terms' rounding, but not below its own: the action (and its infinity-norm
+    // residual) cannot see the component's steps, as it cannot see changes below its rounding.
+    std::snprintf(buf, sizeof buf,
+                  "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
+                  "the DEL residual %.3g is at the round-off level of the largest DEL terms (estimate %.3g) but far "
+                  "above that of component %s, whose terms are too small against the others' for the action to "
+                  "show its steps: Jacobi-Newton (solver.method = \"jacobi-newton\"), whose node steps are in "
+                  "each coordinate's own units, or coordinates in comparable units may reach the solution",
+                  iteration, residual, residual_floor, unsolved.c_str());
   } else if (at_round_off(residual, residual_floor)) {
     std::snprintf(buf, sizeof buf,
                   "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
@@ -285,6 +295,7 @@ class TrustRegionNewton : public Method_ {
     last_step_newton_ = false;
     const std::size_t n = rhs_.size(), o = space_.offset();
     const double F = ctx.action, r0 = ctx.residual;
+    const std::string unsolved0 = unsolved_component(ctx);  // at q, before a trial's evaluation
     for (std::size_t i = 0; i < n; ++i) rhs_[i] = -ctx.res[o + i];
     best_residual_ = std::min(best_residual_, r0);
     double scale = space_.max_abs_diagonal(ctx);
@@ -373,7 +384,7 @@ class TrustRegionNewton : public Method_ {
     }
     if (!at_round_off(r0, ctx.residual_floor)) measure_round_off(ctx);
     return newton_stalled(iteration, ctx.residual, ctx.residual_floor, diagonal_spread(ctx),
-                          std::max(std::fabs(ctx.action), ctx.residual_scale));
+                          std::max(std::fabs(ctx.action), ctx.residual_scale), unsolved0);
   }
 
   /** Values of save_state() before the watchdog's reference point. */

@@ -60,6 +60,7 @@ class Forwarding final : public pardel::detail::Topology {
   void gather(bool everywhere, pardel::Trajectory& out) override { inner_.gather(everywhere, out); }
   void refine(const pardel::Options& options, pardel::Summary& summary) override { inner_.refine(options, summary); }
   void assess(const pardel::Options& options, pardel::PointAssessment& out) override { inner_.assess(options, out); }
+  void interior_inertia(pardel::detail::Inertia& out) override { inner_.interior_inertia(out); }
 
  private:
   OneProcess inner_;

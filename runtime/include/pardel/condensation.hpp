@@ -181,6 +181,19 @@ bool solve_interior(const Interval& f, double h, double t0, double t1, const dou
       [&](const double* x, double* g, double* H) { f.interior(h, t0, t1, q0, q1, p, x, g, H); }, q0, q1, z);
 }
 
+/** d2S/dz2 (M x M, row-major) at the interior values z* that the condensed kernels find
+ *  (pardel_interior_hessian_kernel); every entry NaN where they cannot be found. */
+template <int D, int N, int M>
+void interior_hessian(const Interval& f, double h, double t0, double t1, const double* q0, const double* q1,
+                      const double* p, double* H) {
+  double z[M], g[M];
+  if (!solve_interior<D, N, M>(f, h, t0, t1, q0, q1, p, z)) {
+    for (int i = 0; i < M * M; ++i) H[i] = std::numeric_limits<double>::quiet_NaN();
+    return;
+  }
+  f.interior(h, t0, t1, q0, q1, p, z, g, H);
+}
+
 /** Every output NaN: the interval could not be condensed. */
 inline void fail_outputs(int D, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();

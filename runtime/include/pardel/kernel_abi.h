@@ -21,8 +21,9 @@
 
 /* 3: pardel_discretization gained grad_extended (its array's stride changed).
  * 4: and full_extended.
- * 5: and bare_name. */
-#define PARDEL_KERNEL_ABI_VERSION 5
+ * 5: and bare_name.
+ * 6: and interior_size, interior_hessian. */
+#define PARDEL_KERNEL_ABI_VERSION 6
 
 /* The qualifier of every generated kernel with double arithmetic only: __host__ __device__ under a
  * CUDA compiler, so that the same generated source runs on the host and on the device (device code
@@ -88,6 +89,17 @@ typedef double (*pardel_action_kernel)(double h, double t0, double t1, const dou
 typedef double (*pardel_clock_kernel)(double h, double t0, const double* q0, const double* q1,
                                       const double* p);
 
+/**
+ * d2S/dz2 (M x M, row-major, M = pardel_discretization::interior_size) of a Galerkin interval's
+ * action S(q0, z, q1) at its interior values z* (dS/dz = 0, as the condensed kernels find them):
+ * the interval's own block of the Hessian of the action over nodes and interior values. By
+ * Haynsworth's inertia additivity that action's inertia is the condensed node Hessian's plus those
+ * of these blocks (the point assessment, docs/solvers.md). Every entry NaN where the interval
+ * cannot be condensed.
+ */
+typedef void (*pardel_interior_hessian_kernel)(double h, double t0, double t1, const double* q0, const double* q1,
+                                               const double* p, double* H);
+
 /** One discretization of a model, with its kernels. */
 typedef struct pardel_discretization {
   const char* name;              /**< "trapezoid", "midpoint", "trapezoid(alpha=1)", "gauss2", ... */
@@ -107,6 +119,11 @@ typedef struct pardel_discretization {
    *  "hermite_gauss" of "hermite_gauss(s=ORDER)"; NULL where a bare name means another parameter
    *  or is refused (galerkin_gauss). pardel::find_discretization resolves bare names by it. */
   const char* bare_name;
+  /** The interior values of an interval (s - order values of each coordinate under a Galerkin
+   *  discretization with s above the model's order; 0: none). */
+  int interior_size;
+  /** NULL where interior_size is 0. */
+  pardel_interior_hessian_kernel interior_hessian;
 } pardel_discretization;
 
 /** How a model's reported cost is computed from a solution (the .lag's `cost NAME = KIND`). */

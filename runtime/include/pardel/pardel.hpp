@@ -409,6 +409,9 @@ struct Summary {
    *  levels that start them), included in wall_seconds; 0 where nothing was assessed. */
   double assessment_seconds = 0;
   double residual_floor = std::numeric_limits<double>::quiet_NaN();  ///< round-off level of the residual at the returned iterate
+  /** The residual at the returned iterate lies at the round-off level in every component (each
+   *  against its own terms), not only against the largest terms (residual_floor). */
+  bool residual_at_round_off = false;
   double tolerance = std::numeric_limits<double>::quiet_NaN();       ///< the residual that counted as converged (Options::rtol or tol)
   PointAssessment point;      ///< what the returned trajectory is (minimum, saddle, degenerate)
   /** The estimated error of the coordinates at the nodes (Options::error_estimate): Richardson's

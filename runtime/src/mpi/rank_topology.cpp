@@ -10,6 +10,7 @@
 #include <climits>
 #include <cmath>
 
+#include "../assessment.hpp"
 #include "distributed_newton.hpp"
 
 namespace pardel::mpi::detail {
@@ -142,5 +143,15 @@ void RankTopology::gather(bool everywhere, Trajectory& out) { gather_trajectory(
 void RankTopology::refine(const Options&, Summary&) {}
 
 void RankTopology::assess(const Options& options, PointAssessment& out) { assess_distributed(options, local_, out); }
+
+void RankTopology::interior_inertia(pardel::detail::Inertia& out) {
+  out = pardel::detail::interior_inertia(local_.ctx, local_.layout.local(local_.layout.first_interval()),
+                                         local_.owned_intervals());
+  long counts[3] = {out.positive, out.negative, out.zero};
+  MPI_Allreduce(MPI_IN_PLACE, counts, 3, MPI_LONG, MPI_SUM, local_.comm);
+  out.positive = counts[0];
+  out.negative = counts[1];
+  out.zero = counts[2];
+}
 
 }  // namespace pardel::mpi::detail

@@ -50,6 +50,7 @@ class RankTopology final : public pardel::detail::Topology {
   bool releases_whole_trajectories() const override { return true; }
   void refine(const Options& options, Summary& summary) override;
   void assess(const Options& options, PointAssessment& out) override;
+  void interior_inertia(pardel::detail::Inertia& out) override;
 
  private:
   Local local_;
