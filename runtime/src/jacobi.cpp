@@ -48,12 +48,14 @@ struct NodeScratch {
   Eigen::PartialPivLU<Mat> lu;
   IntervalDerivatives left, right, ahead, a, b;  // rolling buffer; a, b: the node's own re-evaluations
   // What the thread found in its range.
-  double residual = 0, scale = 0, qmax = 0;
-  std::vector<double> comp_residual, comp_scale;  ///< per component: max |r_i| and max |D2_i| + |D1_i|
+  double residual = 0, scale = 0, qmax = 0, hq = 0;
+  /** Per component: max |r_i|, max |D2_i| + |D1_i| and max of the diagonal block's row of |H| |q|. */
+  std::vector<double> comp_residual, comp_scale, comp_hq;
   int bad_residual = -1, singular = -1, bad_value = -1;
   explicit NodeScratch(int d)
       : M(Mat::Zero(d, d)), r(Vec::Zero(d)), x(Vec::Zero(d)), dx(Vec::Zero(d)), jscale(Vec::Ones(d)), rs(Vec::Zero(d)), lu(d), left(d), right(d), ahead(d),
-        a(d), b(d), comp_residual(static_cast<std::size_t>(d)), comp_scale(static_cast<std::size_t>(d)) {}
+        a(d), b(d), comp_residual(static_cast<std::size_t>(d)), comp_scale(static_cast<std::size_t>(d)),
+        comp_hq(static_cast<std::size_t>(d)) {}
 };
 
 /** Solves M dx = r for a node block and subtracts dx from x; false when M is singular or not
@@ -134,7 +136,7 @@ class JacobiSweeps : public Method_ {
       const int first = static_cast<int>(nodes * tid / nt), last = static_cast<int>(nodes * (tid + 1) / nt);
       pass(ctx, s, first, last);
     }
-    double residual = 0, scale = 0;
+    double residual = 0, scale = 0, hq = 0;
     int bad = -1;
     singular_ = -1;
     bad_value_ = -1;
@@ -143,12 +145,14 @@ class JacobiSweeps : public Method_ {
       const NodeScratch<D>& s = scratch_[static_cast<std::size_t>(i)];
       residual = std::max(residual, s.residual);
       scale = std::max(scale, s.scale);
+      hq = std::max(hq, s.hq);
       qmax_ = std::max(qmax_, s.qmax);
       if (s.bad_residual >= 0 && (bad < 0 || s.bad_residual < bad)) bad = s.bad_residual;
       if (s.singular >= 0 && (singular_ < 0 || s.singular < singular_)) singular_ = s.singular;
       if (s.bad_value >= 0 && (bad_value_ < 0 || s.bad_value < bad_value_)) bad_value_ = s.bad_value;
     }
-    ctx.residual_floor = 16 * std::numeric_limits<double>::epsilon() * scale;
+    const double eps = std::numeric_limits<double>::epsilon();
+    ctx.residual_floor = 16 * eps * scale + 2 * eps * hq;  // as engine.cpp's, with the diagonal blocks' |H| |q|
     ctx.residual_scale = scale;
     const std::size_t d = static_cast<std::size_t>(ctx.dim);
     ctx.comp_residual.assign(d, 0.0);
@@ -159,6 +163,7 @@ class JacobiSweeps : public Method_ {
       for (std::size_t i = 0; i < d; ++i) {
         ctx.comp_residual[i] = std::max(ctx.comp_residual[i], s.comp_residual[i]);
         ctx.comp_scale[i] = std::max(ctx.comp_scale[i], s.comp_scale[i]);
+        ctx.comp_hq[i] = std::max(ctx.comp_hq[i], s.comp_hq[i]);
       }
     }
     ctx.residual = bad >= 0 ? std::numeric_limits<double>::quiet_NaN() : residual;
@@ -198,11 +203,12 @@ class JacobiSweeps : public Method_ {
     const pardel_sweep_kernel kern = ctx.disc->sweep;
     const double* q = ctx.q.data();
     // What this range finds, in locals (the scratch is written once at the end).
-    double residual = 0, residual_scale = 0, qmax = 0;
+    double residual = 0, residual_scale = 0, qmax = 0, hq = 0;
     int bad_residual = -1, singular = -1, bad_value = -1;
     double probe = 0;
     std::fill(s.comp_residual.begin(), s.comp_residual.end(), 0.0);
     std::fill(s.comp_scale.begin(), s.comp_scale.end(), 0.0);
+    std::fill(s.comp_hq.begin(), s.comp_hq.end(), 0.0);
     auto eval = [&](int k, IntervalDerivatives& out) {
       const std::size_t kk = static_cast<std::size_t>(k);
       kern(ctx.hk[kk], ctx.t[kk], ctx.t[kk + 1], q + kk * dz, q + (kk + 1) * dz, p, out.D1.data(), out.D2.data(),
@@ -246,6 +252,16 @@ class JacobiSweeps : public Method_ {
         // First Newton step from the shared interval derivatives.
         s.M = RowMap(left->D22.data(), d, d);
         s.M += RowMap(right->D11.data(), d, d);
+        // The rounding of the node's values seen through its diagonal block, |H_kk| |q_k| (the
+        // sweep kernel has no D12: the neighbours' blocks, of the same size for kinetic terms, are
+        // left out, so this part of the round-off level is low by a factor of 2 to 3 there).
+        for (int i = 0; i < d; ++i) {
+          if (!f[i]) continue;
+          double row = 0;
+          for (int j = 0; j < d; ++j) row += std::fabs(s.M(i, j)) * std::fabs(qk[j]);
+          s.comp_hq[static_cast<std::size_t>(i)] = std::max(s.comp_hq[static_cast<std::size_t>(i)], row);
+          hq = std::max(hq, row);
+        }
         for (int i = 0; i < d; ++i) s.x[i] = qk[i];
         bool fine = step(s, f, d);
         const int steps = nonlinear_ ? 50 : substeps_;
@@ -293,6 +309,7 @@ class JacobiSweeps : public Method_ {
     }
     s.residual = residual;
     s.scale = residual_scale;
+    s.hq = hq;
     s.qmax = qmax;
     s.bad_residual = bad_residual;
     s.singular = singular;

@@ -51,3 +51,29 @@ def test_newton_alone_says_which_component_it_left_unsolved():
         assert r.status == "stalled"
         assert "far above that of component y" in r.message, r.message
         assert "cannot be reached in double precision" not in r.message
+
+
+GLIDE_LAG = """\
+# a free particle x beside a spring y (y'' = -y over T = 2, below its conjugate time pi)
+model glide_and_spring
+coords x y
+L = x'^2/2 + y'^2/2 - y^2/2
+discretizations galerkin_gauss(s=2)
+"""
+
+
+@pytest.mark.parametrize("method", ["jacobi", "jacobi-newton"])
+def test_the_jacobi_methods_count_the_rounding_of_large_values_in_their_tolerance(method):
+    # x offset to 1e8: the rounding of the nodes seen through the Hessian, 2 eps |H||q|, lies far
+    # above rtol times the DEL terms under galerkin_gauss(s=2). The Jacobi sweeps left that term out
+    # of their round-off level and ran to max_iterations with the residual flat at 5e-7, on an
+    # answer equal to the unshifted problem's.
+    q0, qN = np.array([0.0, 0.4]), np.array([1.0, -0.7])
+    shift = np.array([1e8, 0.0])
+    r = pardel.solve(GLIDE_LAG, q0=q0 + shift, qN=qN + shift, T=T, N=16, method=method, max_iterations=5000)
+    plain = pardel.solve(GLIDE_LAG, q0=q0, qN=qN, T=T, N=16, method=method, max_iterations=5000)
+    assert plain.status == "converged", plain.message
+    assert r.status == "converged", r.message
+    assert r.iterations <= 1.2 * plain.iterations, (r.iterations, plain.iterations)
+    assert np.abs(r.q[:, 1] - plain.q[:, 1]).max() <= 1e-7
+    assert np.abs((r.q[:, 0] - 1e8) - plain.q[:, 0]).max() <= 1e-6
