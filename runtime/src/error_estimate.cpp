@@ -211,12 +211,28 @@ Order check_order(const Problem& problem, const Trajectory& fine, const Trajecto
   return out;
 }
 
-/** fine + e: at a common node its own e, elsewhere the cubic (fewer nodes on tiny grids) through
- *  the four nearest common nodes, in the node index; the node times too under a clock. */
+/** The nodes of `level` that hold a knot (sorted): the correction's slope jumps there, so that
+ *  add_corrections interpolates within each stretch between them. None under a clock. */
+std::vector<int> knot_nodes(const Problem& problem, const Trajectory& level) {
+  std::vector<int> nodes;
+  if (problem.knots.empty() || problem.clock != ClockMode::none) return nodes;
+  const bool own = level.t.size() == static_cast<std::size_t>(level.N) + 1;
+  const double tolerance = 1e-9 * std::max(1.0, std::fabs(problem.T));
+  for (const Knot& knot : problem.knots)
+    for (int m = 1; m < level.N; ++m) {
+      const double t = own ? level.t[static_cast<std::size_t>(m)] : problem.t0 + problem.T * m / level.N;
+      if (std::fabs(t - knot.t) <= tolerance) nodes.push_back(m);
+    }
+  std::sort(nodes.begin(), nodes.end());
+  return nodes;
+}
+
+/** fine + e: at a common node its own e, elsewhere the cubic (fewer nodes on tiny stretches)
+ *  through the four nearest common nodes of its stretch between the ends and the knot nodes
+ *  `breaks` (common-node indices), in the node index; the node times too under a clock. */
 void add_corrections(const std::vector<double>& e, const std::vector<double>& et, int ratio, bool clocked,
-                     Trajectory& fine) {
+                     const std::vector<int>& breaks, Trajectory& fine) {
   const int d = fine.dim, Nc = fine.N / ratio;
-  const int n = std::min(4, Nc + 1);
   double w[4];
   for (int k = 0; k <= fine.N; ++k) {
     double* f = fine.node(k);
@@ -227,7 +243,14 @@ void add_corrections(const std::vector<double>& e, const std::vector<double>& et
       continue;
     }
     const double x = static_cast<double>(k) / ratio;
-    const int a = std::clamp(static_cast<int>(std::floor(x)) - (n - 1) / 2, 0, Nc + 1 - n);
+    const int below = static_cast<int>(std::floor(x));
+    int lo = 0, hi = Nc;  // the stretch of common nodes that holds x
+    for (const int b : breaks) {
+      if (b <= below) lo = std::max(lo, b);
+      if (b > below) hi = std::min(hi, b);
+    }
+    const int n = std::min(4, hi - lo + 1);
+    const int a = std::clamp(below - (n - 1) / 2, lo, hi + 1 - n);
     lagrange_weights(x, a, n, w);
     for (int j = 0; j < n; ++j) {
       const double* em = e.data() + static_cast<std::size_t>(a + j) * d;
@@ -399,7 +422,7 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, con
     summary.error_note += "; not extrapolated: the estimate is not confirmed";
     return;
   }
-  add_corrections(e, et, ratio, clocked, fine);
+  add_corrections(e, et, ratio, clocked, knot_nodes(problem, coarse), fine);
   summary.extrapolated = true;
 }
 

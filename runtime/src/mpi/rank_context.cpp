@@ -129,13 +129,19 @@ int globalize_residual(Local& local, int local_bad) {
     in[4 + 2 * d + i] = ctx.comp_hq[i];
   }
   MPI_Allreduce(in, out, static_cast<int>(n), MPI_DOUBLE, MPI_MAX, local.comm);
-  ctx.residual_floor = out[1];
   ctx.residual_scale = out[3];
+  double hq = 0;
   for (std::size_t i = 0; i < d; ++i) {
     ctx.comp_residual[i] = out[4 + i];
     ctx.comp_scale[i] = out[4 + d + i];
     ctx.comp_hq[i] = out[4 + 2 * d + i];
+    hq = std::max(hq, ctx.comp_hq[i]);
   }
+  // The floor of one process, 16 eps max scale + 2 eps max |H||q| (engine.cpp, jacobi.cpp), from
+  // the global maxima: the ranks' own floors sum maxima that may lie on different ranks, and their
+  // largest can fall below it (a measured floor, in out[1], stays).
+  const double eps = std::numeric_limits<double>::epsilon();
+  ctx.residual_floor = std::max(out[1], 16 * eps * out[3] + 2 * eps * hq);
   if (out[2] > -1e300) {
     ctx.residual = std::numeric_limits<double>::quiet_NaN();
     return static_cast<int>(-out[2]);
