@@ -580,10 +580,16 @@ Inertia interior_inertia(const Context& ctx, int first, int count) {
         zero += M;
         continue;
       }
-      // Row-major or column-major alike: H is symmetric. The congruence J H J keeps its inertia.
+      // Row-major or column-major alike: H is symmetric. The congruence J H J keeps its inertia;
+      // formed in place, with Gershgorin's bound of the result (no temporary a block).
       for (int a = 0; a < M; ++a) J[a] = jacobi_scale(H(a, a));
-      H = J.asDiagonal() * H * J.asDiagonal();
-      const double tiny = zero_threshold(H.cwiseAbs().rowwise().sum().maxCoeff());
+      double bound = 0;
+      for (int a = 0; a < M; ++a) {
+        double row = 0;
+        for (int b = 0; b < M; ++b) row += std::fabs(H(a, b) *= J[a] * J[b]);
+        bound = std::max(bound, row);
+      }
+      const double tiny = zero_threshold(bound);
       eigen.compute(H, Eigen::EigenvaluesOnly);
       if (eigen.info() != Eigen::Success) {
         zero += M;

@@ -338,10 +338,6 @@ inline double component_floor(const Context& ctx, int i) {
   return ctx.comp_floor_measured.empty() ? estimated : std::max(estimated, ctx.comp_floor_measured[ii]);
 }
 
-/** Whether the residual is at the round-off level in every component (component_floor), not only
- *  against the largest terms (at_round_off): a coordinate whose terms are 1e-14 of another's has an
- *  unsolved residual far below the other's rounding. The overall test alone where the
- *  per-component sizes are not known. */
 /** The name of the first component whose residual lies far above its own round-off level while the
  *  whole residual is at the largest terms' (at_round_off, not residual_at_round_off); empty where
  *  there is none. */

@@ -398,33 +398,47 @@ bool retries_in_identity_metric(const Problem& problem, const Options& requested
          !first.residual_at_round_off && trajectory.N == problem.N;
 }
 
-/** `first`, or where retries_in_identity_metric() its retry: the retry's result as after() where it
- *  converged or was interrupted (trajectory then the retry's), else the first's with the retry's
+/** How a later attempt of the automatic method is named in the solve's message. */
+struct LaterAttempt {
+  std::string what;       ///< "a retry from there in the identity metric (...)": where it ended or was interrupted
+  std::string converged;  ///< appended to its own message where it converged, before "(first outcome)"
+};
+
+/** A later attempt with `options` from `start` after `first`: its result as after() where it
+ *  converged or was interrupted (trajectory then its iterate), else `first` with the attempt's
  *  outcome in the message. */
+Summary later_attempt(const Problem& problem, const Options& options, Summary first, Trajectory start,
+                      Trajectory& trajectory, const OnceFlags& flags, const TopologyFactory& make,
+                      const LaterAttempt& named) {
+  Summary again = solve_once(problem, numbered_after(options, first), start, flags, make);
+  if (again.termination == Termination::interrupted) {
+    trajectory = std::move(start);
+    return interrupted_after(std::move(first), std::move(again), named.what);
+  }
+  if (again.termination != Termination::converged) {
+    first.message += "; " + named.what + " ended " + to_string(again.termination) + ": " + again.message;
+    first.wall_seconds += again.wall_seconds;
+    return first;
+  }
+  const std::string first_outcome = std::string(to_string(first.termination)) + ": " + first.message;
+  trajectory = std::move(start);
+  Summary both = after(std::move(first), std::move(again));
+  both.message += named.converged + " (" + first_outcome + ")";
+  return both;
+}
+
+/** `first`, or where retries_in_identity_metric() its retry from where it stopped (later_attempt;
+ *  a retry that fails leaves the first attempt's iterate). */
 Summary with_identity_retry(const Problem& problem, const Options& requested, Summary first, Trajectory& trajectory,
                             const OnceFlags& flags, const TopologyFactory& make) {
   if (!retries_in_identity_metric(problem, requested, first, trajectory)) return first;
   Options options = requested;
   options.newton_shift = NewtonShift::identity;
-  Trajectory retry = trajectory;  // a retry that fails leaves the first attempt's iterate
-  Summary again = solve_once(problem, numbered_after(options, first), retry, flags, make);
-  if (again.termination == Termination::interrupted) {
-    trajectory = std::move(retry);
-    return interrupted_after(std::move(first), std::move(again),
-                             "a retry from there in the identity metric (newton_shift = identity)");
-  }
-  if (again.termination != Termination::converged) {
-    first.message += std::string("; a retry from there in the identity metric (newton_shift = identity) ended ") +
-                     to_string(again.termination) + ": " + again.message;
-    first.wall_seconds += again.wall_seconds;
-    return first;
-  }
-  const std::string first_outcome = std::string(to_string(first.termination)) + ": " + first.message;
-  trajectory = std::move(retry);
-  Summary both = after(std::move(first), std::move(again));
-  both.message += " in the identity metric (newton_shift = identity), retried from where the minimizing Newton in "
-                  "the kinetic metric stopped (" + first_outcome + ")";
-  return both;
+  const Trajectory from = trajectory;
+  return later_attempt(problem, options, std::move(first), from, trajectory, flags, make,
+                       {"a retry from there in the identity metric (newton_shift = identity)",
+                        " in the identity metric (newton_shift = identity), retried from where the minimizing "
+                        "Newton in the kinetic metric stopped"});
 }
 
 /** The automatic method's attempts all stalled with the residual at the round-off level of the
@@ -438,8 +452,7 @@ bool needs_node_steps(const Options& requested, const Summary& attempts) {
 }
 
 /** `attempts`, or where needs_node_steps() the seed's Jacobi-Newton from the start `guess`, whose
- *  node steps are in each coordinate's own units: its result as after() where it converged or was
- *  interrupted (trajectory then its own), else `attempts` with its outcome in the message. */
+ *  node steps are in each coordinate's own units (later_attempt). */
 Summary with_node_steps(const Problem& problem, const Options& requested, Summary attempts, const Trajectory& guess,
                         Trajectory& trajectory, const OnceFlags& flags, const TopologyFactory& make) {
   if (!needs_node_steps(requested, attempts)) return attempts;
@@ -450,24 +463,11 @@ Summary with_node_steps(const Problem& problem, const Options& requested, Summar
   // max_iterations where it does not converge.
   const long n = static_cast<long>(problem.N);
   options.max_iterations = std::min(requested.max_iterations, std::max(20000L, 4 * n * n));
-  Trajectory nodes = guess;
-  Summary again = solve_once(problem, numbered_after(options, attempts), nodes, flags, make);
   const std::string what = "Jacobi-Newton from the same start (node steps in each coordinate's own units)";
-  if (again.termination == Termination::interrupted) {
-    trajectory = std::move(nodes);
-    return interrupted_after(std::move(attempts), std::move(again), what);
-  }
-  if (again.termination != Termination::converged) {
-    attempts.message += "; then " + what + " ended " + to_string(again.termination) + ": " + again.message;
-    attempts.wall_seconds += again.wall_seconds;
-    return attempts;
-  }
-  const std::string outcome = std::string(to_string(attempts.termination)) + ": " + attempts.message;
-  trajectory = std::move(nodes);
-  Summary both = after(std::move(attempts), std::move(again));
-  both.message += " by " + what + ", after the Newton methods stalled with a component's residual far above its "
-                  "own round-off level (" + outcome + ")";
-  return both;
+  return later_attempt(problem, options, std::move(attempts), guess, trajectory, flags, make,
+                       {what,
+                        " by " + what + ", after the Newton methods stalled with a component's residual far above "
+                        "its own round-off level"});
 }
 
 /** The solve without the error estimate: the automatic method minimizes first; where no minimum
