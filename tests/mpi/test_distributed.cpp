@@ -612,6 +612,24 @@ TEST(Point, MinimumSaddleAndKnotsAsInOneProcess) {
   expect_same_point(with_knots);
 }
 
+TEST(Point, GalerkinInteriorValuesCountOverRanksAsInOneProcess) {
+  // x'' = -x over T = 40 on 12 intervals under galerkin_gauss(s=4): the node Hessian (the condensed
+  // action's) is positive definite and each interval's interior block has one negative eigenvalue,
+  // so the whole action has index 12 (tests/python/test_galerkin_inertia.py checks such counts
+  // against NumPy); over ranks each counts its own intervals and the counts are summed.
+  pardel::Options newton;
+  newton.method = pardel::Method::newton;
+  newton.threads = 1;
+  const auto oscillator = bundled_problem("harmonic", "galerkin_gauss(s=4)", 40.0, 12, {1.0}, {0.5});
+  const Both b = solve_both(oscillator, newton, pardel::linear_guess(oscillator));
+  ASSERT_TRUE(b.one.converged()) << b.one.message;
+  ASSERT_TRUE(b.dist.converged()) << b.dist.message;
+  EXPECT_EQ(b.one.point.kind, pardel::PointKind::saddle) << b.one.point.note;
+  EXPECT_EQ(b.one.point.negative, 12) << b.one.point.note;  // NumPy: 12 (and 35 positive)
+  EXPECT_EQ(b.one.point.positive, 35) << b.one.point.note;
+  expect_same_point(b);
+}
+
 // ---- models written here: the sweep, gradient and action kernels from a full kernel
 
 using FullKernel = void (*)(double, double, double, const double*, const double*, const double*, double*, double*,
