@@ -459,10 +459,12 @@ Summary with_node_steps(const Problem& problem, const Options& requested, Summar
   Options options = requested;
   options.method = Method::jacobi_newton;
   // Its sweeps needed about N^2 / 2.4 on the problems measured (1865 at N = 64, 27788 at N = 256):
-  // a budget of 4 N^2 (at least 20000) keeps an attempt the user did not ask for from running to
-  // max_iterations where it does not converge.
-  const long n = static_cast<long>(problem.N);
-  options.max_iterations = std::min(requested.max_iterations, std::max(20000L, 4 * n * n));
+  // a budget of 4 N^2 sweeps (at least 20000), and at most 10^8 node updates (about 20 s at
+  // 0.2 us a node), keeps an attempt the user did not ask for from running to max_iterations
+  // where it does not converge.
+  const long n = std::max(1L, static_cast<long>(problem.N));
+  const long budget = std::min(std::max(20000L, 4 * n * n), std::max(1L, 100000000L / n));
+  options.max_iterations = std::min(requested.max_iterations, budget);
   const std::string what = "Jacobi-Newton from the same start (node steps in each coordinate's own units)";
   return later_attempt(problem, options, std::move(attempts), guess, trajectory, flags, make,
                        {what,
