@@ -89,6 +89,15 @@ const std::string kUnconfirmedAgreement =
     " (not confirmed: L depends on t, and a jump or kink in t that all three grids' quadrature points miss alike "
     "near a node they share gives the same agreement; another grid of other nodes does confirm it)";
 
+/** The time of node m of the grid level `level`: its own where it has node times, else uniform. */
+double level_time(const Problem& problem, const Trajectory& level, int m) {
+  const bool own = level.t.size() == static_cast<std::size_t>(level.N) + 1;
+  return own ? level.t[static_cast<std::size_t>(m)] : problem.t0 + problem.T * m / level.N;
+}
+
+/** How close a node's time must be to a fixed time (an end, a knot) to be that time. */
+double time_tolerance(const Problem& problem) { return 1e-9 * std::max(1.0, std::fabs(problem.T)); }
+
 /** Where the grid `level` has a single interval between two fixed times (the ends and the knots),
  *  that stretch ("between t = 0.2 and the knot at t = 1.13"); empty where every stretch has two
  *  or more. Not checked under a clock (no knots there). */
@@ -97,15 +106,13 @@ std::string lone_interval(const Problem& problem, const Trajectory& level) {
   std::vector<double> fixed{problem.t0, problem.t0 + problem.T};
   for (const Knot& knot : problem.knots) fixed.push_back(knot.t);
   std::sort(fixed.begin(), fixed.end());
-  const bool own = level.t.size() == static_cast<std::size_t>(level.N) + 1;
-  auto time = [&](int m) {
-    return own ? level.t[static_cast<std::size_t>(m)] : problem.t0 + problem.T * m / level.N;
-  };
-  const double tolerance = 1e-9 * std::max(1.0, std::fabs(problem.T));
+  const double tolerance = time_tolerance(problem);
   for (std::size_t a = 0; a + 1 < fixed.size(); ++a) {
     int inside = 0;  // nodes strictly between the two fixed times
-    for (int m = 0; m <= level.N; ++m)
-      if (time(m) > fixed[a] + tolerance && time(m) < fixed[a + 1] - tolerance) ++inside;
+    for (int m = 0; m <= level.N; ++m) {
+      const double t = level_time(problem, level, m);
+      if (t > fixed[a] + tolerance && t < fixed[a + 1] - tolerance) ++inside;
+    }
     if (inside == 0)
       return "between t = " + number(fixed[a], 6) + " and t = " + number(fixed[a + 1], 6) + " (a knot at one end)";
   }
@@ -216,13 +223,10 @@ Order check_order(const Problem& problem, const Trajectory& fine, const Trajecto
 std::vector<int> knot_nodes(const Problem& problem, const Trajectory& level) {
   std::vector<int> nodes;
   if (problem.knots.empty() || problem.clock != ClockMode::none) return nodes;
-  const bool own = level.t.size() == static_cast<std::size_t>(level.N) + 1;
-  const double tolerance = 1e-9 * std::max(1.0, std::fabs(problem.T));
+  const double tolerance = time_tolerance(problem);
   for (const Knot& knot : problem.knots)
-    for (int m = 1; m < level.N; ++m) {
-      const double t = own ? level.t[static_cast<std::size_t>(m)] : problem.t0 + problem.T * m / level.N;
-      if (std::fabs(t - knot.t) <= tolerance) nodes.push_back(m);
-    }
+    for (int m = 1; m < level.N; ++m)
+      if (std::fabs(level_time(problem, level, m) - knot.t) <= tolerance) nodes.push_back(m);
   std::sort(nodes.begin(), nodes.end());
   return nodes;
 }
