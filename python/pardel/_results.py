@@ -194,12 +194,21 @@ def _finish(where, raw, coords, checkpoint):
     a KeyboardInterrupt as Interrupted carrying the result, any other as it was raised."""
     result = Result(raw, coords)
     result.checkpoint = checkpoint if raw["checkpoint_written"] else None
+    _raise_pending(where, raw, result, result.checkpoint)
+    return result
+
+
+def _raise_pending(where, raw, result, checkpoint=None):
+    """Raises the exception that stopped a call of the compiled core (raw["pending"], None where
+    nothing did): a KeyboardInterrupt as Interrupted carrying `result` (a Result, BatchResult or
+    SweepResult) and `checkpoint`, any other as it was raised (with raw["pending_trace"], where
+    the core kept it)."""
     pending = raw["pending"]
     if pending is None:
-        return result
+        return
     if isinstance(pending, KeyboardInterrupt):
-        raise Interrupted(where, result, result.checkpoint) from pending
-    if raw["pending_trace"] is not None:
+        raise Interrupted(where, result, checkpoint) from pending
+    if raw.get("pending_trace") is not None:
         raise pending.with_traceback(raw["pending_trace"])
     raise pending
 

@@ -13,7 +13,7 @@ from ._checks import (_MAX_N, _check_array, _check_callback, _check_int, _check_
                       _checkpoint_path, _core_call, _is_real, _kind, _shown)
 from ._models import Model, _check_model, _model_of, _model_spec
 from ._pardel import PardelError
-from ._results import BatchResult, Interrupted, Result, SweepResult, _finish
+from ._results import BatchResult, Result, SweepResult, _finish, _raise_pending
 from ._types import ArrayLike, Guess, ModelLike, OnIteration, Params, PathArg
 
 
@@ -279,8 +279,7 @@ def _solve_batch(model, q0, qN, T, N, params, guess, threads, options):
         params = table
     raw = _pardel.solve_batch_scene(scene._core, q0, qN, params, guess, threads)
     result = BatchResult(raw, m.coords)
-    if raw["pending"] is not None:  # Ctrl-C (the core raises any other exception itself), as _finish raises it
-        raise Interrupted(where, result, None) from raw["pending"]
+    _raise_pending(where, raw, result)  # Ctrl-C: the core raises any other exception itself
     return result
 
 
@@ -348,8 +347,7 @@ def sweep(path: PathArg, overrides: Sequence[str] = (), *, threads: Optional[int
     raw = _pardel.run_sweep(os.fsencode(path), list(overrides), -1 if threads is None else int(threads),
                             os.fsencode(out or ""))  # bytes: paths need not be UTF-8
     result = SweepResult(raw, out)
-    if raw["pending"] is not None:  # Ctrl-C (the core raises any other exception itself), as _finish raises it
-        raise Interrupted(where, result, None) from raw["pending"]
+    _raise_pending(where, raw, result)  # Ctrl-C: the core raises any other exception itself
     return result
 
 
