@@ -351,6 +351,15 @@ inline std::string unsolved_component(const Context& ctx) {
   return {};
 }
 
+/** The end of a stall's message where `component` (unsolved_component) is unsolved below the
+ *  largest terms' rounding: why the method could not see its steps (`measure`: what it judges them
+ *  by) and what may reach it. */
+inline std::string unsolved_component_note(const std::string& component, const char* measure) {
+  return "far above that of component " + component + ", whose terms are too small against the others' for " +
+         measure + " to show its steps: Jacobi-Newton (solver.method = \"jacobi-newton\"), whose node steps are in "
+         "each coordinate's own units, or coordinates in comparable units may reach the solution";
+}
+
 /** Whether the residual is at the round-off level in every component (component_floor), not only
  *  against the largest terms (at_round_off): a coordinate whose terms are 1e-14 of another's has an
  *  unsolved residual far below the other's rounding. The overall test alone where the

@@ -87,11 +87,9 @@ class StationaryNewton : public Method_ {
       std::snprintf(buf, sizeof buf,
                     "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of "
                     "it, reduces the DEL residual %.3g, which is at the round-off level of the largest DEL terms "
-                    "(estimate %.3g) but far above that of component %s, whose terms are too small against the "
-                    "others' for the residual's norm to show its steps: Jacobi-Newton (solver.method = "
-                    "\"jacobi-newton\"), whose node steps are in each coordinate's own units, or coordinates in "
-                    "comparable units may reach the solution",
-                    iteration, 2 * alpha, r0, ctx.residual_floor, unsolved.c_str());
+                    "(estimate %.3g) but %s",
+                    iteration, 2 * alpha, r0, ctx.residual_floor,
+                    unsolved_component_note(unsolved, "the residual's norm").c_str());
     } else if (at_round_off(r0, ctx.residual_floor)) {  // as the trust region's stall (newton_stalled)
       std::snprintf(buf, sizeof buf,
                     "stationary-newton stalled in iteration %ld: no step along the Newton direction, down to %.2g of "

@@ -90,11 +90,8 @@ inline StepOutcome newton_stalled(long iteration, double residual, double residu
     // residual) cannot see the component's steps, as it cannot see changes below its rounding.
     std::snprintf(buf, sizeof buf,
                   "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
-                  "the DEL residual %.3g is at the round-off level of the largest DEL terms (estimate %.3g) but far "
-                  "above that of component %s, whose terms are too small against the others' for the action to "
-                  "show its steps: Jacobi-Newton (solver.method = \"jacobi-newton\"), whose node steps are in "
-                  "each coordinate's own units, or coordinates in comparable units may reach the solution",
-                  iteration, residual, residual_floor, unsolved.c_str());
+                  "the DEL residual %.3g is at the round-off level of the largest DEL terms (estimate %.3g) but %s",
+                  iteration, residual, residual_floor, unsolved_component_note(unsolved, "the action").c_str());
   } else if (at_round_off(residual, residual_floor)) {
     std::snprintf(buf, sizeof buf,
                   "newton stalled in iteration %ld: no decrease of the action even along vanishing gradient steps; "
