@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "assessment.hpp"
+#include "extended_assessment.hpp"
 #include "iterative_refinement.hpp"
 #include "topology.hpp"
 
@@ -67,5 +68,7 @@ void OneProcess::refine(const Options& options, Summary& summary) { refine_solut
 void OneProcess::assess(const Options&, PointAssessment& out) { detail::assess(ctx_, out); }
 
 void OneProcess::interior_inertia(Inertia& out) { out = detail::interior_inertia(ctx_, 0, ctx_.N); }
+
+bool OneProcess::assess_extended(PointAssessment& out) { return detail::assess_extended(ctx_, out); }
 
 }  // namespace pardel::detail

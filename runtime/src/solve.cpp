@@ -20,6 +20,7 @@
 #include "batch_entries.hpp"
 #include "engine.hpp"
 #include "error_estimate.hpp"
+#include "extended_assessment.hpp"
 #include "iteration.hpp"
 #include "iterative_refinement.hpp"
 #include "levels.hpp"
@@ -181,6 +182,8 @@ void assess_point(const Options& options, const OnceFlags& flags, std::unique_pt
       method.reset();
       topology.assess(options, summary.point);
     }
+    // Where double precision cannot tell the point's kind (order >= 2 on fine grids), in extended.
+    const bool extended = detail::beyond_double(summary.point) && topology.assess_extended(summary.point);
     // Under a discretization with interior values the action's own inertia adds theirs.
     const pardel_discretization* disc = topology.context().disc;
     if (disc && disc->interior_size > 0) {
@@ -190,8 +193,9 @@ void assess_point(const Options& options, const OnceFlags& flags, std::unique_pt
     }
     summary.assessment_seconds =
         on_levels + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    detail::note_residual_caveats(summary.residual, summary.residual_floor, topology.context().residual_scale,
-                                  summary.point);
+    if (!extended || summary.point.kind == PointKind::degenerate)  // no saddle caveat of double precision
+      detail::note_residual_caveats(summary.residual, summary.residual_floor, topology.context().residual_scale,
+                                    summary.point);
   }
 }
 

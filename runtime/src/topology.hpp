@@ -90,6 +90,9 @@ class Topology : public Partition {
   /** The inertia of the interior blocks of all intervals at the context's iterate (assessment.hpp's
    *  interior_inertia over this process's intervals, summed over processes). Collective. */
   virtual void interior_inertia(Inertia& out) = 0;
+  /** The point assessment at the context's iterate with the Hessian in extended precision
+   *  (extended_assessment.hpp), where the topology has it; false, `out` unchanged, elsewhere. */
+  virtual bool assess_extended(PointAssessment&) { return false; }
 };
 
 /** Makes a fresh topology for each solve that pardel::solve makes (the attempts, the coarse solve
@@ -124,6 +127,7 @@ class OneProcess final : public Topology {
   void refine(const Options& options, Summary& summary) override;
   void assess(const Options& options, PointAssessment& out) override;
   void interior_inertia(Inertia& out) override;
+  bool assess_extended(PointAssessment& out) override;
 
  private:
   Context ctx_;
