@@ -2,15 +2,18 @@
  * @file assessment.cpp
  * What a returned trajectory is as a stationary point of the discrete action: the inertia of the
  * Hessian from its block LDL^T (minimum, saddle of index k, degenerate) and, at a minimum, its two
- * smallest eigenvalues by Lanczos on the inverse (the second one with the first deflated) against
- * Gershgorin's bound on the largest, which tells a well-posed minimum from a nearly degenerate one.
+ * smallest eigenvalues by Lanczos on the inverse (the second one with the first deflated), and
+ * where those two are nearly equal the third (with both deflated), against Gershgorin's bound on
+ * the largest, which tells a well-posed minimum from a nearly degenerate one.
  * O(N) work: one factorization (or Newton's last one, at the same point) and at most 2 x 24 solves
- * where lambda_1's run takes at most 4 steps, 3 x 24 otherwise; from a coarser level's eigenvectors
+ * where lambda_1's run takes at most 4 steps, 3 x 24 otherwise, and up to 2 x 24 more for the
+ * third (a replay of the second run and the third run); from a coarser level's eigenvectors
  * (LevelEigenvectors, Newton's nested levels) one solve per run on smooth problems. Also the check
  * that refuses a degenerate Lagrangian before solving.
  */
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -28,9 +31,9 @@
 namespace pardel::detail {
 namespace {
 
-std::string format(const char* fmt, double a, double b = 0, double c = 0, double d = 0) {
+std::string format(const char* fmt, double a, double b = 0, double c = 0, double d = 0, double e = 0) {
   char buf[512];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c, d);
+  std::snprintf(buf, sizeof buf, fmt, a, b, c, d, e);
   return buf;
 }
 
@@ -92,9 +95,48 @@ struct Basis {
   double* at(int j) const { return slot[j % cycle]; }
 };
 
+/** Projects v off the K orthonormal vectors y[0 .. K-1] over the free components (zero on the
+ *  fixed ones) and scales it to unit length: the dot products with y and v.v in one pass, then the
+ *  projection and the scaling in one, |P v|^2 = v.v - sum (v.y_m)^2; where that difference cancels
+ *  (below 1e-4 of v.v), P v is formed first and its norm taken. Returns |P v|, or 0 where that is
+ *  zero or not finite (v then not scaled). */
+template <int K>
+double deflate(const LanczosOperator& op, double* v, const double* const* y) {
+  const std::size_t n = op.n;
+  const unsigned char* free = op.free;
+  std::array<double, K + 1> sums{};  // v.y_m, then v.v
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!free[i]) continue;
+    for (int m = 0; m < K; ++m) sums[m] += v[i] * y[m][i];
+    sums[K] += v[i] * v[i];
+  }
+  op.reduce(sums.data(), K + 1);
+  std::array<double, K + 1> c{};
+  double norm2 = sums[K];
+  for (int m = 0; m < K; ++m) {
+    c[m] = sums[m];
+    norm2 -= c[m] * c[m];
+  }
+  if (K > 0 && !(norm2 > 1e-4 * sums[K])) {
+    for (std::size_t i = 0; i < n; ++i)
+      for (int m = 0; m < K; ++m) v[i] -= c[m] * y[m][i];
+    norm2 = dot(op, v, v);
+    c.fill(0);
+  }
+  const double norm = std::sqrt(norm2);
+  if (!(norm > 0) || !std::isfinite(norm)) return 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double vi = v[i];
+    for (int m = 0; m < K; ++m) vi -= c[m] * y[m][i];
+    v[i] = free[i] ? vi / norm : 0.0;
+  }
+  return norm;
+}
+
 /**
- * Lanczos on A = H^-1 over the free components, projected against the unit vector y where y is
- * not null (A restricted to y's complement), from the start vector in basis.at(0) (any norm): the
+ * Lanczos on A = H^-1 over the free components, projected against the K orthonormal vectors
+ * y[0 .. K-1] (A restricted to their complement; K = 0: A itself), from the start vector in
+ * basis.at(0) (any norm): the
  * largest eigenvalue mu of A there, by the largest Ritz value of T_j, and 1/mu, an upper bound on
  * the smallest eigenvalue of H there. Stops when the residual bound puts mu within `settle`
  * (relative) of an eigenvalue (after 3 steps at least), when the Krylov space is invariant, or at
@@ -116,31 +158,15 @@ struct Lanczos {
   double start_norm = 0;  ///< the norm of the start vector (after the projection off y)
   int steps() const { return static_cast<int>(alpha.size()); }
 };
-Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* y, double settle, bool warm,
+template <int K>
+Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* const* y, double settle, bool warm,
                 const Lanczos* replay = nullptr, double* x = nullptr) {
   const std::size_t n = op.n;
   const unsigned char* free = op.free;
   Lanczos run;
   double* v0 = basis.at(0);
-  // v_0 = P s / |P s| (s the start, P the projection off the unit vector y): s.y and s.s in one
-  // pass, then the projection and the scaling in one, |P s|^2 = s.s - (s.y)^2; where that
-  // difference cancels (below 1e-4 of s.s), P s is formed first and its norm taken.
-  double sums[2] = {0, 0};  // s.y, s.s
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!free[i]) continue;
-    if (y) sums[0] += v0[i] * y[i];
-    sums[1] += v0[i] * v0[i];
-  }
-  op.reduce(sums, 2);
-  double c = sums[0], norm2 = sums[1] - c * c;
-  if (y && !(norm2 > 1e-4 * sums[1])) {
-    for (std::size_t i = 0; i < n; ++i) v0[i] -= c * y[i];
-    norm2 = dot(op, v0, v0);
-    c = 0;
-  }
-  const double norm = std::sqrt(norm2);
-  if (!(norm > 0) || !std::isfinite(norm)) return run;
-  for (std::size_t i = 0; i < n; ++i) v0[i] = free[i] ? (y ? v0[i] - c * y[i] : v0[i]) / norm : 0.0;
+  const double norm = deflate<K>(op, v0, y);
+  if (!(norm > 0)) return run;
   run.start_norm = norm;
   if (x) std::fill(x, x + n, 0.0);
   const int steps = replay ? replay->steps() : kLanczosSteps;
@@ -150,25 +176,34 @@ Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* y, 
     const double b_prev = j > 0 ? (replay ? replay->beta[j - 1] : run.beta[j - 1]) : 0.0;
     const double* prev = j > 0 ? basis.at(j - 1) : cur;  // times b_prev = 0 at j = 0
     op.solve(cur, next);
-    // W = P A v_j - beta_{j-1} v_{j-1} - alpha_j v_j (P the projection off y; fixed components
-    // zero), in two passes over the vectors: without y, those of lanczos_recurrence; with y, the
-    // first only forms the dot products that give c = y.A v_j and alpha_j = v_j.(A v_j - c y -
-    // beta_{j-1} v_{j-1}) (expanded), and the second removes the three terms and forms |W|^2.
+    // W = P A v_j - beta_{j-1} v_{j-1} - alpha_j v_j (P the projection off the y_m; fixed
+    // components zero), in two passes over the vectors: without y, those of lanczos_recurrence;
+    // with y, the first only forms the dot products that give c_m = y_m.A v_j and alpha_j =
+    // v_j.(A v_j - sum c_m y_m - beta_{j-1} v_{j-1}) (expanded), and the second removes the terms
+    // and forms |W|^2.
     double a = 0, bb = 0;
-    if (y) {
-      double dots[4] = {0, 0, 0, 0};  // y.next, cur.next, cur.y, cur.prev
+    if constexpr (K > 0) {
+      std::array<double, 2 * K + 2> dots{};  // y_m.next, cur.y_m, then cur.next, cur.prev
       for (std::size_t i = 0; i < n; ++i) {
         if (!free[i]) continue;
-        dots[0] += y[i] * next[i];
-        dots[1] += cur[i] * next[i];
-        dots[2] += cur[i] * y[i];
-        dots[3] += cur[i] * prev[i];
+        for (int m = 0; m < K; ++m) {
+          dots[m] += y[m][i] * next[i];
+          dots[K + m] += cur[i] * y[m][i];
+        }
+        dots[2 * K] += cur[i] * next[i];
+        dots[2 * K + 1] += cur[i] * prev[i];
       }
-      op.reduce(dots, 4);
-      const double c = dots[0];
-      a = dots[1] - c * dots[2] - b_prev * dots[3];
+      op.reduce(dots.data(), 2 * K + 2);
+      a = dots[2 * K];
+      for (int m = 0; m < K; ++m) a -= dots[m] * dots[K + m];
+      a -= b_prev * dots[2 * K + 1];
       for (std::size_t i = 0; i < n; ++i) {
-        const double w = free[i] ? next[i] - c * y[i] - b_prev * prev[i] - a * cur[i] : 0.0;
+        double w = 0.0;
+        if (free[i]) {
+          w = next[i];
+          for (int m = 0; m < K; ++m) w -= dots[m] * y[m][i];
+          w = w - b_prev * prev[i] - a * cur[i];
+        }
         next[i] = w;
         bb += w * w;
       }
@@ -215,8 +250,9 @@ Lanczos lanczos(const LanczosOperator& op, const Basis& basis, const double* y, 
 }
 
 
-/** Start vectors: smooth shapes, even (shape 0) and odd (shape 1) about the middle (the lowest
- *  modes of a string), with per-component weights of no pattern, plus a pseudo-random tenth, so
+/** Start vectors: smooth shapes, even (shape 0) and odd (shapes 1 and 2, with other weights) about
+ *  the middle (the lowest modes of a string), with per-component weights of no pattern, plus a
+ *  pseudo-random tenth (another for each shape), so
  *  that every eigenvector, whatever the mix of components in it, is in the start (a smooth shape
  *  alike in every component misses the modes whose components move against each other). The same
  *  on every rank (a function of the global index). */
@@ -289,7 +325,7 @@ long fixed_components(const Grid& grid) {
   return fixed;
 }
 
-SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive) {
+SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive, bool third) {
   // lambda_1 by Lanczos on H^-1; its Ritz vector y = V s, refined by one inverse iteration, which
   // the run has already done: H^-1 y = mu y + s_k W (the Lanczos relation); then lambda_2 by
   // Lanczos on H^-1 restricted to the complement of the refined vector. The deflation keeps the
@@ -312,7 +348,7 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   SmallestEigenvalues out;
   const Basis cycle4{w, 4};
   const bool warm0 = fill_start(op, 0, cycle4.at(0));
-  const Lanczos first = lanczos(op, cycle4, nullptr, kSettleSmallest, warm0);
+  const Lanczos first = lanczos<0>(op, cycle4, nullptr, kSettleSmallest, warm0);
   out.lambda[0] = first.lambda;
   if (positive < 2 || first.alpha.empty()) {
     out.settled = first.settled;
@@ -329,7 +365,7 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   if (replayed) {
     const Basis cycle3{w, 3};
     fill_start(op, 0, cycle3.at(0));
-    lanczos(op, cycle3, nullptr, 0, warm0, &first, w[3]);
+    lanczos<0>(op, cycle3, nullptr, 0, warm0, &first, w[3]);
     z_out = w[3];
     sums = refine_ritz(op, first, w[3], nullptr, nullptr, cycle3.at(k), z_out);
   } else {
@@ -354,7 +390,7 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
     if (w[j] != y) rest[r++] = w[j];
   const Basis second_basis{rest, 3};
   const bool warm1 = fill_start(op, 1, second_basis.at(0));
-  const Lanczos second = lanczos(op, second_basis, y, kSettleNext, warm1);
+  const Lanczos second = lanczos<1>(op, second_basis, &y, kSettleNext, warm1);
   // A second value below the first: the first run's start lay along a higher mode (a warm start
   // from a coarse level where two modes were in the other order), and the two swap.
   const bool swapped = second.lambda > 0 && second.lambda < out.lambda[0];
@@ -365,20 +401,44 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
     out.lambda[1] = std::max(second.lambda, first.lambda);
   }
   out.settled = first.settled && second.settled;
-  if (op.keep[1] && second.complete && second.lambda > 0) {
-    // The second Ritz vector, refined alike: from the vectors at hand after up to 2 steps (W took
-    // v_0's place after 3), else by a replay that sums it in op.keep[1].
+  // Two nearly equal smallest values (a repeated lowest mode): lambda_3 as well, where asked.
+  const bool repeated = third && positive >= 3 && second.complete && second.lambda > 0 &&
+                        out.lambda[1] < 2 * out.lambda[0];
+  // The second Ritz vector, into op.keep[1] where given, else (for lambda_3's run) a vector of
+  // its own.
+  std::unique_ptr<double[]> own;
+  double* x2 = op.keep[1];
+  if (!x2 && repeated) {
+    own.reset(new double[n]);
+    x2 = own.get();
+  }
+  if (x2 && second.complete && second.lambda > 0) {
+    // Refined as the first: from the vectors at hand after up to 2 steps (W took v_0's place
+    // after 3), else by a replay that sums it in x2.
     const int k2 = second.steps();
     if (k2 <= 2) {
-      refine_ritz(op, second, nullptr, rest, nullptr, second_basis.at(k2), op.keep[1]);
+      refine_ritz(op, second, nullptr, rest, nullptr, second_basis.at(k2), x2);
     } else {
       fill_start(op, 1, second_basis.at(0));
-      lanczos(op, second_basis, y, 0, warm1, &second, op.keep[1]);
-      refine_ritz(op, second, op.keep[1], nullptr, nullptr, second_basis.at(k2), op.keep[1]);
+      lanczos<1>(op, second_basis, &y, 0, warm1, &second, x2);
+      refine_ritz(op, second, x2, nullptr, nullptr, second_basis.at(k2), x2);
     }
-    out.kept[1] = true;
-    if (swapped && out.kept[0]) std::swap_ranges(op.keep[0], op.keep[0] + n, op.keep[1]);
+    out.kept[1] = op.keep[1] != nullptr;
   }
+  // lambda_3 by Lanczos on H^-1 restricted to the complement of both refined vectors (x2 made
+  // orthonormal to y first), from the built-in start of shape 2, in the three vectors of the
+  // second run: an upper bound on the third eigenvalue up to the errors of the two vectors, as
+  // lambda_2 is on the second.
+  if (repeated && deflate<1>(op, x2, &y) > 0) {
+    const double* both[2] = {y, x2};
+    start_vector(op, 2, second_basis.at(0));
+    const Lanczos third_run = lanczos<2>(op, second_basis, both, kSettleNext, false);
+    if (third_run.lambda > 0) {
+      out.lambda[2] = std::max(third_run.lambda, out.lambda[1]);
+      out.settled_third = third_run.settled;
+    }
+  }
+  if (swapped && out.kept[0] && out.kept[1]) std::swap_ranges(op.keep[0], op.keep[0] + n, op.keep[1]);
   return out;
 }
 
@@ -398,13 +458,28 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
   out.lambda_min = e.lambda[0];
   out.lambda_next = e.lambda[1];
   out.lambda_settled = e.settled;
+  // A lowest mode of multiplicity two or more (an isotropic oscillator at a conjugate time) has
+  // lambda_next next to lambda_min; the gap that shows a nearly degenerate minimum then lies above
+  // lambda_next, and smallest_eigenvalues gives lambda_3 there.
+  const bool repeated = out.positive >= 2 && out.lambda_next > 0 && out.lambda_next < 2 * out.lambda_min;
+  const double lambda3 = repeated && out.positive >= 3 ? e.lambda[2] : 0.0;
+  const double soft_motion =
+      std::sqrt(2 * 1e-16 * std::max(std::fabs(action), 1e-300) / std::max(out.lambda_min, 1e-300));
   if (out.positive >= 2 && out.lambda_min < 1e-4 * out.lambda_next) {
     out.nearly_degenerate = true;
-    out.soft_motion = std::sqrt(2 * 1e-16 * std::max(std::fabs(action), 1e-300) / std::max(out.lambda_min, 1e-300));
+    out.soft_motion = soft_motion;
     out.note = format("a nearly degenerate minimum: the smallest eigenvalue of the Hessian, %.3g, is %.2g of the "
                       "next (%.3g); the action is determined to round-off, the trajectory only up to a motion of "
                       "size about %.2g along one direction",
                       out.lambda_min, out.lambda_min / out.lambda_next, out.lambda_next, out.soft_motion);
+  } else if (lambda3 > 0 && out.lambda_next < 1e-4 * lambda3) {
+    out.nearly_degenerate = true;
+    out.soft_motion = soft_motion;
+    out.note = format("a nearly degenerate minimum whose lowest mode is two-fold: the two smallest eigenvalues of the "
+                      "Hessian, %.3g and %.3g, are nearly equal and %.2g of the third (%.3g); the action is "
+                      "determined to round-off, the trajectory only up to a motion of size about %.2g in a "
+                      "two-dimensional subspace",
+                      out.lambda_min, out.lambda_next, out.lambda_next / lambda3, lambda3, out.soft_motion);
   } else if (out.lambda_settled) {
     out.note = format("a strict local minimum: Hessian positive definite, eigenvalues from %.3g (next %.3g) to at "
                       "most %.3g",
@@ -414,14 +489,27 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
                       "most %.3g) to at most %.3g",
                       out.lambda_min, out.lambda_next, out.lambda_max);
   }
-  // A lowest mode of multiplicity two or more (an isotropic oscillator at a conjugate time): the
-  // gap that would show a nearly degenerate minimum lies above lambda_next, which is not computed.
-  if (!out.nearly_degenerate && out.positive >= 2 && out.lambda_next > 0 && out.lambda_next < 2 * out.lambda_min)
-    out.note += "; the two smallest eigenvalues are nearly equal (a repeated lowest mode), so their ratio does not "
-                "tell whether the minimum is nearly degenerate: compare lambda_min with the problem's own scales";
+  if (repeated && !out.nearly_degenerate) {
+    if (!(lambda3 > 0))  // one or two unknowns, or the third run failed
+      out.note += "; the two smallest eigenvalues are nearly equal (a repeated lowest mode), so their ratio does "
+                  "not tell whether the minimum is nearly degenerate: compare lambda_min with the problem's own "
+                  "scales";
+    else if (lambda3 < 2 * out.lambda_next)
+      out.note += format("; the three smallest eigenvalues are nearly equal (the third %.3g: a lowest mode of "
+                         "multiplicity three or more), so their ratios do not tell whether the minimum is nearly "
+                         "degenerate: compare lambda_min with the problem's own scales",
+                         lambda3);
+    else
+      out.note += format("; the two smallest eigenvalues are nearly equal (a two-fold lowest mode), and the third, "
+                         "%.3g, is %.3g times them, short of the factor 1e4 that marks a nearly degenerate minimum",
+                         lambda3, lambda3 / out.lambda_next);
+  }
   if (!out.lambda_settled)
     out.note += format("; the two smallest are upper bounds: Ritz values of %.0f Lanczos steps that had not "
                        "settled",
+                       static_cast<double>(kLanczosSteps));
+  if (lambda3 > 0 && !e.settled_third)
+    out.note += format("; the third is an upper bound: the Ritz value of %.0f Lanczos steps that had not settled",
                        static_cast<double>(kLanczosSteps));
   if (notes_round_off_bound(out.lambda_min, out.lambda_max)) {
     const double condition = out.lambda_max / out.lambda_min;
@@ -499,7 +587,7 @@ void LevelEigenvectors::settle_level(const Context& ctx, const std::function<voi
     op.keep[i] = next_[i].data();
   }
   if (held()) op.start = [this, &ctx](int which, double* v) { return start(ctx, which, v); };
-  const SmallestEigenvalues e = smallest_eigenvalues(op, positive);
+  const SmallestEigenvalues e = smallest_eigenvalues(op, positive, false);
   for (int i = 0; i < 2; ++i) {
     std::swap(v_[i], next_[i]);
     valid_[i] = e.kept[i];

@@ -122,10 +122,12 @@ struct LanczosOperator {
 };
 
 /** The two smallest eigenvalues of H (Ritz values: upper bounds, the second up to the error of
- *  the first one's eigenvector) and whether they settled. */
+ *  the first one's eigenvector) and whether they settled; where the two are nearly equal, the
+ *  third as well (0 where not computed). */
 struct SmallestEigenvalues {
-  double lambda[2] = {0, 0};
-  bool settled = false;
+  double lambda[3] = {0, 0, 0};
+  bool settled = false;           ///< lambda[0] and lambda[1] settled
+  bool settled_third = false;     ///< lambda[2] computed and settled
   bool kept[2] = {false, false};  ///< LanczosOperator::keep[i] written
 };
 
@@ -161,9 +163,12 @@ class LevelEigenvectors {
  *  >= 2, by one inverse iteration from its Ritz vector) and the next one by Lanczos on H^-1 with
  *  that vector deflated (a repeated smallest eigenvalue is found twice, and a converged first one
  *  does not return as a copy). At most 24 steps each, stopping when the residual bound puts them
- *  within 1e-4 and 3e-3 (relative). Four vectors of n (op.work or its own); collective over ranks
- *  through op. */
-SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive);
+ *  within 1e-4 and 3e-3 (relative). With `third`, where `positive` >= 3 and the two are nearly
+ *  equal (the second below twice the first: a repeated lowest mode), the third one as well, by
+ *  Lanczos on H^-1 with both refined vectors deflated (stopping within 3e-3), which tells whether
+ *  a two-fold lowest mode lies far below the rest. Four vectors of n (op.work or its own), and a
+ *  fifth for the third run (op.keep[1] or its own); collective over ranks through op. */
+SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive, bool third = true);
 
 /** A positive definite Hessian's assessment from its smallest eigenvalues, out.positive and
  *  out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note; `diagonal_spread`

@@ -6,7 +6,8 @@
  * threads inside the ranks; under fixed_total_time also when the clock moves nodes across ranks),
  * Newton and hybrid to the tolerance, the levels of refinement and of the automatic method's grid
  * sequencing (those of one process, from the first that fits the ranks), the halo exchange and the
- * rank-order sum, the point assessment (kind, inertia and eigenvalue estimates), refusals (a
+ * rank-order sum, the point assessment (kind, inertia and eigenvalue estimates; a two-fold lowest mode
+ * judged by the third eigenvalue), refusals (a
  * degenerate Lagrangian with the one-process message), a NaN or an
  * interruption on one rank ending every rank (its iterate not assessed, as in one process), the
  * automatic method's second attempt (one process only, and the summary over ranks says so), the
@@ -630,27 +631,88 @@ TEST(Point, GalerkinInteriorValuesCountOverRanksAsInOneProcess) {
   expect_same_point(b);
 }
 
-// ---- models written here: the sweep, gradient and action kernels from a full kernel
+// ---- models written here (one or two coordinates): the sweep, gradient and action kernels from a
+// full kernel
 
 using FullKernel = void (*)(double, double, double, const double*, const double*, const double*, double*, double*,
                             double*, double*, double*, double*);
 template <FullKernel full>
 void sweep_of(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* D1,
               double* D2, double* D11, double* D22) {
-  double Ld, D12;
-  full(h, t0, t1, q0, q1, p, &Ld, D1, D2, D11, &D12, D22);
+  double Ld, D12[4];
+  full(h, t0, t1, q0, q1, p, &Ld, D1, D2, D11, D12, D22);
 }
 template <FullKernel full>
 void grad_of(double h, double t0, double t1, const double* q0, const double* q1, const double* p, double* Ld,
              double* D1, double* D2) {
-  double a, b, c;
-  full(h, t0, t1, q0, q1, p, Ld, D1, D2, &a, &b, &c);
+  double a[4], b[4], c[4];
+  full(h, t0, t1, q0, q1, p, Ld, D1, D2, a, b, c);
 }
 template <FullKernel full>
 double action_of(double h, double t0, double t1, const double* q0, const double* q1, const double* p) {
-  double Ld, D1, D2;
-  grad_of<full>(h, t0, t1, q0, q1, p, &Ld, &D1, &D2);
+  double Ld, D1[2], D2[2];
+  grad_of<full>(h, t0, t1, q0, q1, p, &Ld, D1, D2);
   return Ld;
+}
+
+// The isotropic oscillator in the plane, L = (|q'|^2 - |q|^2) / 2 (trapezoid): its Hessian is two
+// copies of tridiag(-1/h, 2/h - h, -1/h), every eigenvalue twice.
+void plane_full(double h, double, double, const double* q0, const double* q1, const double*, double* Ld, double* D1,
+                double* D2, double* D11, double* D12, double* D22) {
+  *Ld = 0;
+  for (int a = 0; a < 2; ++a) {
+    const double dq = q1[a] - q0[a];
+    *Ld += dq * dq / (2 * h) - h * (q0[a] * q0[a] + q1[a] * q1[a]) / 4;
+    D1[a] = -dq / h - h * q0[a] / 2;
+    D2[a] = dq / h - h * q1[a] / 2;
+  }
+  for (int k = 0; k < 4; ++k) {
+    const double on = k == 0 || k == 3 ? 1.0 : 0.0;
+    D11[k] = D22[k] = on * (1 / h - h / 2);
+    D12[k] = -on / h;
+  }
+}
+const char* const plane_coords[] = {"a", "b"};
+const pardel_discretization plane_discs[] = {
+    {"trapezoid", 2, plane_full, sweep_of<plane_full>, grad_of<plane_full>, action_of<plane_full>}};
+const pardel_model plane_model = {PARDEL_KERNEL_ABI_VERSION, "isotropic_plane", "", 1, 2, 2, plane_coords, 0, nullptr,
+                                  nullptr, 0, nullptr, 1, plane_discs, nullptr, PARDEL_COST_ACTION};
+
+TEST(Point, ATwoFoldLowestModeOverRanksAsInOneProcess) {
+  // The plane oscillator near its conjugate time pi: the two smallest eigenvalues are equal
+  // ((4/h) sin^2(pi / 2N) - h, twice), the third 5.9e4 times larger at T = pi - 1e-4, so the
+  // minimum is nearly degenerate with a two-fold lowest mode; at T = 1 the third is 4.3 times
+  // larger and it is not. The third eigenvalue's Lanczos run over ranks decides as in one process.
+  pardel::Options newton;
+  newton.method = pardel::Method::newton;
+  newton.threads = 1;
+  for (const double T : {3.14159265358979323846 - 1e-4, 1.0}) {
+    const int N = 256;
+    pardel::Problem problem;
+    problem.model = &plane_model;
+    problem.discretization = &plane_model.discretizations[0];
+    problem.T = T;
+    problem.N = N;
+    problem.q0 = {1.0, 0.3};
+    problem.qN = {-0.9, -0.2};
+    const Both b = solve_both(problem, newton, pardel::linear_guess(problem));
+    ASSERT_TRUE(b.one.converged()) << b.one.message;
+    ASSERT_TRUE(b.dist.converged()) << b.dist.message;
+    expect_same_point(b);
+    const double h = T / N, s1 = std::sin(3.14159265358979323846 / (2 * N));
+    const double lambda1 = 4 / h * s1 * s1 - h;
+    const bool soft = T > 3;
+    for (const pardel::Summary* s : {&b.one, &b.dist}) {
+      EXPECT_EQ(s->point.kind, pardel::PointKind::minimum) << s->point.note;
+      EXPECT_NEAR(s->point.lambda_min, lambda1, 1e-4 * lambda1) << s->point.note;
+      EXPECT_NEAR(s->point.lambda_next, lambda1, 3e-3 * lambda1) << s->point.note;
+      EXPECT_EQ(s->point.nearly_degenerate, soft) << s->point.note;
+      if (soft)
+        EXPECT_EQ(s->point.note.find("a nearly degenerate minimum whose lowest mode is two-fold"), 0u) << s->point.note;
+      else
+        EXPECT_NE(s->point.note.find("(a two-fold lowest mode), and the third"), std::string::npos) << s->point.note;
+    }
+  }
 }
 
 // ---- checkpoints: an interrupted solve's state over ranks, resumed over ranks or in one process

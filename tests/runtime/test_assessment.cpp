@@ -13,7 +13,9 @@
  * nearly degenerate minimum, against the exact eigenvalues of its Hessian; the same exact
  * eigenvalues (one spring, two springs whose two lowest modes lie on different coordinates) and a
  * triple one after the automatic method's nested levels, whose eigenvector estimates start the
- * next level's Lanczos runs, and an order-3 model's there equal to its point's own assessment.
+ * next level's Lanczos runs, and an order-3 model's there equal to its point's own assessment; a
+ * two-fold smallest eigenvalue of a diagonal Hessian compared with the third (nearly degenerate
+ * where it lies below 1e-4 of it), which is computed only where the two smallest are nearly equal.
  */
 #include <gtest/gtest.h>
 
@@ -139,6 +141,93 @@ TEST(Assessment, StartsAlongModesInTheOtherOrderGiveTheSmallestFirst) {
   EXPECT_TRUE(cold.settled);
   EXPECT_NEAR(cold.lambda[0], 1, 1e-4);
   EXPECT_NEAR(cold.lambda[1], 2, 6e-3);
+}
+
+/** A diagonal Hessian with the eigenvalues d (dim 2: two components a node) as the Lanczos runs
+ *  see it: x = H^-1 b by division, each solve counted in *solves. */
+pardel::detail::LanczosOperator diagonal_operator(const std::vector<double>& d, const std::vector<unsigned char>& free,
+                                                   int* solves) {
+  pardel::detail::LanczosOperator op;
+  op.n = d.size();
+  op.dim = 2;
+  op.first_node = 1;
+  op.N = static_cast<int>(d.size()) / 2 + 1;
+  op.free = free.data();
+  op.solve = [&d, solves](const double* b, double* x) {
+    ++*solves;
+    for (std::size_t i = 0; i < d.size(); ++i) x[i] = b[i] / d[i];
+  };
+  op.reduce = [](double*, int) {};
+  return op;
+}
+
+TEST(Assessment, ATwoFoldLowestModeIsComparedWithTheThirdEigenvalue) {
+  // H = diag(d) on 60 unknowns: a two-fold smallest eigenvalue (entries 13 and 40) under the rest,
+  // d_i = 0.9 + 0.05 i, whose smallest, d_0 = 0.9, is the third eigenvalue. With
+  // the two-fold value 1e-6 the minimum is nearly degenerate (1e-6 < 1e-4 * 0.9, the ratio of the
+  // two smallest is 1); with 0.3 it is not. A third Lanczos run with both Ritz vectors deflated
+  // gives the third eigenvalue; none is made where the two smallest are not nearly equal.
+  const std::size_t n = 60;
+  const std::vector<unsigned char> free(n, 1);
+  for (const double soft : {1e-6, 0.3}) {
+    std::vector<double> d(n);
+    for (std::size_t i = 0; i < n; ++i) d[i] = 0.9 + 0.05 * static_cast<double>(i);
+    d[13] = d[40] = soft;
+    int solves = 0;
+    const pardel::detail::LanczosOperator op = diagonal_operator(d, free, &solves);
+    const pardel::detail::SmallestEigenvalues e = pardel::detail::smallest_eigenvalues(op, static_cast<long>(n));
+    EXPECT_TRUE(e.settled);
+    EXPECT_TRUE(e.settled_third);
+    EXPECT_GE(e.lambda[0], soft * (1 - 1e-12));
+    EXPECT_LE(e.lambda[0], soft * (1 + 1e-4));
+    EXPECT_GE(e.lambda[1], soft * (1 - 1e-12));
+    EXPECT_LE(e.lambda[1], soft * (1 + 3e-3));
+    EXPECT_GE(e.lambda[2], 0.9 * (1 - 1e-12));
+    EXPECT_LE(e.lambda[2], 0.9 * (1 + 3e-3));
+    // Without the third run: the same two values, fewer solves.
+    int fewer = 0;
+    const pardel::detail::SmallestEigenvalues two =
+        pardel::detail::smallest_eigenvalues(diagonal_operator(d, free, &fewer), static_cast<long>(n), false);
+    EXPECT_EQ(two.lambda[0], e.lambda[0]);
+    EXPECT_EQ(two.lambda[1], e.lambda[1]);
+    EXPECT_EQ(two.lambda[2], 0);
+    EXPECT_LT(fewer, solves);
+
+    pardel::PointAssessment out;
+    out.positive = static_cast<long>(n);
+    out.lambda_max = 4;
+    pardel::detail::describe_minimum(e, 1.0, out);
+    EXPECT_EQ(out.nearly_degenerate, soft < 1e-4 * 0.9) << out.note;
+    if (out.nearly_degenerate) {
+      EXPECT_EQ(out.note.find("a nearly degenerate minimum whose lowest mode is two-fold"), 0u) << out.note;
+      EXPECT_NE(out.note.find("a two-dimensional subspace"), std::string::npos) << out.note;
+      EXPECT_NEAR(out.soft_motion, std::sqrt(2e-16 / out.lambda_min), 1e-12 * out.soft_motion);
+    } else {
+      EXPECT_NE(out.note.find("the two smallest eigenvalues are nearly equal (a two-fold lowest mode), and the third"),
+                std::string::npos)
+          << out.note;
+      EXPECT_EQ(out.soft_motion, 0);
+    }
+    // Only the two values (the third not computed): the flag cannot be set, and the note says why.
+    pardel::PointAssessment blind;
+    blind.positive = static_cast<long>(n);
+    blind.lambda_max = 4;
+    pardel::detail::describe_minimum(two, 1.0, blind);
+    EXPECT_FALSE(blind.nearly_degenerate) << blind.note;
+    EXPECT_NE(blind.note.find("so their ratio does not tell"), std::string::npos) << blind.note;
+  }
+  // Distinct smallest eigenvalues (1, 2, 3, ...): no third run, the same solves as without one.
+  std::vector<double> d(n);
+  for (std::size_t i = 0; i < n; ++i) d[i] = 1 + static_cast<double>(i);
+  int with = 0, without = 0;
+  const pardel::detail::SmallestEigenvalues a =
+      pardel::detail::smallest_eigenvalues(diagonal_operator(d, free, &with), static_cast<long>(n));
+  const pardel::detail::SmallestEigenvalues b =
+      pardel::detail::smallest_eigenvalues(diagonal_operator(d, free, &without), static_cast<long>(n), false);
+  EXPECT_EQ(a.lambda[2], 0);
+  EXPECT_EQ(with, without);
+  EXPECT_EQ(a.lambda[0], b.lambda[0]);
+  EXPECT_EQ(a.lambda[1], b.lambda[1]);
 }
 
 #ifdef PARDEL_HAVE_BUNDLED_MODELS
@@ -360,6 +449,9 @@ TEST(Assessment, ARepeatedSmallestEigenvalueIsReportedTwice) {
   EXPECT_NEAR(s.point.lambda_min, e[0], 1e-4 * e[0]);
   EXPECT_NEAR(s.point.lambda_next, e[1], 3e-3 * e[1]);  // settled to 3e-3 (docs/solvers.md)
   EXPECT_FALSE(s.point.nearly_degenerate);
+  // The two nearly equal: the third is computed too, and found nearly equal as well.
+  EXPECT_NE(s.point.note.find("the three smallest eigenvalues are nearly equal (the third "), std::string::npos)
+      << s.point.note;
 }
 
 TEST(Assessment, ARepeatedSmallestEigenvalueIsReportedTwiceOnNestedLevels) {

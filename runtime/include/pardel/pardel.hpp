@@ -369,8 +369,9 @@ const char* to_string(PointKind kind);
 /**
  * The inertia of the Hessian of the discrete action at a trajectory, from its block LDL^T (O(N)),
  * and, at a minimum, its two smallest eigenvalues by Lanczos on its inverse (a few more O(N)
- * solves) against Gershgorin's bound on the largest. It says what a returned point is; at a
- * residual above the tolerance it describes the point, not a solution.
+ * solves; where the two are nearly equal, the third as well) against Gershgorin's bound on the
+ * largest. It says what a returned point is; at a residual above the tolerance it describes the
+ * point, not a solution.
  */
 struct PointAssessment {
   PointKind kind = PointKind::unknown;
@@ -383,10 +384,14 @@ struct PointAssessment {
    *  eigenvalues (the note says so) */
   bool lambda_settled = false;
   /** A minimum whose smallest eigenvalue is below 1e-4 of the next: the action is determined to
-   *  round-off, the trajectory only up to a motion along the eigenvector of lambda_min. */
+   *  round-off, the trajectory only up to a motion along the eigenvector of lambda_min; or whose
+   *  two smallest are nearly equal (lambda_next < 2 lambda_min: a two-fold lowest mode) and
+   *  lambda_next is below 1e-4 of the third (computed for this, given in the note): a motion in the
+   *  two-dimensional subspace of their eigenvectors. */
   bool nearly_degenerate = false;
   /** For a nearly degenerate minimum: the Euclidean size, over all unknowns, of a motion along that
-   *  eigenvector that changes the action by its round-off, sqrt(2 * 1e-16 |action| / lambda_min). */
+   *  eigenvector (in that subspace) that changes the action by its round-off,
+   *  sqrt(2 * 1e-16 |action| / lambda_min). */
   double soft_motion = 0;
   std::string note;         ///< one sentence: what was found and what it means
 };
