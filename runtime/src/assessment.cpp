@@ -24,6 +24,7 @@
 
 #include "assessment.hpp"
 #include "block_tridiagonal.hpp"
+#include "extended_assessment.hpp"
 #include "constants.hpp"
 #include "iterative_refinement.hpp"
 #include "lanczos.hpp"
@@ -442,16 +443,9 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   return out;
 }
 
-namespace {
-
-/** Whether a minimum's note bounds how far round-off in the DEL residual can move the solution:
- *  by up to the condition number times 1e-16 (relative), said where that exceeds 1e-3 (high orders
- *  at large N: the condition grows like N^(2 order)). */
 bool notes_round_off_bound(double lambda_min, double lambda_max) {
   return lambda_min > 0 && lambda_max / lambda_min * 1e-16 > 1e-3;
 }
-
-}  // namespace
 
 void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessment& out, double diagonal_spread) {
   out.kind = PointKind::minimum;
@@ -837,6 +831,7 @@ PointAssessment assess_point(const Problem& problem, const Trajectory& trajector
     return out;
   }
   detail::assess(ctx, out);
+  if (detail::beyond_double(out)) detail::assess_extended(ctx, out);  // as a solve's own assessment
   detail::add_interior_inertia(detail::interior_inertia(ctx, 0, ctx.N), out);
   return out;
 }

@@ -170,6 +170,11 @@ class LevelEigenvectors {
  *  fifth for the third run (op.keep[1] or its own); collective over ranks through op. */
 SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positive, bool third = true);
 
+/** Whether a minimum's note bounds how far round-off in the DEL residual can move the solution:
+ *  by up to the condition number lambda_max / lambda_min times 1e-16 (relative), said where that
+ *  exceeds 1e-3 (high orders at large N: the condition grows like N^(2 order)). */
+bool notes_round_off_bound(double lambda_min, double lambda_max);
+
 /** A positive definite Hessian's assessment from its smallest eigenvalues, out.positive and
  *  out.lambda_max: kind, eigenvalues, nearly degenerate or not, and the note; `diagonal_spread`
  *  (engine.hpp's, 1 where not known) qualifies the note's round-off bound. */

@@ -19,7 +19,7 @@ bool beyond_double(const PointAssessment& point) {
     case PointKind::degenerate:
       return true;
     case PointKind::minimum:
-      return point.lambda_min > 0 && point.lambda_max / point.lambda_min * 1e-16 > 1e-3;
+      return notes_round_off_bound(point.lambda_min, point.lambda_max);
   }
   return false;
 }

@@ -15,7 +15,8 @@ namespace pardel::detail {
 /** Whether a point assessment made in double precision may be wrong for want of precision: a point
  *  it did not find a minimum (round-off in the pivots of an ill-conditioned Hessian makes negative
  *  or zero ones), or a minimum whose condition number times 1e-16 exceeds 1e-3 (its smallest
- *  eigenvalues are then not resolved). Not for a point that was not assessed. */
+ *  eigenvalues are then not resolved: notes_round_off_bound). Not for a point that was not
+ *  assessed. */
 bool beyond_double(const PointAssessment& point);
 
 /** The assessment of ctx.q with the Hessian from the discretization's full_extended kernel,

@@ -258,6 +258,18 @@ TEST(Assessment, AnOrderThreeModelOnNestedLevelsHasTheEigenvaluesOfItsPointAlone
   ASSERT_TRUE(s.point.lambda_settled) << s.point.note;
   EXPECT_NEAR(s.point.lambda_min, alone.lambda_min, 2e-4 * alone.lambda_min);
   EXPECT_NEAR(s.point.lambda_next, alone.lambda_next, 6e-3 * alone.lambda_next);
+  // At N = 3000 the Hessian's condition (about N^6) is beyond double precision, and both are
+  // found in extended precision. The truth: lambda_min falls like 1/N here (N lambda_min = 31.74
+  // from N = 100 to 3200), and at N = 200 double precision resolves it. In double, N = 3000 gave
+  // 0.0406, four times the value, in both assessments alike.
+  EXPECT_NE(s.point.note.find("extended precision"), std::string::npos) << s.point.note;
+  pardel::Problem coarse = p;
+  coarse.N = 200;
+  auto coarse_tr = pardel::linear_guess(coarse);
+  const pardel::Summary c = pardel::solve(coarse, pardel::Options{}, coarse_tr);
+  ASSERT_TRUE(c.converged()) << c.brief_report();
+  ASSERT_EQ(c.point.note.find("extended precision"), std::string::npos) << c.point.note;
+  EXPECT_NEAR(3000 * s.point.lambda_min, 200 * c.point.lambda_min, 1e-3 * 200 * c.point.lambda_min);
 }
 #endif
 
