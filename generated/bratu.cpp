@@ -221,8 +221,8 @@ static const double bratu_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization bratu_discretizations[] = {
-    {"trapezoid", 2, bratu_trapezoid_full, bratu_trapezoid_sweep, bratu_trapezoid_grad, bratu_trapezoid_action, PD_EXTENDED(bratu_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
-    {"midpoint", 2, bratu_midpoint_full, bratu_midpoint_sweep, bratu_midpoint_grad, bratu_midpoint_action, PD_EXTENDED(bratu_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
+    {"trapezoid", 2, bratu_trapezoid_full, bratu_trapezoid_sweep, bratu_trapezoid_grad, bratu_trapezoid_action, PD_EXTENDED(bratu_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
+    {"midpoint", 2, bratu_midpoint_full, bratu_midpoint_sweep, bratu_midpoint_grad, bratu_midpoint_action, PD_EXTENDED(bratu_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model bratu_model = {

@@ -237,8 +237,8 @@ static const char* const free_particle_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization free_particle_discretizations[] = {
-    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action, PD_EXTENDED(free_particle_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
-    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action, PD_EXTENDED(free_particle_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
+    {"trapezoid", 2, free_particle_trapezoid_full, free_particle_trapezoid_sweep, free_particle_trapezoid_grad, free_particle_trapezoid_action, PD_EXTENDED(free_particle_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
+    {"midpoint", 2, free_particle_midpoint_full, free_particle_midpoint_sweep, free_particle_midpoint_grad, free_particle_midpoint_action, PD_EXTENDED(free_particle_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model free_particle_model = {

@@ -422,8 +422,8 @@ static const char* const fuel_nav_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization fuel_nav_discretizations[] = {
-    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action, PD_EXTENDED(fuel_nav_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
-    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action, PD_EXTENDED(fuel_nav_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
+    {"trapezoid", 2, fuel_nav_trapezoid_full, fuel_nav_trapezoid_sweep, fuel_nav_trapezoid_grad, fuel_nav_trapezoid_action, PD_EXTENDED(fuel_nav_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
+    {"midpoint", 2, fuel_nav_midpoint_full, fuel_nav_midpoint_sweep, fuel_nav_midpoint_grad, fuel_nav_midpoint_action, PD_EXTENDED(fuel_nav_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model fuel_nav_model = {

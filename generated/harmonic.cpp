@@ -708,10 +708,10 @@ static const double harmonic_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization harmonic_discretizations[] = {
-    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, PD_EXTENDED(harmonic_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
-    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, PD_EXTENDED(harmonic_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
-    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, PD_EXTENDED(harmonic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 1, harmonic_galerkin_lobatto_s_2_interval_hessian},
-    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, PD_EXTENDED(harmonic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 3, harmonic_galerkin_gauss_s_4_interval_hessian},
+    {"trapezoid", 2, harmonic_trapezoid_full, harmonic_trapezoid_sweep, harmonic_trapezoid_grad, harmonic_trapezoid_action, PD_EXTENDED(harmonic_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
+    {"midpoint", 2, harmonic_midpoint_full, harmonic_midpoint_sweep, harmonic_midpoint_grad, harmonic_midpoint_action, PD_EXTENDED(harmonic_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
+    {"galerkin_lobatto(s=2)", 4, harmonic_galerkin_lobatto_s_2_full, harmonic_galerkin_lobatto_s_2_sweep, harmonic_galerkin_lobatto_s_2_grad, harmonic_galerkin_lobatto_s_2_action, PD_EXTENDED(harmonic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 1, harmonic_galerkin_lobatto_s_2_interval_hessian, nullptr},
+    {"galerkin_gauss(s=4)", 8, harmonic_galerkin_gauss_s_4_full, harmonic_galerkin_gauss_s_4_sweep, harmonic_galerkin_gauss_s_4_grad, harmonic_galerkin_gauss_s_4_action, PD_EXTENDED(harmonic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 3, harmonic_galerkin_gauss_s_4_interval_hessian, nullptr},
 };
 
 extern "C" const pardel_model harmonic_model = {

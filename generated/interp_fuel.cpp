@@ -1907,8 +1907,8 @@ static const double interp_fuel_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization interp_fuel_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, interp_fuel_trapezoid_alpha_1_full, interp_fuel_trapezoid_alpha_1_sweep, interp_fuel_trapezoid_alpha_1_grad, interp_fuel_trapezoid_alpha_1_action, PD_EXTENDED(interp_fuel_trapezoid_alpha_1_grad_extended), PD_EXTENDED(interp_fuel_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr},
-    {"gauss2", 4, interp_fuel_gauss2_full, interp_fuel_gauss2_sweep, interp_fuel_gauss2_grad, interp_fuel_gauss2_action, PD_EXTENDED(interp_fuel_gauss2_grad_extended), PD_EXTENDED(interp_fuel_gauss2_full_extended), "gauss2", 0, nullptr},
+    {"trapezoid(alpha=1)", 2, interp_fuel_trapezoid_alpha_1_full, interp_fuel_trapezoid_alpha_1_sweep, interp_fuel_trapezoid_alpha_1_grad, interp_fuel_trapezoid_alpha_1_action, PD_EXTENDED(interp_fuel_trapezoid_alpha_1_grad_extended), PD_EXTENDED(interp_fuel_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr, nullptr},
+    {"gauss2", 4, interp_fuel_gauss2_full, interp_fuel_gauss2_sweep, interp_fuel_gauss2_grad, interp_fuel_gauss2_action, PD_EXTENDED(interp_fuel_gauss2_grad_extended), PD_EXTENDED(interp_fuel_gauss2_full_extended), "gauss2", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model interp_fuel_model = {

@@ -1109,7 +1109,7 @@ static const char* const min_jerk_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization min_jerk_discretizations[] = {
-    {"hermite_gauss(s=3)", 6, min_jerk_hermite_gauss_s_3_full, min_jerk_hermite_gauss_s_3_sweep, min_jerk_hermite_gauss_s_3_grad, min_jerk_hermite_gauss_s_3_action, PD_EXTENDED(min_jerk_hermite_gauss_s_3_grad_extended), PD_EXTENDED(min_jerk_hermite_gauss_s_3_full_extended), "hermite_gauss", 0, nullptr},
+    {"hermite_gauss(s=3)", 6, min_jerk_hermite_gauss_s_3_full, min_jerk_hermite_gauss_s_3_sweep, min_jerk_hermite_gauss_s_3_grad, min_jerk_hermite_gauss_s_3_action, PD_EXTENDED(min_jerk_hermite_gauss_s_3_grad_extended), PD_EXTENDED(min_jerk_hermite_gauss_s_3_full_extended), "hermite_gauss", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model min_jerk_model = {

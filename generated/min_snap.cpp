@@ -1810,7 +1810,7 @@ static const char* const min_snap_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization min_snap_discretizations[] = {
-    {"hermite_gauss(s=4)", 8, min_snap_hermite_gauss_s_4_full, min_snap_hermite_gauss_s_4_sweep, min_snap_hermite_gauss_s_4_grad, min_snap_hermite_gauss_s_4_action, PD_EXTENDED(min_snap_hermite_gauss_s_4_grad_extended), PD_EXTENDED(min_snap_hermite_gauss_s_4_full_extended), "hermite_gauss", 0, nullptr},
+    {"hermite_gauss(s=4)", 8, min_snap_hermite_gauss_s_4_full, min_snap_hermite_gauss_s_4_sweep, min_snap_hermite_gauss_s_4_grad, min_snap_hermite_gauss_s_4_action, PD_EXTENDED(min_snap_hermite_gauss_s_4_grad_extended), PD_EXTENDED(min_snap_hermite_gauss_s_4_full_extended), "hermite_gauss", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model min_snap_model = {

@@ -794,10 +794,10 @@ static const double pendulum_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization pendulum_discretizations[] = {
-    {"trapezoid", 2, pendulum_trapezoid_full, pendulum_trapezoid_sweep, pendulum_trapezoid_grad, pendulum_trapezoid_action, PD_EXTENDED(pendulum_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
-    {"midpoint", 2, pendulum_midpoint_full, pendulum_midpoint_sweep, pendulum_midpoint_grad, pendulum_midpoint_action, PD_EXTENDED(pendulum_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
-    {"galerkin_lobatto(s=2)", 4, pendulum_galerkin_lobatto_s_2_full, pendulum_galerkin_lobatto_s_2_sweep, pendulum_galerkin_lobatto_s_2_grad, pendulum_galerkin_lobatto_s_2_action, PD_EXTENDED(pendulum_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 1, pendulum_galerkin_lobatto_s_2_interval_hessian},
-    {"galerkin_gauss(s=4)", 8, pendulum_galerkin_gauss_s_4_full, pendulum_galerkin_gauss_s_4_sweep, pendulum_galerkin_gauss_s_4_grad, pendulum_galerkin_gauss_s_4_action, PD_EXTENDED(pendulum_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 3, pendulum_galerkin_gauss_s_4_interval_hessian},
+    {"trapezoid", 2, pendulum_trapezoid_full, pendulum_trapezoid_sweep, pendulum_trapezoid_grad, pendulum_trapezoid_action, PD_EXTENDED(pendulum_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
+    {"midpoint", 2, pendulum_midpoint_full, pendulum_midpoint_sweep, pendulum_midpoint_grad, pendulum_midpoint_action, PD_EXTENDED(pendulum_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
+    {"galerkin_lobatto(s=2)", 4, pendulum_galerkin_lobatto_s_2_full, pendulum_galerkin_lobatto_s_2_sweep, pendulum_galerkin_lobatto_s_2_grad, pendulum_galerkin_lobatto_s_2_action, PD_EXTENDED(pendulum_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 1, pendulum_galerkin_lobatto_s_2_interval_hessian, nullptr},
+    {"galerkin_gauss(s=4)", 8, pendulum_galerkin_gauss_s_4_full, pendulum_galerkin_gauss_s_4_sweep, pendulum_galerkin_gauss_s_4_grad, pendulum_galerkin_gauss_s_4_action, PD_EXTENDED(pendulum_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 3, pendulum_galerkin_gauss_s_4_interval_hessian, nullptr},
 };
 
 extern "C" const pardel_model pendulum_model = {

@@ -2544,8 +2544,8 @@ static const double spacecraft_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization spacecraft_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action, PD_EXTENDED(spacecraft_trapezoid_alpha_1_grad_extended), PD_EXTENDED(spacecraft_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr},
-    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action, PD_EXTENDED(spacecraft_gauss2_grad_extended), PD_EXTENDED(spacecraft_gauss2_full_extended), "gauss2", 0, nullptr},
+    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action, PD_EXTENDED(spacecraft_trapezoid_alpha_1_grad_extended), PD_EXTENDED(spacecraft_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr, nullptr},
+    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action, PD_EXTENDED(spacecraft_gauss2_grad_extended), PD_EXTENDED(spacecraft_gauss2_full_extended), "gauss2", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model spacecraft_model = {

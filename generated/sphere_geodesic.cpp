@@ -1402,10 +1402,10 @@ static const char* const sphere_geodesic_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization sphere_geodesic_discretizations[] = {
-    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action, PD_EXTENDED(sphere_geodesic_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
-    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action, PD_EXTENDED(sphere_geodesic_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
-    {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action, PD_EXTENDED(sphere_geodesic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 2, sphere_geodesic_galerkin_lobatto_s_2_interval_hessian},
-    {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action, PD_EXTENDED(sphere_geodesic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 6, sphere_geodesic_galerkin_gauss_s_4_interval_hessian},
+    {"trapezoid", 2, sphere_geodesic_trapezoid_full, sphere_geodesic_trapezoid_sweep, sphere_geodesic_trapezoid_grad, sphere_geodesic_trapezoid_action, PD_EXTENDED(sphere_geodesic_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
+    {"midpoint", 2, sphere_geodesic_midpoint_full, sphere_geodesic_midpoint_sweep, sphere_geodesic_midpoint_grad, sphere_geodesic_midpoint_action, PD_EXTENDED(sphere_geodesic_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
+    {"galerkin_lobatto(s=2)", 4, sphere_geodesic_galerkin_lobatto_s_2_full, sphere_geodesic_galerkin_lobatto_s_2_sweep, sphere_geodesic_galerkin_lobatto_s_2_grad, sphere_geodesic_galerkin_lobatto_s_2_action, PD_EXTENDED(sphere_geodesic_galerkin_lobatto_s_2_grad_extended), nullptr, nullptr, 2, sphere_geodesic_galerkin_lobatto_s_2_interval_hessian, nullptr},
+    {"galerkin_gauss(s=4)", 8, sphere_geodesic_galerkin_gauss_s_4_full, sphere_geodesic_galerkin_gauss_s_4_sweep, sphere_geodesic_galerkin_gauss_s_4_grad, sphere_geodesic_galerkin_gauss_s_4_action, PD_EXTENDED(sphere_geodesic_galerkin_gauss_s_4_grad_extended), nullptr, nullptr, 6, sphere_geodesic_galerkin_gauss_s_4_interval_hessian, nullptr},
 };
 
 extern "C" const pardel_model sphere_geodesic_model = {

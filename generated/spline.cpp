@@ -731,8 +731,8 @@ static const char* const spline_coords[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization spline_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action, PD_EXTENDED(spline_trapezoid_alpha_1_grad_extended), PD_EXTENDED(spline_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr},
-    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action, PD_EXTENDED(spline_gauss2_grad_extended), PD_EXTENDED(spline_gauss2_full_extended), "gauss2", 0, nullptr},
+    {"trapezoid(alpha=1)", 2, spline_trapezoid_alpha_1_full, spline_trapezoid_alpha_1_sweep, spline_trapezoid_alpha_1_grad, spline_trapezoid_alpha_1_action, PD_EXTENDED(spline_trapezoid_alpha_1_grad_extended), PD_EXTENDED(spline_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr, nullptr},
+    {"gauss2", 4, spline_gauss2_full, spline_gauss2_sweep, spline_gauss2_grad, spline_gauss2_action, PD_EXTENDED(spline_gauss2_grad_extended), PD_EXTENDED(spline_gauss2_full_extended), "gauss2", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model spline_model = {

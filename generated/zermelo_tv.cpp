@@ -1042,8 +1042,8 @@ static const double zermelo_tv_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization zermelo_tv_discretizations[] = {
-    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, PD_EXTENDED(zermelo_tv_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr},
-    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, PD_EXTENDED(zermelo_tv_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr},
+    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, PD_EXTENDED(zermelo_tv_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
+    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, PD_EXTENDED(zermelo_tv_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
 };
 
 extern "C" const pardel_model zermelo_tv_model = {

@@ -47,10 +47,13 @@ class FolderLock {
 
 double summed_clock(const Problem& problem, const Trajectory& trajectory) {
   const pardel_model& model = *problem.model;
+  const pardel_action_kernel travel = problem.discretization ? problem.discretization->travel : nullptr;
   const double h = problem.T / trajectory.N;
   double total = 0;
   for (int k = 0; k < trajectory.N; ++k) {
-    total += model.clock(h, trajectory.t[k], trajectory.node(k), trajectory.node(k + 1), problem.params.data());
+    total += travel ? travel(h, trajectory.t[k], trajectory.t[k + 1], trajectory.node(k), trajectory.node(k + 1),
+                             problem.params.data())
+                    : model.clock(h, trajectory.t[k], trajectory.node(k), trajectory.node(k + 1), problem.params.data());
   }
   return total;
 }
@@ -67,11 +70,18 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
   // Time-reparametrized models: the clock is dt/ds, its sum the travel time.
   if (model.clock && problem.clock == ClockMode::free_final_time) {
     return {declared ? model.cost_name : "travel_time", summary.final_time - problem.t0,
-            "t_N - t_0, the node times being the prefix sums of the model's clock (free final time)"};
+            problem.discretization && problem.discretization->travel
+                ? "t_N - t_0, the node times being the prefix sums of the model's clock integrated over each "
+                  "interval by the discretization's quadrature (free final time)"
+                : "t_N - t_0, the node times being the prefix sums of the model's clock by the left rule (free final "
+                  "time; L or the clock depends on t)"};
   }
   if (declared && model.cost_kind == PARDEL_COST_CLOCK && model.clock) {
     return {model.cost_name, summed_clock(problem, trajectory),
-            "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the clock F)"};
+            problem.discretization && problem.discretization->travel
+                ? "sum over intervals of the clock F integrated over each by the discretization's quadrature"
+                : "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the clock F; L or the "
+                  "clock depends on t)"};
   }
   return {"action", summary.action, "the discrete action"};
 }
@@ -200,6 +210,8 @@ nlohmann::ordered_json summary_json(const Scene& scene, const Summary& summary, 
                                        ? nlohmann::ordered_json(summary.error_observed_order)
                                        : nlohmann::ordered_json()},
                 {"reliable", summary.error_reliable},
+                {"time", std::isfinite(summary.error_time_estimate) ? nlohmann::ordered_json(summary.error_time_estimate)
+                                                                    : nlohmann::ordered_json()},
                 {"solve", std::isfinite(summary.solve_error) ? nlohmann::ordered_json(summary.solve_error)
                                                              : nlohmann::ordered_json()},
                 {"note", summary.error_note}};

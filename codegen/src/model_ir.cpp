@@ -231,6 +231,39 @@ std::vector<KernelIR> interval_kernels(const LagModel& model, const Discretizati
   return out;
 }
 
+/** The model whose Lagrangian is `model`'s clock: the same interpolant and quadrature then
+ *  integrate the clock over an interval. */
+LagModel clock_as_lagrangian(const LagModel& model) {
+  LagModel out = model;
+  out.lagrangian = model.clock;
+  return out;
+}
+
+/** The travel kernels of `dir` (DiscretizationIR::travel, travel_interval): for a model with a
+ *  clock and no dependence on t only. */
+void add_travel(const LagModel& model, const KernelSymbols& s, const CseOptions& options, DiscretizationIR& dir) {
+  if (!model.has_clock || model.time_dependent()) return;
+  const LagModel clock_model = clock_as_lagrangian(model);
+  KernelIR k;
+  k.variant = "travel";
+  k.function = model.name + "_" + dir.spec.ident + "_travel";
+  if (dir.spec.interior_points > 0) {
+    const GalerkinInterval gi = galerkin_interval(clock_model, dir.spec, s);
+    std::vector<KernelInput> inputs = kernel_inputs(s);
+    for (std::size_t i = 0; i < gi.z.size(); ++i) inputs.push_back({gi.z[i], "z[" + std::to_string(i) + "]", "z"});
+    KernelIR z;
+    z.variant = "travel_z";
+    z.function = k.function + "_z";
+    z.code = generate_kernel_code({{"return", gi.action}}, inputs, options);
+    z.unused_inputs = unused(z.code, {"h", "t0", "t1", "q0", "q1", "p", "z"});
+    dir.travel_interval = std::move(z);
+  } else {
+    k.code = generate_kernel_code({{"return", discrete_lagrangian(clock_model, dir.spec, s)}}, kernel_inputs(s), options);
+    k.unused_inputs = unused(k.code, {"h", "t0", "t1", "q0", "q1", "p"});
+  }
+  dir.travel = std::move(k);
+}
+
 /** build_model_ir without its translation of GiNaC's arithmetic errors. */
 ModelIR build_ir(const LagModel& model, const std::string& source_name, const CseOptions& options) {
   ModelIR ir;
@@ -254,6 +287,7 @@ ModelIR build_ir(const LagModel& model, const std::string& source_name, const Cs
         k.function = model.name + "_" + spec.ident + "_" + variant;
         dir.kernels.push_back(std::move(k));
       }
+      add_travel(model, s, options, dir);
       ir.discretizations.push_back(std::move(dir));
       continue;
     }
@@ -289,6 +323,7 @@ ModelIR build_ir(const LagModel& model, const std::string& source_name, const Cs
       }
       dir.kernels.push_back(std::move(k));
     }
+    add_travel(model, s, options, dir);
     ir.discretizations.push_back(std::move(dir));
   }
   if (model.has_clock) {
@@ -348,6 +383,8 @@ std::string ir_to_json(const ModelIR& ir) {
     for (const KernelIR& k : d.kernels) disc["kernels"].push_back(kernel_json(k));
     disc["extended_kernel"] = optional_kernel_json(d.extended);
     disc["extended_full_kernel"] = optional_kernel_json(d.extended_full);
+    disc["travel_kernel"] = optional_kernel_json(d.travel);
+    disc["travel_interval_kernel"] = optional_kernel_json(d.travel_interval);
     disc["interval_kernels"] = Json::array();
     for (const KernelIR& k : d.interval_kernels) disc["interval_kernels"].push_back(kernel_json(k));
     disc["interval_extended_kernels"] = Json::array();

@@ -35,7 +35,8 @@ class Result:
     value of the Newton correction delta = -H^-1 r at the returned iterate over the nodes and
     coordinates, NaN where not computed), error_note (how it was made, or "not estimated: " and why),
     error_reliable (whether a third grid level confirmed the estimate) and error_observed_order (the
-    order it observed, NaN where none), extrapolated (whether q holds the extrapolated values), refinement_steps and refinement_note
+    order it observed, NaN where none), error_time_estimate (under the free_final_time clock, the same
+    rule's estimate of the node times' error, NaN where not made), extrapolated (whether q holds the extrapolated values), refinement_steps and refinement_note
     (iterative refinement in extended precision: corrections applied, and what happened or why it
     did not run; "" where it was off), grid_sizes and grid_note (an adaptive
     solve's grids, in order, and its outcome; empty otherwise), method, N, final_time,
@@ -66,6 +67,7 @@ class Result:
     error_note: str
     error_reliable: bool
     error_observed_order: float
+    error_time_estimate: float
     extrapolated: bool
     refinement_steps: int
     refinement_note: str
@@ -107,6 +109,8 @@ class Result:
         self.error_reliable = bool(s["error"]["reliable"])
         order = s["error"].get("observed_order")
         self.error_observed_order = float("nan") if order is None else float(order)
+        time_error = s["error"].get("time")
+        self.error_time_estimate = float("nan") if time_error is None else float(time_error)
         self.extrapolated = s["error"]["extrapolated"]
         self.refinement_steps = s["refinement"]["steps"]
         self.refinement_note = s["refinement"]["note"]

@@ -388,7 +388,7 @@ void update_times(Context& ctx, Positions positions) {
     ctx.t[0] = ctx.t0;
     for (int k = 0; k < N; ++k) {
       const std::size_t kk = static_cast<std::size_t>(k);
-      ctx.t[kk + 1] = ctx.t[kk] + ctx.model->clock(hs, ctx.t[kk], q.data() + kk * d, q.data() + (kk + 1) * d, p);
+      ctx.t[kk + 1] = ctx.t[kk] + free_time_step(ctx, kk, hs, q.data());
       ctx.hk[kk] = hs;
     }
   } else {

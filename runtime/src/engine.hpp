@@ -200,6 +200,17 @@ enum class Positions {
  *  parameter and keeps its values. */
 void update_times(Context& ctx, Positions positions);
 
+/** The time that interval k takes under the free_final_time clock, from q (nodes of ctx.dim values)
+ *  with the parameter step hs: the discretization's travel kernel (the clock integrated with its
+ *  own interpolant and quadrature, of its order) where it has one, else the model's clock by the
+ *  seed's left rule at ctx.t[k] (first order; a model whose L or clock depends on t). */
+inline double free_time_step(const Context& ctx, std::size_t k, double hs, const double* q) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  if (ctx.disc && ctx.disc->travel)  // L and the clock do not depend on t
+    return ctx.disc->travel(hs, ctx.t[k], ctx.t[k], q + k * d, q + (k + 1) * d, ctx.p());
+  return ctx.model->clock(hs, ctx.t[k], q + k * d, q + (k + 1) * d, ctx.p());
+}
+
 /** Old nodes j_first..j_last (global numbering on a grid of N intervals) of a trajectory: times
  *  t[j - j_first], values q[(j - j_first) * dim ...]. */
 struct RetimeGrid {

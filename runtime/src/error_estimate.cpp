@@ -353,6 +353,7 @@ void not_estimated(Summary& summary, const std::string& why) {
   summary.error_estimate = std::numeric_limits<double>::quiet_NaN();
   summary.error_by_coordinate.clear();
   summary.error_coarse_N = 0;
+  summary.error_time_estimate = std::numeric_limits<double>::quiet_NaN();
   summary.extrapolated = false;
   summary.error_observed_order = std::numeric_limits<double>::quiet_NaN();
   summary.error_reliable = false;
@@ -417,9 +418,20 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, con
     summary.error_note += "; below the round-off level of a coordinate (8 eps max|x|) the difference is rounding "
                           "alone, and that level is reported instead";
   summary.error_note += order.note;
-  if (problem.clock == ClockMode::free_final_time)
-    summary.error_note += "; the node times and the final time (the clock summed by a left rule: first order in the "
-                          "step) are not in this estimate";
+  summary.error_time_estimate = std::numeric_limits<double>::quiet_NaN();
+  if (problem.clock == ClockMode::free_final_time && clocked && problem.discretization &&
+      problem.discretization->travel) {
+    double time_error = 0;
+    for (int m = 0; m <= Nc; ++m)
+      time_error = std::max(time_error, std::fabs(fine.t[static_cast<std::size_t>(m) * ratio] -
+                                                  coarse.t[static_cast<std::size_t>(m)]));
+    summary.error_time_estimate = time_error / factor;
+    summary.error_note += "; the node times (the clock integrated over each interval by the discretization's "
+                          "quadrature), estimated alike: " + number(summary.error_time_estimate, 3);
+  } else if (problem.clock == ClockMode::free_final_time) {
+    summary.error_note += "; the node times and the final time (the clock summed by a left rule, where L or the "
+                          "clock depends on t: first order in the step) are not in this estimate";
+  }
   if (!extrapolate) return;
   if (!order.reliable) {
     // An estimate that the check did not confirm says too little of the error to correct the path by.

@@ -194,6 +194,17 @@ void interior_hessian(const Interval& f, double h, double t0, double t1, const d
   f.interior(h, t0, t1, q0, q1, p, z, g, H);
 }
 
+/** g(h, t0, t1, q0, q1, p, z) at the interval's interior values z* (dS/dz = 0, as the condensed
+ *  kernels find them): an integral over the interval's polynomial, such as the clock's
+ *  (pardel_discretization::travel); NaN where they cannot be found. */
+template <int D, int N, int M, class G>
+double interior_integral(const Interval& f, G&& g, double h, double t0, double t1, const double* q0, const double* q1,
+                         const double* p) {
+  double z[M];
+  if (!solve_interior<D, N, M>(f, h, t0, t1, q0, q1, p, z)) return std::numeric_limits<double>::quiet_NaN();
+  return g(h, t0, t1, q0, q1, p, z);
+}
+
 /** Every output NaN: the interval could not be condensed. */
 inline void fail_outputs(int D, double* Ld, double* D1, double* D2, double* D11, double* D12, double* D22) {
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();

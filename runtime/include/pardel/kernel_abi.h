@@ -22,8 +22,9 @@
 /* 3: pardel_discretization gained grad_extended (its array's stride changed).
  * 4: and full_extended.
  * 5: and bare_name.
- * 6: and interior_size, interior_hessian. */
-#define PARDEL_KERNEL_ABI_VERSION 6
+ * 6: and interior_size, interior_hessian.
+ * 7: and travel. */
+#define PARDEL_KERNEL_ABI_VERSION 7
 
 /* The qualifier of every generated kernel with double arithmetic only: __host__ __device__ under a
  * CUDA compiler, so that the same generated source runs on the host and on the device (device code
@@ -124,6 +125,13 @@ typedef struct pardel_discretization {
   int interior_size;
   /** NULL where interior_size is 0. */
   pardel_interior_hessian_kernel interior_hessian;
+  /** The model's clock integrated over one interval with this discretization's interpolant and
+   *  quadrature (its interior values found as the condensed kernels find them; NaN where they
+   *  cannot be): the interval's share of the travel time under the free_final_time clock, of the
+   *  discretization's order where the seed's left rule (pardel_clock_kernel) is of order one. NULL
+   *  where the model has no clock or L or the clock depends on t (the left rule then places the
+   *  node times at which L is evaluated, part of the discrete problem). */
+  pardel_action_kernel travel;
 } pardel_discretization;
 
 /** How a model's reported cost is computed from a solution (the .lag's `cost NAME = KIND`). */

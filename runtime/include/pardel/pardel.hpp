@@ -434,6 +434,11 @@ struct Summary {
    *  solve that did not converge, over MPI ranks, a singular Hessian). */
   double solve_error = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> solve_error_by_coordinate;  ///< the same per coordinate (empty where not computed)
+  /** Under the free_final_time clock with a discretization that integrates the clock by its own
+   *  quadrature (pardel_discretization::travel): the same rule's estimate of the node times' error,
+   *  max over the common nodes of |t_N - t_(N/r)| / (r^p - 1), with the order error_estimate used;
+   *  NaN elsewhere (the seed's left rule, of order one, is not estimated). */
+  double error_time_estimate = std::numeric_limits<double>::quiet_NaN();
   int error_coarse_N = 0;       ///< the coarse grid it was estimated against (0: not estimated)
   double error_seconds = 0;     ///< time the estimate took (its coarse solve), included in wall_seconds
   bool extrapolated = false;    ///< the returned trajectory holds the extrapolated values (Options::extrapolate)

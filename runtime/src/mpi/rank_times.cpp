@@ -132,7 +132,7 @@ void update_times_distributed(Local& local, Positions positions) {
   for (int j = jf; j < j_end; ++j) {
     const std::size_t jj = static_cast<std::size_t>(j);
     if (ctx.clock == ClockMode::free_final_time) {
-      ctx.t[jj + 1] = ctx.t[jj] + ctx.model->clock(hs, ctx.t[jj], q.data() + jj * d, q.data() + (jj + 1) * d, p);
+      ctx.t[jj + 1] = ctx.t[jj] + pardel::detail::free_time_step(ctx, jj, hs, q.data());
     } else {
       ctx.t[jj + 1] = ctx.t[jj] + ctx.T * c[j - jf] / total;
     }

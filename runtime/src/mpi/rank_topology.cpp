@@ -91,14 +91,16 @@ std::string RankTopology::coarse_solve_refusal() const {
 
 void RankTopology::share_estimate(Summary& summary) {
   const int root = 0;  // holds_result()
-  double reals[3] = {summary.error_estimate, summary.error_observed_order, summary.error_seconds};
+  double reals[4] = {summary.error_estimate, summary.error_observed_order, summary.error_seconds,
+                     summary.error_time_estimate};
   int ints[4] = {summary.error_coarse_N, summary.error_reliable ? 1 : 0, summary.extrapolated ? 1 : 0,
                  static_cast<int>(summary.error_by_coordinate.size())};
-  MPI_Bcast(reals, 3, MPI_DOUBLE, root, local_.comm);
+  MPI_Bcast(reals, 4, MPI_DOUBLE, root, local_.comm);
   MPI_Bcast(ints, 4, MPI_INT, root, local_.comm);
   summary.error_estimate = reals[0];
   summary.error_observed_order = reals[1];
   summary.error_seconds = reals[2];
+  summary.error_time_estimate = reals[3];
   summary.error_coarse_N = ints[0];
   summary.error_reliable = ints[1] != 0;
   summary.extrapolated = ints[2] != 0;

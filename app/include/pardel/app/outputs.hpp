@@ -24,13 +24,15 @@ struct PhysicalCost {
 
 /**
  * The cost the model declares (`cost NAME = action|clock` in its .lag, carried in pardel_model):
- * the discrete action under NAME, or the travel time, i.e. the summed clock kernel (or
+ * the discrete action under NAME, or the travel time, i.e. the summed clock (or
  * Summary::final_time - t0 under free_final_time). A model with a clock and no declaration
  * reports the travel time under free_final_time; every other model the discrete action ("action").
  */
 PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Trajectory& trajectory);
 
-/** The sum over intervals of the model's clock kernel (requires model.clock). */
+/** The clock summed over the intervals (requires model.clock): each interval's integral of it by
+ *  the discretization's quadrature (pardel_discretization::travel), or the seed's left rule (the
+ *  model's clock kernel) where the discretization has none (L or the clock depends on t). */
 double summed_clock(const Problem& problem, const Trajectory& trajectory);
 
 /** convergence.csv: iteration,N,residual,action,seconds — one row per history record. */
