@@ -319,7 +319,7 @@ std::vector<double> first_grid(const Problem& problem) {
   std::vector<double> fixed{problem.t0, t_end};
   for (const Knot& knot : problem.knots) fixed.push_back(knot.t);
   std::sort(fixed.begin(), fixed.end());
-  const double tol = 1e-9 * std::max(1.0, std::fabs(problem.T));
+  const double tol = time_tolerance(problem);
   if (!(fixed.front() == problem.t0 && fixed.back() == t_end)) return {};
   for (std::size_t j = 1; j < fixed.size(); ++j)
     if (!(fixed[j] - fixed[j - 1] > tol)) return {};
@@ -422,9 +422,8 @@ Prediction predict_grid(const Problem& current, const Trajectory& sol, double p,
 
 /** The node times of `sol`, the solution on `current`'s grid: its own, or uniform where it has none. */
 std::vector<double> node_times(const Problem& current, const Trajectory& sol) {
-  if (sol.t.size() == static_cast<std::size_t>(current.N) + 1) return sol.t;
   std::vector<double> t(static_cast<std::size_t>(current.N) + 1);
-  for (int k = 0; k <= current.N; ++k) t[static_cast<std::size_t>(k)] = current.t0 + current.T * k / current.N;
+  for (int k = 0; k <= current.N; ++k) t[static_cast<std::size_t>(k)] = level_time(current, sol, k);
   return t;
 }
 

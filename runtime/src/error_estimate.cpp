@@ -89,14 +89,6 @@ const std::string kUnconfirmedAgreement =
     " (not confirmed: L depends on t, and a jump or kink in t that all three grids' quadrature points miss alike "
     "near a node they share gives the same agreement; another grid of other nodes does confirm it)";
 
-/** The time of node m of the grid level `level`: its own where it has node times, else uniform. */
-double level_time(const Problem& problem, const Trajectory& level, int m) {
-  const bool own = level.t.size() == static_cast<std::size_t>(level.N) + 1;
-  return own ? level.t[static_cast<std::size_t>(m)] : problem.t0 + problem.T * m / level.N;
-}
-
-/** How close a node's time must be to a fixed time (an end, a knot) to be that time. */
-double time_tolerance(const Problem& problem) { return 1e-9 * std::max(1.0, std::fabs(problem.T)); }
 
 /** Where the grid `level` has a single interval between two fixed times (the ends and the knots),
  *  that stretch ("between t = 0.2 and the knot at t = 1.13"); empty where every stretch has two
@@ -348,6 +340,13 @@ void confirm_round_off(Summary& summary, int other_N) {
                         " before it, whose nodes shared by its three levels lie midway between this grid's, and whose levels agree "
                         "to round-off too";
 }
+
+double level_time(const Problem& problem, const Trajectory& level, int m) {
+  const bool own = level.t.size() == static_cast<std::size_t>(level.N) + 1;
+  return own ? level.t[static_cast<std::size_t>(m)] : problem.t0 + problem.T * m / level.N;
+}
+
+double time_tolerance(const Problem& problem) { return 1e-9 * std::max(1.0, std::fabs(problem.T)); }
 
 void not_estimated(Summary& summary, const std::string& why) {
   summary.error_estimate = std::numeric_limits<double>::quiet_NaN();

@@ -16,6 +16,14 @@
 
 namespace pardel::detail {
 
+/** The time of node m of the grid level `level`: its own where it has node times, else uniform
+ *  over `problem`'s span. */
+double level_time(const Problem& problem, const Trajectory& level, int m);
+
+/** How close a node's time must be to a fixed time (an end, a knot) to be that time:
+ *  1e-9 max(1, |T|). */
+double time_tolerance(const Problem& problem);
+
 /** Why a converged solve on problem.N cannot be compared with a solve on the grid of every other
  *  node (N < 4, N odd, a knot on an odd node); "" when it can. */
 std::string coarse_grid_refusal(const Problem& problem);
