@@ -518,6 +518,26 @@ extern "C" PARDEL_HD double spacecraft_trapezoid_alpha_1_action(double h, double
   return h*0.5*(pd_t0017*pd_t0017 + (pd_t0031*pd_t0031 + (pd_t0033*pd_t0033 + pd_t0034*pd_t0034)));
 }
 
+// travel: the clock integrated over the interval, 43 operations (123 before CSE)
+extern "C" PARDEL_HD double spacecraft_trapezoid_alpha_1_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  const double pd_t0001 = std::sqrt(q1[0]*q1[0] + q1[1]*q1[1]);
+  const double pd_t0002 = p[5] + t1*p[4];
+  const double pd_t0003 = std::cos(pd_t0002);
+  const double pd_t0004 = pd_t0003*p[3] - q1[0];
+  const double pd_t0005 = std::sin(pd_t0002);
+  const double pd_t0006 = p[3]*pd_t0005 - q1[1];
+  const double pd_t0007 = std::sqrt(pd_t0004*pd_t0004 + pd_t0006*pd_t0006);
+  const double pd_t0008 = std::sqrt(q0[1]*q0[1] + q0[0]*q0[0]);
+  const double pd_t0009 = p[5] + p[4]*t0;
+  const double pd_t0010 = std::cos(pd_t0009);
+  const double pd_t0011 = q0[0] - p[3]*pd_t0010;
+  const double pd_t0012 = std::sin(pd_t0009);
+  const double pd_t0013 = p[3]*pd_t0012 - q0[1];
+  const double pd_t0014 = std::sqrt(pd_t0011*pd_t0011 + pd_t0013*pd_t0013);
+  return h*0.5*(pd_t0001*pd_t0007/(p[3]*(pd_t0001 + pd_t0007)) + pd_t0008*pd_t0014/(p[3]*(pd_t0008 + pd_t0014)));
+}
+
 // grad_extended: the grad kernel in pd_quad, 282 operations; outputs as double-double pairs
 #if !defined(__CUDACC__)
 extern "C" void spacecraft_trapezoid_alpha_1_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
@@ -1875,6 +1895,37 @@ extern "C" PARDEL_HD double spacecraft_gauss2_action(double h, double t0, double
   return h*0.00038580246913580245*(pd_t0029*pd_t0029 + (pd_t0045*pd_t0045 + (pd_t0048*pd_t0048 + pd_t0049*pd_t0049)));
 }
 
+// travel: the clock integrated over the interval, 88 operations (515 before CSE)
+extern "C" PARDEL_HD double spacecraft_gauss2_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  const double pd_t0001 = h*q1[2];
+  const double pd_t0002 = h*q0[2];
+  const double pd_t0003 = (pd_t0001 - q1[0]*3.2679491924311224 - (pd_t0002 + q0[0]*6.7320508075688767)*3.7320508075688772)*1.2679491924311228;
+  const double pd_t0004 = h*q0[3];
+  const double pd_t0005 = (q0[1] + q1[1]*0.13007096530426773 + (pd_t0004 - q1[3]*(h*0.2679491924311227))*0.14854314511050559)*31.856406460551018;
+  const double pd_t0006 = std::sqrt((pd_t0003*pd_t0003 + pd_t0005*pd_t0005)*0.0007716049382716049);
+  const double pd_t0007 = t1 - t0;
+  const double pd_t0008 = t0*6.0;
+  const double pd_t0009 = p[4]*0.16666666666666666;
+  const double pd_t0010 = p[5] + (1.2679491924311228*pd_t0007 + pd_t0008)*pd_t0009;
+  const double pd_t0011 = std::cos(pd_t0010);
+  const double pd_t0012 = p[3]*36.0;
+  const double pd_t0013 = pd_t0003 + pd_t0011*pd_t0012;
+  const double pd_t0014 = std::sin(pd_t0010);
+  const double pd_t0015 = pd_t0005 - pd_t0012*pd_t0014;
+  const double pd_t0016 = std::sqrt(0.0007716049382716049*(pd_t0013*pd_t0013 + pd_t0015*pd_t0015));
+  const double pd_t0017 = (pd_t0001 - q1[0]*6.7320508075688767 - 0.2679491924311227*(pd_t0002 + 3.2679491924311224*q0[0]))*4.7320508075688776;
+  const double pd_t0018 = p[5] + pd_t0009*(pd_t0008 + pd_t0007*4.7320508075688776);
+  const double pd_t0019 = std::cos(pd_t0018);
+  const double pd_t0020 = pd_t0017 + pd_t0012*pd_t0019;
+  const double pd_t0021 = std::sin(pd_t0018);
+  const double pd_t0022 = (q0[1] + q1[1]*7.6881108528775508 + (pd_t0004 - q1[3]*(h*3.7320508075688772))*0.30600230943494899)*4.1435935394489816;
+  const double pd_t0023 = pd_t0012*pd_t0021 - pd_t0022;
+  const double pd_t0024 = std::sqrt(0.0007716049382716049*(pd_t0020*pd_t0020 + pd_t0023*pd_t0023));
+  const double pd_t0025 = std::sqrt(0.0007716049382716049*(pd_t0017*pd_t0017 + pd_t0022*pd_t0022));
+  return h*0.5*(pd_t0006*pd_t0016/(p[3]*(pd_t0006 + pd_t0016)) + pd_t0024*pd_t0025/(p[3]*(pd_t0024 + pd_t0025)));
+}
+
 // grad_extended: the grad kernel in pd_quad, 479 operations; outputs as double-double pairs
 #if !defined(__CUDACC__)
 extern "C" void spacecraft_gauss2_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
@@ -2544,8 +2595,8 @@ static const double spacecraft_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization spacecraft_discretizations[] = {
-    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action, PD_EXTENDED(spacecraft_trapezoid_alpha_1_grad_extended), PD_EXTENDED(spacecraft_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr, nullptr},
-    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action, PD_EXTENDED(spacecraft_gauss2_grad_extended), PD_EXTENDED(spacecraft_gauss2_full_extended), "gauss2", 0, nullptr, nullptr},
+    {"trapezoid(alpha=1)", 2, spacecraft_trapezoid_alpha_1_full, spacecraft_trapezoid_alpha_1_sweep, spacecraft_trapezoid_alpha_1_grad, spacecraft_trapezoid_alpha_1_action, PD_EXTENDED(spacecraft_trapezoid_alpha_1_grad_extended), PD_EXTENDED(spacecraft_trapezoid_alpha_1_full_extended), "trapezoid", 0, nullptr, spacecraft_trapezoid_alpha_1_travel},
+    {"gauss2", 4, spacecraft_gauss2_full, spacecraft_gauss2_sweep, spacecraft_gauss2_grad, spacecraft_gauss2_action, PD_EXTENDED(spacecraft_gauss2_grad_extended), PD_EXTENDED(spacecraft_gauss2_full_extended), "gauss2", 0, nullptr, spacecraft_gauss2_travel},
 };
 
 extern "C" const pardel_model spacecraft_model = {

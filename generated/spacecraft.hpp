@@ -20,6 +20,8 @@ PARDEL_HD void spacecraft_trapezoid_alpha_1_sweep(double h, double t0, double t1
 PARDEL_HD void spacecraft_trapezoid_alpha_1_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 PARDEL_HD double spacecraft_trapezoid_alpha_1_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double spacecraft_trapezoid_alpha_1_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p);
 #if !defined(__CUDACC__)
 void spacecraft_trapezoid_alpha_1_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
@@ -38,6 +40,8 @@ PARDEL_HD void spacecraft_gauss2_sweep(double h, double t0, double t1, const dou
 PARDEL_HD void spacecraft_gauss2_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 PARDEL_HD double spacecraft_gauss2_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double spacecraft_gauss2_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p);
 #if !defined(__CUDACC__)
 void spacecraft_gauss2_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);

@@ -502,6 +502,38 @@ extern "C" PARDEL_HD double zermelo_tv_trapezoid_action(double h, double t0, dou
   return h*0.5*(pd_t0017*pd_t0017 + pd_t0028*pd_t0028);
 }
 
+// travel: the clock integrated over the interval, 66 operations (425 before CSE)
+extern "C" PARDEL_HD double zermelo_tv_trapezoid_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  const double pd_t0001 = 0.5*t0;
+  const double pd_t0002 = std::cos(pd_t0001);
+  const double pd_t0003 = 1.0/h;
+  const double pd_t0004 = std::sin(q0[1] + q0[0]*2.0);
+  const double pd_t0005 = p[0]*pd_t0003*pd_t0004;
+  const double pd_t0006 = q0[0] - q1[0];
+  const double pd_t0007 = std::sin(pd_t0001);
+  const double pd_t0008 = q0[1] - q1[1];
+  const double pd_t0009 = p[0]*pd_t0004;
+  const double pd_t0010 = pd_t0009*pd_t0009;
+  const double pd_t0011 = 1.0/(pd_t0010*(pd_t0007*pd_t0007) + pd_t0010*(pd_t0002*pd_t0002) - 1.0);
+  const double pd_t0012 = (pd_t0002*(pd_t0005*pd_t0006) + pd_t0007*(pd_t0005*pd_t0008))*pd_t0011;
+  const double pd_t0013 = std::sin(q1[1] + 2.0*q1[0]);
+  const double pd_t0014 = p[0]*pd_t0013;
+  const double pd_t0015 = 0.5*t1;
+  const double pd_t0016 = std::sin(pd_t0015);
+  const double pd_t0017 = pd_t0014*pd_t0016;
+  const double pd_t0018 = std::cos(pd_t0015);
+  const double pd_t0019 = pd_t0014*pd_t0018;
+  const double pd_t0020 = pd_t0017*pd_t0017 + pd_t0019*pd_t0019 - 1.0;
+  const double pd_t0021 = pd_t0006*pd_t0003;
+  const double pd_t0022 = h/pd_t0008;
+  const double pd_t0023 = pd_t0020/(pd_t0021*pd_t0019 + pd_t0017/pd_t0022);
+  const double pd_t0024 = pd_t0021*pd_t0021 + 1.0/(pd_t0022*pd_t0022);
+  const double pd_t0025 = std::sqrt(pd_t0012*pd_t0012 - pd_t0024*pd_t0011);
+  const double pd_t0026 = std::sqrt(-(pd_t0024/pd_t0020 - 1.0/(pd_t0023*pd_t0023)));
+  return -(h*0.5*(pd_t0012 + 1.0/pd_t0023 - pd_t0025 - pd_t0026));
+}
+
 // grad_extended: the grad kernel in pd_quad, 213 operations; outputs as double-double pairs
 #if !defined(__CUDACC__)
 extern "C" void zermelo_tv_trapezoid_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
@@ -940,6 +972,24 @@ extern "C" PARDEL_HD double zermelo_tv_midpoint_action(double h, double t0, doub
   return h*(pd_t0013*pd_t0013);
 }
 
+// travel: the clock integrated over the interval, 36 operations (278 before CSE)
+extern "C" PARDEL_HD double zermelo_tv_midpoint_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p) {
+  const double pd_t0001 = (q0[0] - q1[0])/h;
+  const double pd_t0002 = std::sin((q0[1] + q1[1])*0.5 + (q0[0] + q1[0]));
+  const double pd_t0003 = pd_t0002*p[0];
+  const double pd_t0004 = (t1 + t0)*0.25;
+  const double pd_t0005 = std::cos(pd_t0004);
+  const double pd_t0006 = pd_t0003*pd_t0005;
+  const double pd_t0007 = std::sin(pd_t0004);
+  const double pd_t0008 = pd_t0003*pd_t0007;
+  const double pd_t0009 = h/(q0[1] - q1[1]);
+  const double pd_t0010 = 1.0/(pd_t0008*pd_t0008 + pd_t0006*pd_t0006 - 1.0);
+  const double pd_t0011 = (pd_t0001*pd_t0006 + pd_t0008/pd_t0009)*pd_t0010;
+  const double pd_t0012 = std::sqrt(pd_t0011*pd_t0011 - (pd_t0001*pd_t0001 + 1.0/(pd_t0009*pd_t0009))*pd_t0010);
+  return -(h*(pd_t0011 - pd_t0012));
+}
+
 // grad_extended: the grad kernel in pd_quad, 120 operations; outputs as double-double pairs
 #if !defined(__CUDACC__)
 extern "C" void zermelo_tv_midpoint_grad_extended(double h_in, double t0_in, double t1_in, const double* q0_in,
@@ -1042,8 +1092,8 @@ static const double zermelo_tv_param_defaults[] = {
 #define PD_EXTENDED(kernel) kernel
 #endif
 static const pardel_discretization zermelo_tv_discretizations[] = {
-    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, PD_EXTENDED(zermelo_tv_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, nullptr},
-    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, PD_EXTENDED(zermelo_tv_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, nullptr},
+    {"trapezoid", 2, zermelo_tv_trapezoid_full, zermelo_tv_trapezoid_sweep, zermelo_tv_trapezoid_grad, zermelo_tv_trapezoid_action, PD_EXTENDED(zermelo_tv_trapezoid_grad_extended), nullptr, "trapezoid", 0, nullptr, zermelo_tv_trapezoid_travel},
+    {"midpoint", 2, zermelo_tv_midpoint_full, zermelo_tv_midpoint_sweep, zermelo_tv_midpoint_grad, zermelo_tv_midpoint_action, PD_EXTENDED(zermelo_tv_midpoint_grad_extended), nullptr, "midpoint", 0, nullptr, zermelo_tv_midpoint_travel},
 };
 
 extern "C" const pardel_model zermelo_tv_model = {

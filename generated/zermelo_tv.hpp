@@ -20,6 +20,8 @@ PARDEL_HD void zermelo_tv_trapezoid_sweep(double h, double t0, double t1, const 
 PARDEL_HD void zermelo_tv_trapezoid_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 PARDEL_HD double zermelo_tv_trapezoid_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double zermelo_tv_trapezoid_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p);
 #if !defined(__CUDACC__)
 void zermelo_tv_trapezoid_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);
@@ -33,6 +35,8 @@ PARDEL_HD void zermelo_tv_midpoint_sweep(double h, double t0, double t1, const d
 PARDEL_HD void zermelo_tv_midpoint_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* Ld, double* D1, double* D2);
 PARDEL_HD double zermelo_tv_midpoint_action(double h, double t0, double t1, const double* q0, const double* q1, const double* p);
+PARDEL_HD double zermelo_tv_midpoint_travel(double h, double t0, double t1, const double* q0, const double* q1,
+    const double* p);
 #if !defined(__CUDACC__)
 void zermelo_tv_midpoint_grad_extended(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p, double* Ld, double* D1, double* D2);

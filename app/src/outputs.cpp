@@ -74,14 +74,13 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
                 ? "t_N - t_0, the node times being the prefix sums of the model's clock integrated over each "
                   "interval by the discretization's quadrature (free final time)"
                 : "t_N - t_0, the node times being the prefix sums of the model's clock by the left rule (free final "
-                  "time; L or the clock depends on t)"};
+                  "time)"};
   }
   if (declared && model.cost_kind == PARDEL_COST_CLOCK && model.clock) {
     return {model.cost_name, summed_clock(problem, trajectory),
             problem.discretization && problem.discretization->travel
                 ? "sum over intervals of the clock F integrated over each by the discretization's quadrature"
-                : "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the clock F; L or the "
-                  "clock depends on t)"};
+                : "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the clock F)"};
   }
   return {"action", summary.action, "the discrete action"};
 }

@@ -239,10 +239,11 @@ LagModel clock_as_lagrangian(const LagModel& model) {
   return out;
 }
 
-/** The travel kernels of `dir` (DiscretizationIR::travel, travel_interval): for a model with a
- *  clock and no dependence on t only. */
+/** The travel kernels of `dir` (DiscretizationIR::travel, travel_interval) of a model with a
+ *  clock; where L or the clock depends on t, the time at a quadrature point is linear between the
+ *  interval's t0 and t1, as in the discrete Lagrangian. */
 void add_travel(const LagModel& model, const KernelSymbols& s, const CseOptions& options, DiscretizationIR& dir) {
-  if (!model.has_clock || model.time_dependent()) return;
+  if (!model.has_clock) return;
   const LagModel clock_model = clock_as_lagrangian(model);
   KernelIR k;
   k.variant = "travel";

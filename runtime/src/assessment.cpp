@@ -470,7 +470,7 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
     out.nearly_degenerate = true;
     out.soft_motion = soft_motion;
     out.note = format("a nearly degenerate minimum whose lowest mode is two-fold: the two smallest eigenvalues of the "
-                      "Hessian, %.3g and %.3g, are nearly equal and %.2g of the third (%.3g); the action is "
+                      "Hessian, %.3g and %.3g, lie within a factor 2 of each other and the second is %.2g of the third (%.3g); the action is "
                       "determined to round-off, the trajectory only up to a motion of size about %.2g in a "
                       "two-dimensional subspace",
                       out.lambda_min, out.lambda_next, out.lambda_next / lambda3, lambda3, out.soft_motion);
@@ -485,17 +485,18 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
   }
   if (repeated && !out.nearly_degenerate) {
     if (!(lambda3 > 0))  // one or two unknowns, or the third run failed
-      out.note += "; the two smallest eigenvalues are nearly equal (a repeated lowest mode), so their ratio does "
-                  "not tell whether the minimum is nearly degenerate: compare lambda_min with the problem's own "
-                  "scales";
+      out.note += "; the two smallest eigenvalues lie within a factor 2 of each other (as a repeated lowest mode "
+                  "makes them), so their ratio does not tell whether the minimum is nearly degenerate: compare "
+                  "lambda_min with the problem's own scales";
     else if (lambda3 < 2 * out.lambda_next)
-      out.note += format("; the three smallest eigenvalues are nearly equal (the third %.3g: a lowest mode of "
-                         "multiplicity three or more), so their ratios do not tell whether the minimum is nearly "
-                         "degenerate: compare lambda_min with the problem's own scales",
+      out.note += format("; the three smallest eigenvalues lie within factors 2 of each other (the third %.3g), so "
+                         "their ratios do not tell whether the minimum is nearly degenerate: compare lambda_min with "
+                         "the problem's own scales",
                          lambda3);
     else
-      out.note += format("; the two smallest eigenvalues are nearly equal (a two-fold lowest mode), and the third, "
-                         "%.3g, is %.3g times them, short of the factor 1e4 that marks a nearly degenerate minimum",
+      out.note += format("; the two smallest eigenvalues lie within a factor 2 of each other (as a two-fold lowest mode "
+                         "makes them), and the third, %.3g, is %.3g times the second, short of the factor 1e4 that "
+                         "marks a nearly degenerate minimum",
                          lambda3, lambda3 / out.lambda_next);
   }
   if (!out.lambda_settled)
@@ -508,7 +509,7 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
   if (notes_round_off_bound(out.lambda_min, out.lambda_max)) {
     const double condition = out.lambda_max / out.lambda_min;
     out.note += format("; the Hessian's condition number is about %.2g, so round-off alone can move the trajectory by "
-                       "up to %.2g relative",
+                       "up to %.2g relative in a double-precision solve",
                        condition, condition * 1e-16);
     if (diagonal_spread > kStallSpread)
       out.note += format(" (a bound over all coordinates in one norm: the Hessian's diagonal spans a factor %.2g, and "

@@ -377,6 +377,48 @@ void retime_nodes(const RetimeGrid& old, const double* t_new, int k_first, int k
   }
 }
 
+double free_time_step(const Grid& ctx, std::size_t k, double hs, const double* q, double guess) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim);
+  const double t0 = ctx.t[k], *q0 = q + k * d, *q1 = q + (k + 1) * d;
+  const pardel_action_kernel travel = ctx.disc ? ctx.disc->travel : nullptr;
+  if (!travel) return ctx.model->clock(hs, t0, q0, q1, ctx.p());
+  if (!ctx.model->time_dependent) return travel(hs, t0, t0, q0, q1, ctx.p());
+  // dt = travel(t0, t0 + dt): a contraction by about hs |dF/dt|, from the interval's previous
+  // duration where there is one (one or two steps near a solution), else the left rule's.
+  constexpr int kTravelIterations = 50;
+  double dt = guess > 0 && std::isfinite(guess) ? guess : ctx.model->clock(hs, t0, q0, q1, ctx.p());
+  for (int it = 0; it < kTravelIterations && std::isfinite(dt); ++it) {
+    const double next = travel(hs, t0, t0 + dt, q0, q1, ctx.p());
+    const bool settled = std::fabs(next - dt) <= 4 * std::numeric_limits<double>::epsilon() *
+                                                     std::max(std::fabs(t0), std::fabs(next));
+    dt = next;
+    if (settled) return dt;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+double time_shift(const Context& ctx, const std::vector<double>& delta) {
+  const std::size_t d = static_cast<std::size_t>(ctx.dim), N = static_cast<std::size_t>(ctx.N);
+  if (ctx.clock != ClockMode::free_final_time || !ctx.model->clock || delta.size() != (N - 1) * d) return 0;
+  std::vector<double> moved = ctx.q;
+  for (std::size_t i = 0; i < delta.size(); ++i) moved[d + i] += delta[i];
+  // The moved path's times in a context of its own (free_time_step reads the times so far).
+  Grid other;
+  other.clock = ctx.clock;
+  other.model = ctx.model;
+  other.disc = ctx.disc;
+  other.dim = ctx.dim;
+  other.params = ctx.params;
+  other.t.assign(N + 1, ctx.t0);
+  const double hs = ctx.T / ctx.N;
+  double shift = 0;
+  for (std::size_t k = 0; k < N; ++k) {
+    other.t[k + 1] = other.t[k] + free_time_step(other, k, hs, moved.data(), ctx.t[k + 1] - ctx.t[k]);
+    shift = std::max(shift, std::fabs(other.t[k + 1] - ctx.t[k + 1]));
+  }
+  return shift;
+}
+
 void update_times(Context& ctx, Positions positions) {
   const std::vector<double>& q = ctx.q;
   if (ctx.clock == ClockMode::none || ctx.model->clock == nullptr) return;
@@ -385,10 +427,14 @@ void update_times(Context& ctx, Positions positions) {
   const double* p = ctx.p();
   if (ctx.clock == ClockMode::free_final_time) {
     // A sequential prefix sum: each step needs the time reached so far.
+    // Each interval's previous duration (0 where the times are not yet set) starts its step.
+    double start_before = ctx.t[0];
     ctx.t[0] = ctx.t0;
     for (int k = 0; k < N; ++k) {
       const std::size_t kk = static_cast<std::size_t>(k);
-      ctx.t[kk + 1] = ctx.t[kk] + free_time_step(ctx, kk, hs, q.data());
+      const double end_before = ctx.t[kk + 1];
+      ctx.t[kk + 1] = ctx.t[kk] + free_time_step(ctx, kk, hs, q.data(), end_before - start_before);
+      start_before = end_before;
       ctx.hk[kk] = hs;
     }
   } else {

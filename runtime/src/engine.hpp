@@ -201,14 +201,25 @@ enum class Positions {
 void update_times(Context& ctx, Positions positions);
 
 /** The time that interval k takes under the free_final_time clock, from q (nodes of ctx.dim values)
- *  with the parameter step hs: the discretization's travel kernel (the clock integrated with its
- *  own interpolant and quadrature, of its order) where it has one, else the model's clock by the
- *  seed's left rule at ctx.t[k] (first order; a model whose L or clock depends on t). */
-inline double free_time_step(const Context& ctx, std::size_t k, double hs, const double* q) {
-  const std::size_t d = static_cast<std::size_t>(ctx.dim);
-  if (ctx.disc && ctx.disc->travel)  // L and the clock do not depend on t
-    return ctx.disc->travel(hs, ctx.t[k], ctx.t[k], q + k * d, q + (k + 1) * d, ctx.p());
-  return ctx.model->clock(hs, ctx.t[k], q + k * d, q + (k + 1) * d, ctx.p());
+ *  with the parameter step hs, ctx.t[k] the time it starts at: the discretization's travel kernel
+ *  (the clock integrated with its own interpolant and quadrature) where it has one, solved for the
+ *  interval's end time by fixed-point iteration where L or the clock depends on t, started from
+ *  `guess` (the interval's previous duration) where that is positive, else from the left rule (NaN
+ *  where it does not settle in kTravelIterations); else the model's clock by the seed's left rule
+ *  (first order). */
+double free_time_step(const Grid& ctx, std::size_t k, double hs, const double* q, double guess);
+
+/** Under the free_final_time clock: the largest change of a node time when the interior nodes move
+ *  by `delta` (nodes 1..N-1, dim each: the solve's Newton correction), the times summed from t0 as
+ *  update_times sums them; 0 under another clock mode or none. */
+double time_shift(const Context& ctx, const std::vector<double>& delta);
+
+/** Whether ctx's discrete problem is one of fixed node times: no clock, or the free_final_time
+ *  clock of a model whose L and clock do not depend on t, where the node times only report the
+ *  travel time (the kernels' step is the parameter's, whatever the times). Iterative refinement
+ *  and the assessment in extended precision need it. */
+inline bool times_outside_the_problem(const Context& ctx) {
+  return ctx.clock == ClockMode::none || (ctx.clock == ClockMode::free_final_time && !ctx.model->time_dependent);
 }
 
 /** Old nodes j_first..j_last (global numbering on a grid of N intervals) of a trajectory: times

@@ -319,6 +319,11 @@ void record_solve_error(const std::vector<double>& delta, int dim, int ncoords, 
 }
 
 void include_solve_error(Summary& summary) {
+  if (std::isfinite(summary.error_time_estimate) && std::isfinite(summary.solve_time_error)) {
+    summary.error_time_estimate += summary.solve_time_error;
+    summary.error_note += "; the node times' estimate with the solve's own error in them, " +
+                          number(summary.solve_time_error, 3) + ", added";
+  }
   if (!std::isfinite(summary.error_estimate) || !std::isfinite(summary.solve_error)) return;
   std::vector<double>& by = summary.error_by_coordinate;
   if (by.size() == summary.solve_error_by_coordinate.size() && !by.empty()) {
@@ -420,16 +425,18 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, con
   summary.error_time_estimate = std::numeric_limits<double>::quiet_NaN();
   if (problem.clock == ClockMode::free_final_time && clocked && problem.discretization &&
       problem.discretization->travel) {
-    double time_error = 0;
+    double time_error = 0, largest = 0;
     for (int m = 0; m <= Nc; ++m)
       time_error = std::max(time_error, std::fabs(fine.t[static_cast<std::size_t>(m) * ratio] -
                                                   coarse.t[static_cast<std::size_t>(m)]));
-    summary.error_time_estimate = time_error / factor;
+    for (double t : fine.t) largest = std::max(largest, std::fabs(t));
+    // Below the times' round-off the difference is rounding alone, as for the coordinates.
+    summary.error_time_estimate = std::max(time_error / factor, 8 * std::numeric_limits<double>::epsilon() * largest);
     summary.error_note += "; the node times (the clock integrated over each interval by the discretization's "
                           "quadrature), estimated alike: " + number(summary.error_time_estimate, 3);
   } else if (problem.clock == ClockMode::free_final_time) {
-    summary.error_note += "; the node times and the final time (the clock summed by a left rule, where L or the "
-                          "clock depends on t: first order in the step) are not in this estimate";
+    summary.error_note += "; the node times and the final time (the clock summed by the left rule, the "
+                          "discretization having no travel kernel: first order in the step) are not in this estimate";
   }
   if (!extrapolate) return;
   if (!order.reliable) {

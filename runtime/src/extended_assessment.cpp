@@ -25,7 +25,7 @@ bool beyond_double(const PointAssessment& point) {
 }
 
 bool assess_extended(Context& ctx, PointAssessment& out) {
-  if (!ctx.disc || !ctx.disc->full_extended || ctx.N < 2 || ctx.clock != ClockMode::none) return false;
+  if (!ctx.disc || !ctx.disc->full_extended || ctx.N < 2 || !times_outside_the_problem(ctx)) return false;
   ExtendedNodeSystem system;
   Inertia in;
   if (!system.evaluate(ctx, ctx.q) || !system.factor(&in)) return false;
@@ -49,6 +49,9 @@ bool assess_extended(Context& ctx, PointAssessment& out) {
   }
   point.note += "; counted with the Hessian in extended precision, whose condition number is beyond double "
                 "precision here";
+  if (point.kind == PointKind::minimum && notes_round_off_bound(point.lambda_min, point.lambda_max))
+    point.note += " (iterative refinement in extended precision corrects that round-off of a double solve where it "
+                  "runs: refinement_note)";
   out = point;
   return true;
 }

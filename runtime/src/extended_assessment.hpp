@@ -22,8 +22,9 @@ bool beyond_double(const PointAssessment& point);
 /** The assessment of ctx.q with the Hessian from the discretization's full_extended kernel,
  *  factored and counted in extended precision (extended_node_system.hpp), the smallest eigenvalues
  *  of a minimum by the same Lanczos iteration through the extended solve, into `out`; true. False,
- *  with `out` unchanged, where there is no such kernel, the model has a clock (its node times
- *  move with q), or a value is not finite or a pivot singular in extended precision. */
+ *  with `out` unchanged, where there is no such kernel, the node times move with q
+ *  (times_outside_the_problem false), or a value is not finite or a pivot singular in extended
+ *  precision. */
 bool assess_extended(Context& ctx, PointAssessment& out);
 
 }  // namespace pardel::detail

@@ -166,10 +166,11 @@ int extended_residual(const Context& ctx, const std::vector<double>& q, std::vec
 namespace {
 
 /** Whether refine_solution runs under `mode` at all (its first correction may still keep nothing):
- *  not off, N >= 2, order >= 2 under automatic, no clock, an extended kernel. */
+ *  not off, N >= 2, order >= 2 under automatic, node times outside the problem (no clock, or the
+ *  free final time of a model that does not depend on t), an extended kernel. */
 bool refines(const Context& ctx, Refinement mode) {
   return mode != Refinement::off && ctx.N >= 2 && !(mode == Refinement::automatic && ctx.order < 2) &&
-         ctx.clock == ClockMode::none && ctx.disc && ctx.disc->grad_extended;
+         times_outside_the_problem(ctx) && ctx.disc && ctx.disc->grad_extended;
 }
 
 }  // namespace
@@ -191,7 +192,7 @@ void refine_solution(Context& ctx, const Options& options, Summary& summary) {
   // would pay the extended residual and a factorization for an error of eps N^2 (measured in
   // docs/solvers.md), negligible below N of about 1e5.
   if (options.iterative_refinement == Refinement::automatic && ctx.order < 2) return;
-  if (ctx.clock != ClockMode::none) {  // the node times move with q: not a fixed residual to refine
+  if (!times_outside_the_problem(ctx)) {  // the node times move with q: not a fixed residual to refine
     if (options.iterative_refinement == Refinement::on) summary.refinement_note = "not run: the model has a clock";
     return;
   }
@@ -239,6 +240,7 @@ void refine_solution(Context& ctx, const Options& options, Summary& summary) {
                 steps, steps == 1 ? "" : "s", wide_part, change, plain.steps > 0 ? plain.first : wide.first,
                 plain.failure.empty() ? plain.residual : wide.residual);
   summary.refinement_note = buf;
+  update_times(ctx, Positions::stay);  // under free_final_time the travel time of the refined path
   eval_full(ctx, ctx.q);
   compute_residual(ctx);
   ctx.action = sum_action(ctx);

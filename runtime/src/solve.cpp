@@ -300,6 +300,8 @@ Summary solve_once(const Problem& problem, const Options& requested, Trajectory&
   }
   if (corrected) {
     detail::record_solve_error(delta, topology->context().dim, problem.model->ncoords, summary);
+    if (problem.clock == ClockMode::free_final_time && std::isfinite(summary.solve_error))
+      summary.solve_time_error = detail::time_shift(topology->context(), delta);
     if (flags.coarser_levels) flags.coarser_levels->correction = std::move(delta);
   }
   finished();

@@ -407,15 +407,15 @@ TEST_P(GeneratedKernels, ClockMatchesGinac) {
   }
 }
 
-// The travel kernel is the clock under the discretization's own quadrature: for the order-1
-// trapezoid and midpoint rules it is formed here from the left-rule clock kernel, h F(x0, (x1 -
-// x0)/h), evaluated where each rule evaluates F (the other discretizations' orders are measured in
-// tests/python/test_travel_time.py). A model whose L or clock depends on t has none.
+// The travel kernel is the clock under the discretization's own quadrature, the time linear over
+// the interval: for the order-1 trapezoid and midpoint rules it is formed here from the left-rule
+// clock kernel, h F(t, x0, (x1 - x0)/h), evaluated where each rule evaluates F (the other
+// discretizations' orders are measured in tests/python/test_travel_time.py).
 TEST_P(GeneratedKernels, TravelIsTheClockUnderTheDiscretizationsQuadrature) {
   const pardel_model& model = *entry_.model;
   for (int k = 0; k < model.ndiscretizations; ++k) {
     const pardel_discretization& d = model.discretizations[k];
-    if (model.clock == nullptr || model.time_dependent) {
+    if (model.clock == nullptr) {
       EXPECT_EQ(d.travel, nullptr) << d.name;
       continue;
     }
@@ -431,13 +431,13 @@ TEST_P(GeneratedKernels, TravelIsTheClockUnderTheDiscretizationsQuadrature) {
       if (name == "trapezoid") {
         for (std::size_t i = 0; i < n; ++i) to[i] = 2 * x.q1[i] - x.q0[i];  // q1 + (q1 - q0)
         want = (model.clock(x.h, x.t0, x.q0.data(), x.q1.data(), x.p.data()) +
-                model.clock(x.h, x.t0, x.q1.data(), to.data(), x.p.data())) / 2;
+                model.clock(x.h, x.t1, x.q1.data(), to.data(), x.p.data())) / 2;
       } else {
         for (std::size_t i = 0; i < n; ++i) {
           from[i] = (x.q0[i] + x.q1[i]) / 2;
           to[i] = from[i] + x.q1[i] - x.q0[i];
         }
-        want = model.clock(x.h, x.t0, from.data(), to.data(), x.p.data());
+        want = model.clock(x.h, (x.t0 + x.t1) / 2, from.data(), to.data(), x.p.data());
       }
       const double got = d.travel(x.h, x.t0, x.t1, x.q0.data(), x.q1.data(), x.p.data());
       EXPECT_NEAR(got, want, 1e-12 * std::max(1.0, std::fabs(want))) << name;

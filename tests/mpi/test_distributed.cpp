@@ -710,7 +710,7 @@ TEST(Point, ATwoFoldLowestModeOverRanksAsInOneProcess) {
       if (soft)
         EXPECT_EQ(s->point.note.find("a nearly degenerate minimum whose lowest mode is two-fold"), 0u) << s->point.note;
       else
-        EXPECT_NE(s->point.note.find("(a two-fold lowest mode), and the third"), std::string::npos) << s->point.note;
+        EXPECT_NE(s->point.note.find("(as a two-fold lowest mode makes them), and the third"), std::string::npos) << s->point.note;
     }
   }
 }

@@ -203,7 +203,7 @@ TEST(Assessment, ATwoFoldLowestModeIsComparedWithTheThirdEigenvalue) {
       EXPECT_NE(out.note.find("a two-dimensional subspace"), std::string::npos) << out.note;
       EXPECT_NEAR(out.soft_motion, std::sqrt(2e-16 / out.lambda_min), 1e-12 * out.soft_motion);
     } else {
-      EXPECT_NE(out.note.find("the two smallest eigenvalues are nearly equal (a two-fold lowest mode), and the third"),
+      EXPECT_NE(out.note.find("the two smallest eigenvalues lie within a factor 2 of each other (as a two-fold lowest mode makes them), and the third"),
                 std::string::npos)
           << out.note;
       EXPECT_EQ(out.soft_motion, 0);
@@ -462,7 +462,7 @@ TEST(Assessment, ARepeatedSmallestEigenvalueIsReportedTwice) {
   EXPECT_NEAR(s.point.lambda_next, e[1], 3e-3 * e[1]);  // settled to 3e-3 (docs/solvers.md)
   EXPECT_FALSE(s.point.nearly_degenerate);
   // The two nearly equal: the third is computed too, and found nearly equal as well.
-  EXPECT_NE(s.point.note.find("the three smallest eigenvalues are nearly equal (the third "), std::string::npos)
+  EXPECT_NE(s.point.note.find("the three smallest eigenvalues lie within factors 2 of each other (the third "), std::string::npos)
       << s.point.note;
 }
 

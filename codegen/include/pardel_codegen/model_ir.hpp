@@ -55,11 +55,11 @@ struct DiscretizationIR {
    *  the corrections of iterative refinement where the Hessian rounded to double is too
    *  ill-conditioned (condition ~ N^(2 order)); as `extended` for interior values. */
   std::optional<KernelIR> extended_full;
-  /** Models with a clock whose L and clock do not depend on t: the clock integrated over the
-   *  interval with the discretization's own interpolant and quadrature (variant "travel", a
-   *  pardel_action_kernel; kernel_abi.h, pardel_discretization::travel), the interval's share of
-   *  the travel time under the free_final_time clock. With interior values only its name: its code
-   *  solves for z (condensation.hpp) and calls travel_interval. */
+  /** Models with a clock: the clock integrated over the interval with the discretization's own
+   *  interpolant and quadrature (variant "travel", a pardel_action_kernel; kernel_abi.h,
+   *  pardel_discretization::travel), the interval's share of the travel time under the
+   *  free_final_time clock. With interior values only its name: its code solves for z
+   *  (condensation.hpp) and calls travel_interval. */
   std::optional<KernelIR> travel;
   /** With interior values and `travel`: the integral over [q0, z, q1] (variant "travel_z"). */
   std::optional<KernelIR> travel_interval;

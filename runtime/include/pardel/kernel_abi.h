@@ -127,10 +127,11 @@ typedef struct pardel_discretization {
   pardel_interior_hessian_kernel interior_hessian;
   /** The model's clock integrated over one interval with this discretization's interpolant and
    *  quadrature (its interior values found as the condensed kernels find them; NaN where they
-   *  cannot be): the interval's share of the travel time under the free_final_time clock, of the
-   *  discretization's order where the seed's left rule (pardel_clock_kernel) is of order one. NULL
-   *  where the model has no clock or L or the clock depends on t (the left rule then places the
-   *  node times at which L is evaluated, part of the discrete problem). */
+   *  cannot be), the time at a quadrature point linear between t0 and t1 as in the discrete
+   *  Lagrangian: the interval's share of the travel time under the free_final_time clock, of the
+   *  discretization's order where the seed's left rule (pardel_clock_kernel) is of order one.
+   *  Where L or the clock depends on t, the runtime finds t1 = t0 + travel(h, t0, t1, ...) by
+   *  fixed-point iteration. NULL where the model has no clock. */
   pardel_action_kernel travel;
 } pardel_discretization;
 

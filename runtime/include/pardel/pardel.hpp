@@ -436,9 +436,14 @@ struct Summary {
   std::vector<double> solve_error_by_coordinate;  ///< the same per coordinate (empty where not computed)
   /** Under the free_final_time clock with a discretization that integrates the clock by its own
    *  quadrature (pardel_discretization::travel): the same rule's estimate of the node times' error,
-   *  max over the common nodes of |t_N - t_(N/r)| / (r^p - 1), with the order error_estimate used;
+   *  max over the common nodes of |t_N - t_(N/r)| / (r^p - 1) with the order error_estimate used
+   *  (at least the times' round-off, 8 eps max|t|), plus solve_time_error where that was computed;
    *  NaN elsewhere (the seed's left rule, of order one, is not estimated). */
   double error_time_estimate = std::numeric_limits<double>::quiet_NaN();
+  /** Under the free_final_time clock, where solve_error was computed: the largest change of a node
+   *  time that the Newton correction at the returned iterate makes (the solve's own error in the
+   *  times); NaN elsewhere. */
+  double solve_time_error = std::numeric_limits<double>::quiet_NaN();
   int error_coarse_N = 0;       ///< the coarse grid it was estimated against (0: not estimated)
   double error_seconds = 0;     ///< time the estimate took (its coarse solve), included in wall_seconds
   bool extrapolated = false;    ///< the returned trajectory holds the extrapolated values (Options::extrapolate)

@@ -128,11 +128,14 @@ void update_times_distributed(Local& local, Positions positions) {
   double carried[2] = {ctx.t0, ctx.t0};  // times of the left halo and of the first owned node
   if (L.has_left()) MPI_Recv(carried, 2, MPI_DOUBLE, L.rank - 1, 104, local.comm, MPI_STATUS_IGNORE);
   if (L.has_left()) ctx.t[0] = carried[0];
+  double start_before = ctx.t[static_cast<std::size_t>(jf)];  // each interval's previous duration starts its step
   ctx.t[static_cast<std::size_t>(jf)] = carried[1];
   for (int j = jf; j < j_end; ++j) {
     const std::size_t jj = static_cast<std::size_t>(j);
     if (ctx.clock == ClockMode::free_final_time) {
-      ctx.t[jj + 1] = ctx.t[jj] + pardel::detail::free_time_step(ctx, jj, hs, q.data());
+      const double end_before = ctx.t[jj + 1];
+      ctx.t[jj + 1] = ctx.t[jj] + pardel::detail::free_time_step(ctx, jj, hs, q.data(), end_before - start_before);
+      start_before = end_before;
     } else {
       ctx.t[jj + 1] = ctx.t[jj] + ctx.T * c[j - jf] / total;
     }

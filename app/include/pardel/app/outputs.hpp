@@ -32,7 +32,7 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
 
 /** The clock summed over the intervals (requires model.clock): each interval's integral of it by
  *  the discretization's quadrature (pardel_discretization::travel), or the seed's left rule (the
- *  model's clock kernel) where the discretization has none (L or the clock depends on t). */
+ *  model's clock kernel) where the discretization has none (a model compiled without it). */
 double summed_clock(const Problem& problem, const Trajectory& trajectory);
 
 /** convergence.csv: iteration,N,residual,action,seconds — one row per history record. */
