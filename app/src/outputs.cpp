@@ -43,18 +43,22 @@ class FolderLock {
   int fd_;
 };
 
+/** Interval k's share of the summed clock: its travel kernel (the clock integrated by the
+ *  discretization's quadrature) where the discretization has one, else the left rule. */
+double clock_share(const Problem& problem, const Trajectory& trajectory, int k) {
+  const pardel_action_kernel travel = problem.discretization ? problem.discretization->travel : nullptr;
+  const double h = problem.T / trajectory.N;
+  return travel ? travel(h, trajectory.t[k], trajectory.t[k + 1], trajectory.node(k), trajectory.node(k + 1),
+                         problem.params.data())
+                : problem.model->clock(h, trajectory.t[k], trajectory.node(k), trajectory.node(k + 1),
+                                       problem.params.data());
+}
+
 }  // namespace
 
 double summed_clock(const Problem& problem, const Trajectory& trajectory) {
-  const pardel_model& model = *problem.model;
-  const pardel_action_kernel travel = problem.discretization ? problem.discretization->travel : nullptr;
-  const double h = problem.T / trajectory.N;
   double total = 0;
-  for (int k = 0; k < trajectory.N; ++k) {
-    total += travel ? travel(h, trajectory.t[k], trajectory.t[k + 1], trajectory.node(k), trajectory.node(k + 1),
-                             problem.params.data())
-                    : model.clock(h, trajectory.t[k], trajectory.node(k), trajectory.node(k + 1), problem.params.data());
-  }
+  for (int k = 0; k < trajectory.N; ++k) total += clock_share(problem, trajectory, k);
   return total;
 }
 
@@ -77,10 +81,20 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
                   "time)"};
   }
   if (declared && model.cost_kind == PARDEL_COST_CLOCK && model.clock) {
-    return {model.cost_name, summed_clock(problem, trajectory),
-            problem.discretization && problem.discretization->travel
-                ? "sum over intervals of the clock F integrated over each by the discretization's quadrature"
-                : "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the clock F)"};
+    const double value = summed_clock(problem, trajectory);
+    std::string definition = problem.discretization && problem.discretization->travel
+                                 ? "sum over intervals of the clock F integrated over each by the discretization's "
+                                   "quadrature"
+                                 : "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the "
+                                   "clock F)";
+    for (int k = 0; k < trajectory.N && !std::isfinite(value); ++k)  // name the first interval at fault
+      if (!std::isfinite(clock_share(problem, trajectory, k))) {
+        definition += fmt::format("; not finite: the clock's share of interval {} (t = {:.6g} to {:.6g}) is not a "
+                                  "number, the model's clock being undefined or infinite on the path there",
+                                  k, trajectory.t[k], trajectory.t[k + 1]);
+        break;
+      }
+    return {model.cost_name, value, definition};
   }
   return {"action", summary.action, "the discrete action"};
 }

@@ -184,3 +184,14 @@ def test_the_node_times_estimate_is_at_least_their_round_off_and_holds_the_solve
     floor = 8 * np.finfo(float).eps * 2.5
     assert floor <= r.error_time_estimate < 10 * floor, r.error_time_estimate
     assert "the node times' estimate with the solve's own error in them" in r.error_note, r.error_note
+
+
+def test_a_clock_undefined_on_the_path_names_its_interval():
+    # Without a clock mode the clock only gives the cost; where it is not a number on the path the
+    # cost is null and its definition says where (the solve of L is not affected).
+    lag = "model root_clock\ncoords x\nL = x'^2/2\nclock = sqrt(x - 1/2)\ncost travel_time = clock\n" \
+          "discretizations trapezoid\n"
+    r = pardel.solve(lag, q0=[0.0], qN=[1.0], T=1.0, N=10)
+    assert r.status == "converged", r.message
+    assert r.cost is None
+    assert "not finite: the clock's share of interval 0 (t = 0 to 0.1) is not a number" in r.cost_definition
