@@ -43,10 +43,16 @@ class FolderLock {
   int fd_;
 };
 
-/** Interval k's share of the summed clock: its travel kernel (the clock integrated by the
- *  discretization's quadrature) where the discretization has one, else the left rule. */
+/** The discretization's travel kernel (the clock integrated by its quadrature), or null: the seed's
+ *  left rule then. */
+pardel_action_kernel travel_kernel(const Problem& problem) {
+  return problem.discretization ? problem.discretization->travel : nullptr;
+}
+
+/** Interval k's share of the summed clock: its travel kernel where the discretization has one,
+ *  else the left rule. */
 double clock_share(const Problem& problem, const Trajectory& trajectory, int k) {
-  const pardel_action_kernel travel = problem.discretization ? problem.discretization->travel : nullptr;
+  const pardel_action_kernel travel = travel_kernel(problem);
   const double h = problem.T / trajectory.N;
   return travel ? travel(h, trajectory.t[k], trajectory.t[k + 1], trajectory.node(k), trajectory.node(k + 1),
                          problem.params.data())
@@ -74,7 +80,7 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
   // Time-reparametrized models: the clock is dt/ds, its sum the travel time.
   if (model.clock && problem.clock == ClockMode::free_final_time) {
     return {declared ? model.cost_name : "travel_time", summary.final_time - problem.t0,
-            problem.discretization && problem.discretization->travel
+            travel_kernel(problem)
                 ? "t_N - t_0, the node times being the prefix sums of the model's clock integrated over each "
                   "interval by the discretization's quadrature (free final time)"
                 : "t_N - t_0, the node times being the prefix sums of the model's clock by the left rule (free final "
@@ -82,7 +88,7 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
   }
   if (declared && model.cost_kind == PARDEL_COST_CLOCK && model.clock) {
     const double value = summed_clock(problem, trajectory);
-    std::string definition = problem.discretization && problem.discretization->travel
+    std::string definition = travel_kernel(problem)
                                  ? "sum over intervals of the clock F integrated over each by the discretization's "
                                    "quadrature"
                                  : "sum over intervals of h * clock(t_k, q_k, (q_{k+1} - q_k)/h) (left rule of the "

@@ -32,6 +32,13 @@
 namespace pardel::detail {
 namespace {
 
+/** Whether the two smallest eigenvalues lie within a factor 2 of each other (as a repeated lowest
+ *  mode makes them), where their ratio cannot show a nearly degenerate minimum and the third is
+ *  computed and compared instead. */
+bool lowest_two_close(double lambda_min, double lambda_next) {
+  return lambda_next > 0 && lambda_next < 2 * lambda_min;
+}
+
 std::string format(const char* fmt, double a, double b = 0, double c = 0, double d = 0, double e = 0) {
   char buf[512];
   std::snprintf(buf, sizeof buf, fmt, a, b, c, d, e);
@@ -404,7 +411,7 @@ SmallestEigenvalues smallest_eigenvalues(const LanczosOperator& op, long positiv
   out.settled = first.settled && second.settled;
   // Two nearly equal smallest values (a repeated lowest mode): lambda_3 as well, where asked.
   const bool repeated = third && positive >= 3 && second.complete && second.lambda > 0 &&
-                        out.lambda[1] < 2 * out.lambda[0];
+                        lowest_two_close(out.lambda[0], out.lambda[1]);
   // The second Ritz vector, into op.keep[1] where given, else (for lambda_3's run) a vector of
   // its own.
   std::unique_ptr<double[]> own;
@@ -455,7 +462,7 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
   // A lowest mode of multiplicity two or more (an isotropic oscillator at a conjugate time) has
   // lambda_next next to lambda_min; the gap that shows a nearly degenerate minimum then lies above
   // lambda_next, and smallest_eigenvalues gives lambda_3 there.
-  const bool repeated = out.positive >= 2 && out.lambda_next > 0 && out.lambda_next < 2 * out.lambda_min;
+  const bool repeated = out.positive >= 2 && lowest_two_close(out.lambda_min, out.lambda_next);
   const double lambda3 = repeated && out.positive >= 3 ? e.lambda[2] : 0.0;
   const double soft_motion =
       std::sqrt(2 * 1e-16 * std::max(std::fabs(action), 1e-300) / std::max(out.lambda_min, 1e-300));
@@ -470,9 +477,9 @@ void describe_minimum(const SmallestEigenvalues& e, double action, PointAssessme
     out.nearly_degenerate = true;
     out.soft_motion = soft_motion;
     out.note = format("a nearly degenerate minimum whose lowest mode is two-fold: the two smallest eigenvalues of the "
-                      "Hessian, %.3g and %.3g, lie within a factor 2 of each other and the second is %.2g of the third (%.3g); the action is "
-                      "determined to round-off, the trajectory only up to a motion of size about %.2g in a "
-                      "two-dimensional subspace",
+                      "Hessian, %.3g and %.3g, lie within a factor 2 of each other and the second is %.2g of the "
+                      "third (%.3g); the action is determined to round-off, the trajectory only up to a motion of "
+                      "size about %.2g in a two-dimensional subspace",
                       out.lambda_min, out.lambda_next, out.lambda_next / lambda3, lambda3, out.soft_motion);
   } else if (out.lambda_settled) {
     out.note = format("a strict local minimum: Hessian positive definite, eigenvalues from %.3g (next %.3g) to at "

@@ -377,9 +377,7 @@ void retime_nodes(const RetimeGrid& old, const double* t_new, int k_first, int k
   }
 }
 
-double free_time_step(const Grid& ctx, std::size_t k, double hs, const double* q, double guess) {
-  const std::size_t d = static_cast<std::size_t>(ctx.dim);
-  const double t0 = ctx.t[k], *q0 = q + k * d, *q1 = q + (k + 1) * d;
+double free_time_step(const Grid& ctx, double t0, const double* q0, const double* q1, double hs, double guess) {
   const pardel_action_kernel travel = ctx.disc ? ctx.disc->travel : nullptr;
   if (!travel) return ctx.model->clock(hs, t0, q0, q1, ctx.p());
   if (!ctx.model->time_dependent) return travel(hs, t0, t0, q0, q1, ctx.p());
@@ -402,19 +400,11 @@ double time_shift(const Context& ctx, const std::vector<double>& delta) {
   if (ctx.clock != ClockMode::free_final_time || !ctx.model->clock || delta.size() != (N - 1) * d) return 0;
   std::vector<double> moved = ctx.q;
   for (std::size_t i = 0; i < delta.size(); ++i) moved[d + i] += delta[i];
-  // The moved path's times in a context of its own (free_time_step reads the times so far).
-  Grid other;
-  other.clock = ctx.clock;
-  other.model = ctx.model;
-  other.disc = ctx.disc;
-  other.dim = ctx.dim;
-  other.params = ctx.params;
-  other.t.assign(N + 1, ctx.t0);
   const double hs = ctx.T / ctx.N;
-  double shift = 0;
+  double t = ctx.t0, shift = 0;  // the moved path's time at node k + 1
   for (std::size_t k = 0; k < N; ++k) {
-    other.t[k + 1] = other.t[k] + free_time_step(other, k, hs, moved.data(), ctx.t[k + 1] - ctx.t[k]);
-    shift = std::max(shift, std::fabs(other.t[k + 1] - ctx.t[k + 1]));
+    t += free_time_step(ctx, t, moved.data() + k * d, moved.data() + (k + 1) * d, hs, ctx.t[k + 1] - ctx.t[k]);
+    shift = std::max(shift, std::fabs(t - ctx.t[k + 1]));
   }
   return shift;
 }
@@ -433,7 +423,8 @@ void update_times(Context& ctx, Positions positions) {
     for (int k = 0; k < N; ++k) {
       const std::size_t kk = static_cast<std::size_t>(k);
       const double end_before = ctx.t[kk + 1];
-      ctx.t[kk + 1] = ctx.t[kk] + free_time_step(ctx, kk, hs, q.data(), end_before - start_before);
+      ctx.t[kk + 1] = ctx.t[kk] + free_time_step(ctx, ctx.t[kk], q.data() + kk * d, q.data() + (kk + 1) * d, hs,
+                                                  end_before - start_before);
       start_before = end_before;
       ctx.hk[kk] = hs;
     }

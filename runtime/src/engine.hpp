@@ -200,14 +200,14 @@ enum class Positions {
  *  parameter and keeps its values. */
 void update_times(Context& ctx, Positions positions);
 
-/** The time that interval k takes under the free_final_time clock, from q (nodes of ctx.dim values)
- *  with the parameter step hs, ctx.t[k] the time it starts at: the discretization's travel kernel
+/** The time that an interval from node values q0 to q1 takes under the free_final_time clock, with
+ *  the parameter step hs, starting at time t0: the discretization's travel kernel
  *  (the clock integrated with its own interpolant and quadrature) where it has one, solved for the
  *  interval's end time by fixed-point iteration where L or the clock depends on t, started from
  *  `guess` (the interval's previous duration) where that is positive, else from the left rule (NaN
  *  where it does not settle in kTravelIterations); else the model's clock by the seed's left rule
  *  (first order). */
-double free_time_step(const Grid& ctx, std::size_t k, double hs, const double* q, double guess);
+double free_time_step(const Grid& ctx, double t0, const double* q0, const double* q1, double hs, double guess);
 
 /** Under the free_final_time clock: the largest change of a node time when the interior nodes move
  *  by `delta` (nodes 1..N-1, dim each: the solve's Newton correction), the times summed from t0 as

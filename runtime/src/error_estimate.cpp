@@ -20,6 +20,10 @@
 namespace pardel::detail {
 namespace {
 
+/** The round-off level of values up to `size` in magnitude, below which two solutions differ by
+ *  rounding alone: 8 eps size. */
+double rounding_level(double size) { return 8 * std::numeric_limits<double>::epsilon() * size; }
+
 std::string number(double v, int digits = 10) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*g", digits, v);
@@ -376,7 +380,7 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, con
   for (int i = 0; i < nc; ++i) {
     double size = 0;
     for (int k = 0; k <= fine.N; ++k) size = std::max(size, std::fabs(fine.node(k)[i]));
-    roundoff[static_cast<std::size_t>(i)] = 8 * std::numeric_limits<double>::epsilon() * size;
+    roundoff[static_cast<std::size_t>(i)] = rounding_level(size);
   }
   const Order order = check_order(problem, fine, coarse, ratio, third, roundoff);
   const double factor = std::pow(static_cast<double>(ratio), order.p) - 1;
@@ -431,7 +435,7 @@ void richardson(const Problem& problem, const Trajectory& coarse, int ratio, con
                                                   coarse.t[static_cast<std::size_t>(m)]));
     for (double t : fine.t) largest = std::max(largest, std::fabs(t));
     // Below the times' round-off the difference is rounding alone, as for the coordinates.
-    summary.error_time_estimate = std::max(time_error / factor, 8 * std::numeric_limits<double>::epsilon() * largest);
+    summary.error_time_estimate = std::max(time_error / factor, rounding_level(largest));
     summary.error_note += "; the node times (the clock integrated over each interval by the discretization's "
                           "quadrature), estimated alike: " + number(summary.error_time_estimate, 3);
   } else if (problem.clock == ClockMode::free_final_time) {

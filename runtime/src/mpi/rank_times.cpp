@@ -134,7 +134,8 @@ void update_times_distributed(Local& local, Positions positions) {
     const std::size_t jj = static_cast<std::size_t>(j);
     if (ctx.clock == ClockMode::free_final_time) {
       const double end_before = ctx.t[jj + 1];
-      ctx.t[jj + 1] = ctx.t[jj] + pardel::detail::free_time_step(ctx, jj, hs, q.data(), end_before - start_before);
+      ctx.t[jj + 1] = ctx.t[jj] + pardel::detail::free_time_step(ctx, ctx.t[jj], q.data() + jj * d,
+                                                                  q.data() + (jj + 1) * d, hs, end_before - start_before);
       start_before = end_before;
     } else {
       ctx.t[jj + 1] = ctx.t[jj] + ctx.T * c[j - jf] / total;
