@@ -232,98 +232,110 @@ extern "C" void pendulum_midpoint_grad_extended(double h_in, double t0_in, doubl
 // The interval's action S over its nodes and 1 interior values z, condensed by
 // pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
 
-// start: 2 operations (2 before CSE)
+// start: 0 operations (0 before CSE)
 static void pendulum_galerkin_lobatto_s_2_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* z) {
   (void)h;
   (void)t0;
   (void)t1;
+  (void)q0;
+  (void)q1;
   (void)p;
   (void)z;
-  z[0] = (q0[0] + q1[0])*0.5;
+  z[0] = 0.0;
 }
 
-// interior: 29 operations (31 before CSE)
+// interior: 28 operations (35 before CSE)
 static void pendulum_galerkin_lobatto_s_2_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     const double* z, double* g, double* H) {
   (void)t0;
   (void)t1;
   const double pd_t0001 = 1.0/h;
-  const double pd_t0002 = z[0]*4.0*pd_t0001;
-  const double pd_t0003 = std::sin(z[0]);
-  const double pd_t0004 = p[0]/p[1];
-  const double pd_t0005 = std::cos(z[0]);
-  g[0] = h*0.66666666666666663*((pd_t0002 - (q0[0] + q1[0]*3.0)*pd_t0001)*pd_t0001 - ((q1[0] + q0[0]*3.0)*pd_t0001 - pd_t0002)*pd_t0001 - pd_t0003*pd_t0004);
-  H[0] = -(h*(0.66666666666666663*(pd_t0004*pd_t0005) - 1.0/(h*h)*5.333333333333333));
+  const double pd_t0002 = (q0[0] - q1[0])*pd_t0001;
+  const double pd_t0003 = z[0]*4.0*pd_t0001;
+  const double pd_t0004 = z[0] + (q0[0] + q1[0])*0.5;
+  const double pd_t0005 = std::sin(pd_t0004);
+  const double pd_t0006 = p[0]/p[1];
+  const double pd_t0007 = std::cos(pd_t0004);
+  g[0] = h*0.66666666666666663*((pd_t0002 + pd_t0003)*pd_t0001 - (pd_t0002 - pd_t0003)*pd_t0001 - pd_t0005*pd_t0006);
+  H[0] = -(h*(0.66666666666666663*(pd_t0006*pd_t0007) - 1.0/(h*h)*5.333333333333333));
 }
 
-// ext_grad: 63 operations (127 before CSE)
+// ext_grad: 58 operations (136 before CSE)
 static void pendulum_galerkin_lobatto_s_2_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     const double* z, double* S, double* g) {
   (void)t0;
   (void)t1;
-  const double pd_t0001 = p[0]/p[1];
-  const double pd_t0002 = std::cos(z[0]);
-  const double pd_t0003 = q0[0] - q1[0];
-  const double pd_t0004 = 1.0/(h*h);
+  const double pd_t0001 = z[0] + (q0[0] + q1[0])*0.5;
+  const double pd_t0002 = std::cos(pd_t0001);
+  const double pd_t0003 = p[0]/p[1];
+  const double pd_t0004 = q0[0] - q1[0];
   const double pd_t0005 = 1.0/h;
-  const double pd_t0006 = z[0]*4.0*pd_t0005;
-  const double pd_t0007 = (q1[0] + q0[0]*3.0)*pd_t0005 - pd_t0006;
-  const double pd_t0008 = pd_t0006 - (q0[0] + q1[0]*3.0)*pd_t0005;
-  const double pd_t0009 = std::cos(q1[0]);
-  const double pd_t0010 = std::cos(q0[0]);
-  const double pd_t0011 = pd_t0008*pd_t0005;
-  const double pd_t0012 = std::sin(q0[0]);
-  const double pd_t0013 = pd_t0007*pd_t0005;
-  const double pd_t0014 = 0.66666666666666663*(pd_t0003*pd_t0004);
-  const double pd_t0015 = std::sin(z[0]);
-  const double pd_t0016 = std::sin(q1[0]);
-  S[0] = h*(pd_t0001*pd_t0002*0.66666666666666663 + (pd_t0003*pd_t0003*pd_t0004*0.33333333333333331 + ((pd_t0007*pd_t0007 + pd_t0008*pd_t0008)*0.083333333333333329 + (pd_t0009*pd_t0001 + pd_t0001*pd_t0010)*0.16666666666666666)));
-  g[0] = -(h*(0.16666666666666666*(pd_t0011 + pd_t0001*pd_t0012) - pd_t0013*0.5 - pd_t0014));
-  g[1] = h*0.66666666666666663*(pd_t0011 - pd_t0013 - pd_t0001*pd_t0015);
-  g[2] = -(h*(pd_t0011*0.5 + (pd_t0014 + 0.16666666666666666*(pd_t0001*pd_t0016 - pd_t0013))));
+  const double pd_t0006 = pd_t0004*pd_t0005;
+  const double pd_t0007 = z[0]*4.0*pd_t0005;
+  const double pd_t0008 = pd_t0006 + pd_t0007;
+  const double pd_t0009 = pd_t0006 - pd_t0007;
+  const double pd_t0010 = std::cos(q1[0]);
+  const double pd_t0011 = std::cos(q0[0]);
+  const double pd_t0012 = pd_t0009*pd_t0005;
+  const double pd_t0013 = pd_t0008*pd_t0005;
+  const double pd_t0014 = pd_t0012 + 4.0*(pd_t0004/(h*h) + pd_t0013*0.25);
+  const double pd_t0015 = std::sin(q0[0]);
+  const double pd_t0016 = std::sin(pd_t0001);
+  const double pd_t0017 = pd_t0003*pd_t0016;
+  const double pd_t0018 = 0.33333333333333331*pd_t0017;
+  const double pd_t0019 = std::sin(q1[0]);
+  S[0] = h*(pd_t0002*pd_t0003*0.66666666666666663 + (pd_t0006*pd_t0006*0.33333333333333331 + ((pd_t0008*pd_t0008 + pd_t0009*pd_t0009)*0.083333333333333329 + (pd_t0003*pd_t0010 + pd_t0003*pd_t0011)*0.16666666666666666)));
+  g[0] = h*(0.16666666666666666*(pd_t0014 - pd_t0003*pd_t0015) - pd_t0018);
+  g[1] = h*0.66666666666666663*(pd_t0013 - pd_t0017 - pd_t0012);
+  g[2] = -(h*(pd_t0018 + 0.16666666666666666*(pd_t0014 + pd_t0003*pd_t0019)));
 }
 
-// ext_full: 79 operations (173 before CSE)
+// ext_full: 80 operations (241 before CSE)
 static void pendulum_galerkin_lobatto_s_2_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     const double* z, double* S, double* g, double* H) {
   (void)t0;
   (void)t1;
-  const double pd_t0001 = p[0]/p[1];
-  const double pd_t0002 = std::cos(z[0]);
-  const double pd_t0003 = pd_t0001*pd_t0002*0.66666666666666663;
-  const double pd_t0004 = q0[0] - q1[0];
-  const double pd_t0005 = 1.0/(h*h);
-  const double pd_t0006 = 1.0/h;
-  const double pd_t0007 = z[0]*4.0*pd_t0006;
-  const double pd_t0008 = (q1[0] + q0[0]*3.0)*pd_t0006 - pd_t0007;
-  const double pd_t0009 = pd_t0007 - (q0[0] + q1[0]*3.0)*pd_t0006;
-  const double pd_t0010 = std::cos(q1[0]);
-  const double pd_t0011 = pd_t0010*pd_t0001;
-  const double pd_t0012 = std::cos(q0[0]);
-  const double pd_t0013 = pd_t0001*pd_t0012;
-  const double pd_t0014 = pd_t0009*pd_t0006;
-  const double pd_t0015 = std::sin(q0[0]);
-  const double pd_t0016 = pd_t0008*pd_t0006;
-  const double pd_t0017 = 0.66666666666666663*(pd_t0004*pd_t0005);
-  const double pd_t0018 = std::sin(z[0]);
-  const double pd_t0019 = std::sin(q1[0]);
-  const double pd_t0020 = pd_t0005*2.3333333333333335;
-  const double pd_t0021 = -(pd_t0006*2.6666666666666665);
-  const double pd_t0022 = 0.33333333333333331*pd_t0006;
-  S[0] = h*(pd_t0003 + (pd_t0004*pd_t0004*pd_t0005*0.33333333333333331 + ((pd_t0008*pd_t0008 + pd_t0009*pd_t0009)*0.083333333333333329 + (pd_t0011 + pd_t0013)*0.16666666666666666)));
-  g[0] = -(h*(0.16666666666666666*(pd_t0014 + pd_t0001*pd_t0015) - pd_t0016*0.5 - pd_t0017));
-  g[1] = h*0.66666666666666663*(pd_t0014 - pd_t0016 - pd_t0001*pd_t0018);
-  g[2] = -(h*(pd_t0014*0.5 + (pd_t0017 + 0.16666666666666666*(pd_t0001*pd_t0019 - pd_t0016))));
-  H[0] = -(h*(pd_t0013*0.16666666666666666 - pd_t0020));
-  H[1] = pd_t0021;
-  H[2] = pd_t0022;
-  H[3] = pd_t0021;
-  H[4] = -(h*(pd_t0003 - pd_t0005*5.333333333333333));
-  H[5] = pd_t0021;
-  H[6] = pd_t0022;
-  H[7] = pd_t0021;
-  H[8] = -(h*(pd_t0011*0.16666666666666666 - pd_t0020));
+  const double pd_t0001 = z[0] + (q0[0] + q1[0])*0.5;
+  const double pd_t0002 = std::cos(pd_t0001);
+  const double pd_t0003 = p[0]/p[1];
+  const double pd_t0004 = pd_t0002*pd_t0003;
+  const double pd_t0005 = pd_t0004*0.66666666666666663;
+  const double pd_t0006 = q0[0] - q1[0];
+  const double pd_t0007 = 1.0/h;
+  const double pd_t0008 = pd_t0006*pd_t0007;
+  const double pd_t0009 = z[0]*4.0*pd_t0007;
+  const double pd_t0010 = pd_t0008 + pd_t0009;
+  const double pd_t0011 = pd_t0008 - pd_t0009;
+  const double pd_t0012 = std::cos(q1[0]);
+  const double pd_t0013 = pd_t0003*pd_t0012;
+  const double pd_t0014 = std::cos(q0[0]);
+  const double pd_t0015 = pd_t0003*pd_t0014;
+  const double pd_t0016 = pd_t0011*pd_t0007;
+  const double pd_t0017 = 1.0/(h*h);
+  const double pd_t0018 = pd_t0010*pd_t0007;
+  const double pd_t0019 = pd_t0016 + 4.0*(pd_t0006*pd_t0017 + pd_t0018*0.25);
+  const double pd_t0020 = std::sin(q0[0]);
+  const double pd_t0021 = std::sin(pd_t0001);
+  const double pd_t0022 = pd_t0003*pd_t0021;
+  const double pd_t0023 = 0.33333333333333331*pd_t0022;
+  const double pd_t0024 = std::sin(q1[0]);
+  const double pd_t0025 = pd_t0004 - pd_t0017*6.0;
+  const double pd_t0026 = -(pd_t0004*(h*0.33333333333333331));
+  const double pd_t0027 = -(h*(pd_t0017 + pd_t0004*0.16666666666666666));
+  S[0] = h*(pd_t0005 + (pd_t0008*pd_t0008*0.33333333333333331 + ((pd_t0010*pd_t0010 + pd_t0011*pd_t0011)*0.083333333333333329 + (pd_t0013 + pd_t0015)*0.16666666666666666)));
+  g[0] = h*(0.16666666666666666*(pd_t0019 - pd_t0003*pd_t0020) - pd_t0023);
+  g[1] = h*0.66666666666666663*(pd_t0018 - pd_t0022 - pd_t0016);
+  g[2] = -(h*(pd_t0023 + 0.16666666666666666*(pd_t0019 + pd_t0003*pd_t0024)));
+  H[0] = -(h*(0.16666666666666666*(pd_t0015 + pd_t0025)));
+  H[1] = pd_t0026;
+  H[2] = pd_t0027;
+  H[3] = pd_t0026;
+  H[4] = -(h*(pd_t0005 - pd_t0017*5.333333333333333));
+  H[5] = pd_t0026;
+  H[6] = pd_t0027;
+  H[7] = pd_t0026;
+  H[8] = -(h*(0.16666666666666666*(pd_t0013 + pd_t0025)));
 }
 
 static const pardel_condensation::Interval pendulum_galerkin_lobatto_s_2_interval = {
@@ -335,45 +347,50 @@ static const pardel_condensation::Interval pendulum_galerkin_lobatto_s_2_interva
 
 #if !defined(__CUDACC__)
 
-// interior_extended: in pd_quad, 29 operations
+// interior_extended: in pd_quad, 28 operations
 static void pendulum_galerkin_lobatto_s_2_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
     const pd_quad* z, pd_quad* g, pd_quad* H) {
   (void)t0;
   (void)t1;
   const pd_quad pd_t0001 = 1.0/h;
-  const pd_quad pd_t0002 = z[0]*4.0*pd_t0001;
-  const pd_quad pd_t0003 = sinq(z[0]);
-  const pd_quad pd_t0004 = p[0]/p[1];
-  const pd_quad pd_t0005 = cosq(z[0]);
-  g[0] = h*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*((pd_t0002 - (q0[0] + q1[0]*3.0)*pd_t0001)*pd_t0001 - ((q1[0] + q0[0]*3.0)*pd_t0001 - pd_t0002)*pd_t0001 - pd_t0003*pd_t0004);
-  H[0] = -(h*(((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0004*pd_t0005) - 1.0/(h*h)*((pd_quad(5.333333333333333) + 2.9605947323337506e-16 + 1.6177811532852781e-32))));
+  const pd_quad pd_t0002 = (q0[0] - q1[0])*pd_t0001;
+  const pd_quad pd_t0003 = z[0]*4.0*pd_t0001;
+  const pd_quad pd_t0004 = z[0] + (q0[0] + q1[0])*0.5;
+  const pd_quad pd_t0005 = sinq(pd_t0004);
+  const pd_quad pd_t0006 = p[0]/p[1];
+  const pd_quad pd_t0007 = cosq(pd_t0004);
+  g[0] = h*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*((pd_t0002 + pd_t0003)*pd_t0001 - (pd_t0002 - pd_t0003)*pd_t0001 - pd_t0005*pd_t0006);
+  H[0] = -(h*(((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0006*pd_t0007) - 1.0/(h*h)*((pd_quad(5.333333333333333) + 2.9605947323337506e-16 + 1.6177811532852781e-32))));
 }
 
-// ext_grad_extended: in pd_quad, 63 operations
+// ext_grad_extended: in pd_quad, 58 operations
 static void pendulum_galerkin_lobatto_s_2_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
     const pd_quad* z, pd_quad* S, pd_quad* g) {
   (void)t0;
   (void)t1;
-  const pd_quad pd_t0001 = p[0]/p[1];
-  const pd_quad pd_t0002 = cosq(z[0]);
-  const pd_quad pd_t0003 = q0[0] - q1[0];
-  const pd_quad pd_t0004 = 1.0/(h*h);
+  const pd_quad pd_t0001 = z[0] + (q0[0] + q1[0])*0.5;
+  const pd_quad pd_t0002 = cosq(pd_t0001);
+  const pd_quad pd_t0003 = p[0]/p[1];
+  const pd_quad pd_t0004 = q0[0] - q1[0];
   const pd_quad pd_t0005 = 1.0/h;
-  const pd_quad pd_t0006 = z[0]*4.0*pd_t0005;
-  const pd_quad pd_t0007 = (q1[0] + q0[0]*3.0)*pd_t0005 - pd_t0006;
-  const pd_quad pd_t0008 = pd_t0006 - (q0[0] + q1[0]*3.0)*pd_t0005;
-  const pd_quad pd_t0009 = cosq(q1[0]);
-  const pd_quad pd_t0010 = cosq(q0[0]);
-  const pd_quad pd_t0011 = pd_t0008*pd_t0005;
-  const pd_quad pd_t0012 = sinq(q0[0]);
-  const pd_quad pd_t0013 = pd_t0007*pd_t0005;
-  const pd_quad pd_t0014 = ((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0003*pd_t0004);
-  const pd_quad pd_t0015 = sinq(z[0]);
-  const pd_quad pd_t0016 = sinq(q1[0]);
-  S[0] = h*(pd_t0001*pd_t0002*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33)) + (pd_t0003*pd_t0003*pd_t0004*((pd_quad(0.33333333333333331) + 1.8503717077085941e-17 + 1.0111132208032988e-33)) + ((pd_t0007*pd_t0007 + pd_t0008*pd_t0008)*((pd_quad(0.083333333333333329) + 4.6259292692714853e-18 + 2.5277830520082471e-34)) + (pd_t0009*pd_t0001 + pd_t0001*pd_t0010)*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34)))));
-  g[0] = -(h*(((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34))*(pd_t0011 + pd_t0001*pd_t0012) - pd_t0013*0.5 - pd_t0014));
-  g[1] = h*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0011 - pd_t0013 - pd_t0001*pd_t0015);
-  g[2] = -(h*(pd_t0011*0.5 + (pd_t0014 + ((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34))*(pd_t0001*pd_t0016 - pd_t0013))));
+  const pd_quad pd_t0006 = pd_t0004*pd_t0005;
+  const pd_quad pd_t0007 = z[0]*4.0*pd_t0005;
+  const pd_quad pd_t0008 = pd_t0006 + pd_t0007;
+  const pd_quad pd_t0009 = pd_t0006 - pd_t0007;
+  const pd_quad pd_t0010 = cosq(q1[0]);
+  const pd_quad pd_t0011 = cosq(q0[0]);
+  const pd_quad pd_t0012 = pd_t0009*pd_t0005;
+  const pd_quad pd_t0013 = pd_t0008*pd_t0005;
+  const pd_quad pd_t0014 = pd_t0012 + 4.0*(pd_t0004/(h*h) + pd_t0013*0.25);
+  const pd_quad pd_t0015 = sinq(q0[0]);
+  const pd_quad pd_t0016 = sinq(pd_t0001);
+  const pd_quad pd_t0017 = pd_t0003*pd_t0016;
+  const pd_quad pd_t0018 = ((pd_quad(0.33333333333333331) + 1.8503717077085941e-17 + 1.0111132208032988e-33))*pd_t0017;
+  const pd_quad pd_t0019 = sinq(q1[0]);
+  S[0] = h*(pd_t0002*pd_t0003*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33)) + (pd_t0006*pd_t0006*((pd_quad(0.33333333333333331) + 1.8503717077085941e-17 + 1.0111132208032988e-33)) + ((pd_t0008*pd_t0008 + pd_t0009*pd_t0009)*((pd_quad(0.083333333333333329) + 4.6259292692714853e-18 + 2.5277830520082471e-34)) + (pd_t0003*pd_t0010 + pd_t0003*pd_t0011)*((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34)))));
+  g[0] = h*(((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34))*(pd_t0014 - pd_t0003*pd_t0015) - pd_t0018);
+  g[1] = h*((pd_quad(0.66666666666666663) + 3.7007434154171883e-17 + 2.0222264416065976e-33))*(pd_t0013 - pd_t0017 - pd_t0012);
+  g[2] = -(h*(pd_t0018 + ((pd_quad(0.16666666666666666) + 9.2518585385429707e-18 + 5.0555661040164941e-34))*(pd_t0014 + pd_t0003*pd_t0019)));
 }
 
 static const pardel_condensation::ExtendedInterval<pd_quad> pendulum_galerkin_lobatto_s_2_interval_extended = {
@@ -422,208 +439,248 @@ extern "C" double pendulum_galerkin_lobatto_s_2_action(double h, double t0, doub
 // The interval's action S over its nodes and 3 interior values z, condensed by
 // pardel/condensation.hpp: L_d(q0, q1) = S at the z where dS/dz = 0.
 
-// start: 8 operations (8 before CSE)
+// start: 0 operations (0 before CSE)
 static void pendulum_galerkin_gauss_s_4_start(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     double* z) {
   (void)h;
   (void)t0;
   (void)t1;
+  (void)q0;
+  (void)q1;
   (void)p;
   (void)z;
-  z[0] = q1[0]*0.17267316464601143 + q0[0]*0.82732683535398854;
-  z[1] = (q0[0] + q1[0])*0.5;
-  z[2] = q0[0]*0.17267316464601143 + q1[0]*0.82732683535398854;
+  z[0] = 0.0;
+  z[1] = 0.0;
+  z[2] = 0.0;
 }
 
-// interior: 207 operations (896 before CSE)
+// interior: 149 operations (851 before CSE)
 static void pendulum_galerkin_gauss_s_4_interior(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     const double* z, double* g, double* H) {
   (void)t0;
   (void)t1;
   const double pd_t0001 = 1.0/h;
-  const double pd_t0002 = z[1]*3.7995286238720101*pd_t0001;
-  const double pd_t0003 = (z[2]*0.38843642956475866*pd_t0001 + z[0]*3.8808713571172655*pd_t0001 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0001 - pd_t0002)*pd_t0001;
-  const double pd_t0004 = z[1]*0.43835335626489408*pd_t0001;
-  const double pd_t0005 = (z[2]*0.12379358188276635*pd_t0001 + z[0]*6.6712789727391666*pd_t0001 - pd_t0004 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0001)*pd_t0001;
-  const double pd_t0006 = (z[0]*0.38843642956475866*pd_t0001 + z[2]*3.8808713571172655*pd_t0001 - pd_t0002 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0001)*pd_t0001;
-  const double pd_t0007 = p[0]/p[1];
-  const double pd_t0008 = z[1]*0.18874099619441229;
-  const double pd_t0009 = q1[0]*0.0327484862937516 + pd_t0008 - z[2]*0.093822535645591634 - q0[0]*0.43891529665310852 - z[0]*0.68875165018946372;
-  const double pd_t0010 = std::sin(pd_t0009);
-  const double pd_t0011 = pd_t0007*pd_t0010;
-  const double pd_t0012 = z[1]*0.64588385333726939;
-  const double pd_t0013 = z[2]*0.61060199273548066 + (pd_t0012 + q0[0]*0.061452809596679384) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
-  const double pd_t0014 = std::sin(pd_t0013);
-  const double pd_t0015 = pd_t0007*pd_t0014;
-  const double pd_t0016 = pd_t0008 + q0[0]*0.0327484862937516 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[2]*0.68875165018946372;
-  const double pd_t0017 = std::sin(pd_t0016);
-  const double pd_t0018 = pd_t0007*pd_t0017;
-  const double pd_t0019 = (z[0]*0.12379358188276635*pd_t0001 + z[2]*6.6712789727391666*pd_t0001 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0001 - pd_t0004)*pd_t0001;
-  const double pd_t0020 = pd_t0012 + (q1[0]*0.061452809596679384 + z[0]*0.61060199273548066) - q0[0]*0.12476247709889343 - z[2]*0.19317617857053604;
-  const double pd_t0021 = std::sin(pd_t0020);
-  const double pd_t0022 = pd_t0007*pd_t0021;
-  const double pd_t0023 = std::cos(pd_t0020);
-  const double pd_t0024 = pd_t0007*pd_t0023;
-  const double pd_t0025 = std::cos(pd_t0009);
-  const double pd_t0026 = pd_t0007*pd_t0025;
-  const double pd_t0027 = std::cos(pd_t0016);
-  const double pd_t0028 = pd_t0007*pd_t0027;
-  const double pd_t0029 = std::cos(pd_t0013);
-  const double pd_t0030 = pd_t0007*pd_t0029;
-  const double pd_t0031 = 1.0/(h*h);
-  const double pd_t0032 = pd_t0031*12.703703703703704;
-  const double pd_t0033 = pd_t0031*5.8074074074074078;
-  const double pd_t0034 = h*(pd_t0030*0.040683871556431793 + (pd_t0028*0.0030799344260414238 + pd_t0026*0.022609812278198024) - pd_t0024*0.12859584048289346 - pd_t0033);
-  const double pd_t0035 = pd_t0024 + pd_t0030;
-  const double pd_t0036 = pd_t0028 + pd_t0026;
-  const double pd_t0037 = h*(pd_t0035*0.038461486405326983 + pd_t0031*1.2703703703703704 - pd_t0036*0.011239264183104759);
-  const double pd_t0038 = -(h*(pd_t0033 + pd_t0030*0.12859584048289346 - pd_t0026*0.0030799344260414238 - pd_t0028*0.022609812278198024 - pd_t0024*0.040683871556431793));
-  g[0] = h*(pd_t0003*1.2654457260944294 + (pd_t0005*1.1603183569654674 + (pd_t0006*0.12665846775638201 + (pd_t0011*0.11979279930741085 + (pd_t0015*0.062989454444818543 + (pd_t0018*0.016318311803700261 + pd_t0019*0.021531098627420201))))) - pd_t0022*0.19910056555592964);
-  g[1] = -(h*((pd_t0003 + pd_t0006)*1.2389220914098444 + ((pd_t0022 + pd_t0015)*0.21060501277892579 + ((pd_t0011 + pd_t0018)*0.032827235001148022 + (pd_t0019 + pd_t0005)*0.07624166942950393))));
-  g[2] = h*(pd_t0006*1.2654457260944294 + (pd_t0019*1.1603183569654674 + (pd_t0003*0.12665846775638201 + (pd_t0018*0.11979279930741085 + (pd_t0022*0.062989454444818543 + (pd_t0011*0.016318311803700261 + pd_t0005*0.021531098627420201))))) - pd_t0015*0.19910056555592964);
-  H[0] = -(h*(pd_t0024*0.12157120208321184 + (pd_t0026*0.082507488203794471 + (pd_t0028*0.0015310253908785464 + pd_t0030*0.01216806209989291)) - pd_t0032));
-  H[1] = pd_t0034;
-  H[2] = pd_t0037;
-  H[3] = pd_t0034;
-  H[4] = -(h*(pd_t0036*0.0061958450364247566 + pd_t0035*0.13602637718579746 - pd_t0031*9.481481481481481));
-  H[5] = pd_t0038;
-  H[6] = pd_t0037;
-  H[7] = pd_t0038;
-  H[8] = -(h*(pd_t0030*0.12157120208321184 + (pd_t0028*0.082507488203794471 + (pd_t0026*0.0015310253908785464 + pd_t0024*0.01216806209989291)) - pd_t0032));
+  const double pd_t0002 = z[2]*pd_t0001;
+  const double pd_t0003 = (pd_t0002 - z[0]*0.82574185835055369*pd_t0001)*1.6469119986915983;
+  const double pd_t0004 = (q0[0] - q1[0])*pd_t0001;
+  const double pd_t0005 = pd_t0004 - z[1]*1.3064773400177123*pd_t0001;
+  const double pd_t0006 = (pd_t0003 - pd_t0005)*pd_t0001;
+  const double pd_t0007 = (pd_t0005 + pd_t0003)*pd_t0001;
+  const double pd_t0008 = pd_t0006 + pd_t0007;
+  const double pd_t0009 = p[0]/p[1];
+  const double pd_t0010 = z[1]*0.22255573065553855;
+  const double pd_t0011 = (z[0] + z[2]*0.67694468393226148)*0.25844425285419081;
+  const double pd_t0012 = q1[0]*0.93056815579702634 + (q0[0]*0.069431844202973714 + (pd_t0010 + pd_t0011));
+  const double pd_t0013 = std::sin(pd_t0012);
+  const double pd_t0014 = pd_t0009*pd_t0013;
+  const double pd_t0015 = pd_t0010 - q1[0]*0.069431844202973714 - pd_t0011 - q0[0]*0.93056815579702634;
+  const double pd_t0016 = std::sin(pd_t0015);
+  const double pd_t0017 = pd_t0009*pd_t0016;
+  const double pd_t0018 = pd_t0014 - pd_t0017;
+  const double pd_t0019 = z[1]*0.30068361730310234;
+  const double pd_t0020 = (z[0] - z[2]*0.10551611250369008)*0.88441289000295209;
+  const double pd_t0021 = q1[0]*0.66999052179242813 + (q0[0]*0.33000947820757187 + (pd_t0019 + pd_t0020));
+  const double pd_t0022 = std::sin(pd_t0021);
+  const double pd_t0023 = pd_t0009*pd_t0022;
+  const double pd_t0024 = pd_t0019 - q1[0]*0.33000947820757187 - q0[0]*0.66999052179242813 - pd_t0020;
+  const double pd_t0025 = std::sin(pd_t0024);
+  const double pd_t0026 = pd_t0025*pd_t0009;
+  const double pd_t0027 = pd_t0023 - pd_t0026;
+  const double pd_t0028 = (pd_t0002 + z[0]*2.8257418583505536*pd_t0001)*1.2189879398208248;
+  const double pd_t0029 = pd_t0004 + z[1]*2.4493344828748551*pd_t0001;
+  const double pd_t0030 = (pd_t0028 - pd_t0029)*pd_t0001;
+  const double pd_t0031 = (pd_t0029 + pd_t0028)*pd_t0001;
+  const double pd_t0032 = pd_t0030 + pd_t0031;
+  const double pd_t0033 = std::cos(pd_t0012);
+  const double pd_t0034 = pd_t0009*pd_t0033;
+  const double pd_t0035 = std::cos(pd_t0015);
+  const double pd_t0036 = pd_t0009*pd_t0035;
+  const double pd_t0037 = pd_t0034 + pd_t0036;
+  const double pd_t0038 = std::cos(pd_t0024);
+  const double pd_t0039 = pd_t0009*pd_t0038;
+  const double pd_t0040 = std::cos(pd_t0021);
+  const double pd_t0041 = pd_t0009*pd_t0040;
+  const double pd_t0042 = pd_t0039 + pd_t0041;
+  const double pd_t0043 = 1.0/(h*h);
+  const double pd_t0044 = pd_t0036 - pd_t0034;
+  const double pd_t0045 = pd_t0041 - pd_t0039;
+  const double pd_t0046 = h*(pd_t0043*1.6408720254679445e-76 + pd_t0044*0.010004000891015875 - pd_t0045*0.086711980632552574);
+  const double pd_t0047 = -(h*(pd_t0037*0.0078642081747671774 - pd_t0043*1.2090635977132222e-76 - pd_t0042*0.026911827222386227));
+  const double pd_t0048 = h*(pd_t0045*0.0091495111038422134 + (pd_t0043*2.6772122520792778e-76 + pd_t0044*0.0067721552212268044));
+  g[0] = -(h*(pd_t0008*0.44343398063795225 + (pd_t0018*0.04495054277662975 + pd_t0027*0.28838279055670357) - pd_t0032*0.5991008766235747));
+  g[1] = h*((pd_t0006 + pd_t0031 - pd_t0007 - pd_t0030)*0.42600643361512919 - (pd_t0017 + pd_t0014)*0.03870854461081763 - (pd_t0026 + pd_t0023)*0.098044682085381113);
+  g[2] = -(h*((pd_t0018 - pd_t0027)*0.030429030972509229 - pd_t0032*0.21201543051539845 - pd_t0008*0.53701284021585893));
+  H[0] = -(h*(pd_t0037*0.011617209443296419 + pd_t0042*0.25504945722337025 - pd_t0043*5.333333333333333));
+  H[1] = pd_t0046;
+  H[2] = pd_t0047;
+  H[3] = pd_t0046;
+  H[4] = -(h*(pd_t0037*0.008614808428473026 + pd_t0042*0.029480429666765069 - pd_t0043*3.2000000000000002));
+  H[5] = pd_t0048;
+  H[6] = pd_t0047;
+  H[7] = pd_t0048;
+  H[8] = -(h*(pd_t0042*0.0028396313888771744 + pd_t0037*0.0053236339172452749 - pd_t0043*2.2857142857142856));
 }
 
-// ext_grad: 199 operations (767 before CSE)
+// ext_grad: 142 operations (698 before CSE)
 static void pendulum_galerkin_gauss_s_4_ext_grad(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     const double* z, double* S, double* g) {
   (void)t0;
   (void)t1;
-  const double pd_t0001 = p[0]/p[1];
-  const double pd_t0002 = z[1]*0.64588385333726939;
-  const double pd_t0003 = pd_t0002 + (q1[0]*0.061452809596679384 + z[0]*0.61060199273548066) - q0[0]*0.12476247709889343 - z[2]*0.19317617857053604;
+  const double pd_t0001 = z[1]*0.30068361730310234;
+  const double pd_t0002 = (z[0] - z[2]*0.10551611250369008)*0.88441289000295209;
+  const double pd_t0003 = pd_t0001 - q1[0]*0.33000947820757187 - q0[0]*0.66999052179242813 - pd_t0002;
   const double pd_t0004 = std::cos(pd_t0003);
-  const double pd_t0005 = z[2]*0.61060199273548066 + (pd_t0002 + q0[0]*0.061452809596679384) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
-  const double pd_t0006 = std::cos(pd_t0005);
-  const double pd_t0007 = z[1]*0.18874099619441229;
-  const double pd_t0008 = q0[0]*0.0327484862937516 + pd_t0007 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[2]*0.68875165018946372;
-  const double pd_t0009 = std::cos(pd_t0008);
-  const double pd_t0010 = pd_t0007 + q1[0]*0.0327484862937516 - z[2]*0.093822535645591634 - q0[0]*0.43891529665310852 - z[0]*0.68875165018946372;
+  const double pd_t0005 = p[0]/p[1];
+  const double pd_t0006 = q1[0]*0.66999052179242813 + (q0[0]*0.33000947820757187 + (pd_t0001 + pd_t0002));
+  const double pd_t0007 = std::cos(pd_t0006);
+  const double pd_t0008 = (z[0] + z[2]*0.67694468393226148)*0.25844425285419081;
+  const double pd_t0009 = z[1]*0.22255573065553855;
+  const double pd_t0010 = q1[0]*0.93056815579702634 + (pd_t0008 + (q0[0]*0.069431844202973714 + pd_t0009));
   const double pd_t0011 = std::cos(pd_t0010);
-  const double pd_t0012 = 1.0/h;
-  const double pd_t0013 = z[1]*0.43835335626489408*pd_t0012;
-  const double pd_t0014 = z[0]*0.12379358188276635*pd_t0012 + z[2]*6.6712789727391666*pd_t0012 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0012 - pd_t0013;
-  const double pd_t0015 = z[2]*0.12379358188276635*pd_t0012 + z[0]*6.6712789727391666*pd_t0012 - pd_t0013 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0012;
-  const double pd_t0016 = z[1]*3.7995286238720101*pd_t0012;
-  const double pd_t0017 = z[0]*0.38843642956475866*pd_t0012 + z[2]*3.8808713571172655*pd_t0012 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0012 - pd_t0016;
-  const double pd_t0018 = z[2]*0.38843642956475866*pd_t0012 + z[0]*3.8808713571172655*pd_t0012 - pd_t0016 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0012;
-  const double pd_t0019 = pd_t0015*pd_t0012;
-  const double pd_t0020 = pd_t0018*pd_t0012;
-  const double pd_t0021 = pd_t0017*pd_t0012;
-  const double pd_t0022 = std::sin(pd_t0005);
-  const double pd_t0023 = pd_t0001*pd_t0022;
-  const double pd_t0024 = std::sin(pd_t0008);
-  const double pd_t0025 = pd_t0001*pd_t0024;
-  const double pd_t0026 = pd_t0014*pd_t0012;
-  const double pd_t0027 = std::sin(pd_t0003);
-  const double pd_t0028 = pd_t0001*pd_t0027;
-  const double pd_t0029 = std::sin(pd_t0010);
-  const double pd_t0030 = pd_t0001*pd_t0029;
-  S[0] = h*((pd_t0001*pd_t0004 + pd_t0001*pd_t0006)*0.32607257743127305 + ((pd_t0009*pd_t0001 + pd_t0001*pd_t0011)*0.17392742256872692 + ((pd_t0014*pd_t0014 + pd_t0015*pd_t0015)*0.086963711284363462 + (pd_t0017*pd_t0017 + pd_t0018*pd_t0018)*0.16303628871563652)));
-  g[0] = -(h*(pd_t0019*1.0994869450636569 + (pd_t0020*0.1232741032024484 + (pd_t0021*0.029907999238518453 + (pd_t0023*0.02003807601558252 + (pd_t0025*0.0056958598140994963 + pd_t0026*0.0061208410997268927)))) - pd_t0028*0.040681622474346361 - pd_t0030*0.076339406272863342));
-  g[1] = h*(pd_t0020*1.2654457260944294 + (pd_t0019*1.1603183569654674 + (pd_t0021*0.12665846775638201 + (pd_t0030*0.11979279930741085 + (pd_t0023*0.062989454444818543 + (pd_t0025*0.016318311803700261 + pd_t0026*0.021531098627420201))))) - pd_t0028*0.19910056555592964);
-  g[2] = -(h*((pd_t0020 + pd_t0021)*1.2389220914098444 + ((pd_t0028 + pd_t0023)*0.21060501277892579 + ((pd_t0030 + pd_t0025)*0.032827235001148022 + (pd_t0026 + pd_t0019)*0.07624166942950393))));
-  g[3] = h*(pd_t0021*1.2654457260944294 + (pd_t0026*1.1603183569654674 + (pd_t0020*0.12665846775638201 + (pd_t0025*0.11979279930741085 + (pd_t0028*0.062989454444818543 + (pd_t0030*0.016318311803700261 + pd_t0019*0.021531098627420201))))) - pd_t0023*0.19910056555592964);
-  g[4] = -(h*(pd_t0026*1.0994869450636569 + (pd_t0021*0.1232741032024484 + (pd_t0020*0.029907999238518453 + (pd_t0028*0.02003807601558252 + (pd_t0030*0.0056958598140994963 + pd_t0019*0.0061208410997268927)))) - pd_t0023*0.040681622474346361 - pd_t0025*0.076339406272863342));
+  const double pd_t0012 = pd_t0009 - pd_t0008 - q1[0]*0.069431844202973714 - q0[0]*0.93056815579702634;
+  const double pd_t0013 = std::cos(pd_t0012);
+  const double pd_t0014 = 1.0/h;
+  const double pd_t0015 = z[2]*pd_t0014;
+  const double pd_t0016 = (pd_t0015 + z[0]*2.8257418583505536*pd_t0014)*1.2189879398208248;
+  const double pd_t0017 = (q0[0] - q1[0])*pd_t0014;
+  const double pd_t0018 = pd_t0017 + z[1]*2.4493344828748551*pd_t0014;
+  const double pd_t0019 = pd_t0016 - pd_t0018;
+  const double pd_t0020 = pd_t0018 + pd_t0016;
+  const double pd_t0021 = pd_t0017 - z[1]*1.3064773400177123*pd_t0014;
+  const double pd_t0022 = (pd_t0015 - z[0]*0.82574185835055369*pd_t0014)*1.6469119986915983;
+  const double pd_t0023 = pd_t0021 + pd_t0022;
+  const double pd_t0024 = pd_t0022 - pd_t0021;
+  const double pd_t0025 = std::sin(pd_t0010);
+  const double pd_t0026 = pd_t0005*pd_t0025;
+  const double pd_t0027 = std::sin(pd_t0006);
+  const double pd_t0028 = pd_t0005*pd_t0027;
+  const double pd_t0029 = std::sin(pd_t0012);
+  const double pd_t0030 = pd_t0005*pd_t0029;
+  const double pd_t0031 = pd_t0020*pd_t0014;
+  const double pd_t0032 = pd_t0019*pd_t0014;
+  const double pd_t0033 = pd_t0031 - pd_t0032;
+  const double pd_t0034 = pd_t0024*pd_t0014;
+  const double pd_t0035 = pd_t0023*pd_t0014;
+  const double pd_t0036 = pd_t0034 - pd_t0035;
+  const double pd_t0037 = 0.17392742256872692*(pd_t0033 - pd_t0036*1.8747623153124482);
+  const double pd_t0038 = std::sin(pd_t0003);
+  const double pd_t0039 = pd_t0005*pd_t0038;
+  const double pd_t0040 = pd_t0034 + pd_t0035;
+  const double pd_t0041 = pd_t0026 - pd_t0030;
+  const double pd_t0042 = pd_t0028 - pd_t0039;
+  const double pd_t0043 = pd_t0032 + pd_t0031;
+  S[0] = h*((pd_t0004*pd_t0005 + pd_t0005*pd_t0007)*0.32607257743127305 + ((pd_t0005*pd_t0011 + pd_t0005*pd_t0013)*0.17392742256872692 + ((pd_t0019*pd_t0019 + pd_t0020*pd_t0020)*0.086963711284363462 + (pd_t0023*pd_t0023 + pd_t0024*pd_t0024)*0.16303628871563652)));
+  g[0] = -(h*(pd_t0026*0.012076101706416622 + pd_t0028*0.10760704113589251 - pd_t0030*0.1618513208623103 - pd_t0037 - pd_t0039*0.21846553629538057));
+  g[1] = -(h*(pd_t0040*0.44343398063795225 + (pd_t0041*0.04495054277662975 + pd_t0042*0.28838279055670357) - pd_t0043*0.5991008766235747));
+  g[2] = h*((pd_t0033 + pd_t0036)*0.42600643361512919 - (pd_t0030 + pd_t0026)*0.03870854461081763 - (pd_t0039 + pd_t0028)*0.098044682085381113);
+  g[3] = -(h*((pd_t0041 - pd_t0042)*0.030429030972509229 - pd_t0043*0.21201543051539845 - pd_t0040*0.53701284021585893));
+  g[4] = -(h*(pd_t0028*0.21846553629538057 + (pd_t0037 + pd_t0026*0.1618513208623103) - pd_t0030*0.012076101706416622 - pd_t0039*0.10760704113589251));
 }
 
-// ext_full: 341 operations (2268 before CSE)
+// ext_full: 264 operations (2181 before CSE)
 static void pendulum_galerkin_gauss_s_4_ext_full(double h, double t0, double t1, const double* q0, const double* q1, const double* p,
     const double* z, double* S, double* g, double* H) {
   (void)t0;
   (void)t1;
-  const double pd_t0001 = p[0]/p[1];
-  const double pd_t0002 = z[1]*0.64588385333726939;
-  const double pd_t0003 = pd_t0002 + (q1[0]*0.061452809596679384 + z[0]*0.61060199273548066) - q0[0]*0.12476247709889343 - z[2]*0.19317617857053604;
+  const double pd_t0001 = z[1]*0.30068361730310234;
+  const double pd_t0002 = (z[0] - z[2]*0.10551611250369008)*0.88441289000295209;
+  const double pd_t0003 = pd_t0001 - q1[0]*0.33000947820757187 - q0[0]*0.66999052179242813 - pd_t0002;
   const double pd_t0004 = std::cos(pd_t0003);
-  const double pd_t0005 = pd_t0001*pd_t0004;
-  const double pd_t0006 = z[2]*0.61060199273548066 + (pd_t0002 + q0[0]*0.061452809596679384) - q1[0]*0.12476247709889343 - z[0]*0.19317617857053604;
-  const double pd_t0007 = std::cos(pd_t0006);
-  const double pd_t0008 = pd_t0001*pd_t0007;
-  const double pd_t0009 = pd_t0005 + pd_t0008;
-  const double pd_t0010 = z[1]*0.18874099619441229;
-  const double pd_t0011 = q0[0]*0.0327484862937516 + pd_t0010 - z[0]*0.093822535645591634 - q1[0]*0.43891529665310852 - z[2]*0.68875165018946372;
-  const double pd_t0012 = std::cos(pd_t0011);
-  const double pd_t0013 = pd_t0012*pd_t0001;
-  const double pd_t0014 = pd_t0010 + q1[0]*0.0327484862937516 - z[2]*0.093822535645591634 - q0[0]*0.43891529665310852 - z[0]*0.68875165018946372;
-  const double pd_t0015 = std::cos(pd_t0014);
-  const double pd_t0016 = pd_t0001*pd_t0015;
-  const double pd_t0017 = pd_t0013 + pd_t0016;
-  const double pd_t0018 = 1.0/h;
-  const double pd_t0019 = z[1]*0.43835335626489408*pd_t0018;
-  const double pd_t0020 = z[0]*0.12379358188276635*pd_t0018 + z[2]*6.6712789727391666*pd_t0018 - (q0[0]*0.035191926663020949 + q1[0]*6.3215272716940181)*pd_t0018 - pd_t0019;
-  const double pd_t0021 = z[2]*0.12379358188276635*pd_t0018 + z[0]*6.6712789727391666*pd_t0018 - pd_t0019 - (q1[0]*0.035191926663020949 + q0[0]*6.3215272716940181)*pd_t0018;
-  const double pd_t0022 = z[1]*3.7995286238720101*pd_t0018;
-  const double pd_t0023 = z[0]*0.38843642956475866*pd_t0018 + z[2]*3.8808713571172655*pd_t0018 - (q0[0]*0.091721908889508555 + q1[0]*0.37805725392050521)*pd_t0018 - pd_t0022;
-  const double pd_t0024 = z[2]*0.38843642956475866*pd_t0018 + z[0]*3.8808713571172655*pd_t0018 - pd_t0022 - (q1[0]*0.091721908889508555 + q0[0]*0.37805725392050521)*pd_t0018;
-  const double pd_t0025 = pd_t0021*pd_t0018;
-  const double pd_t0026 = pd_t0024*pd_t0018;
-  const double pd_t0027 = pd_t0023*pd_t0018;
-  const double pd_t0028 = std::sin(pd_t0006);
-  const double pd_t0029 = pd_t0001*pd_t0028;
-  const double pd_t0030 = std::sin(pd_t0011);
-  const double pd_t0031 = pd_t0001*pd_t0030;
-  const double pd_t0032 = pd_t0020*pd_t0018;
-  const double pd_t0033 = std::sin(pd_t0003);
-  const double pd_t0034 = pd_t0001*pd_t0033;
-  const double pd_t0035 = std::sin(pd_t0014);
-  const double pd_t0036 = pd_t0001*pd_t0035;
-  const double pd_t0037 = 1.0/(h*h);
-  const double pd_t0038 = pd_t0037*7.0;
-  const double pd_t0039 = pd_t0037*7.8257701508806026;
-  const double pd_t0040 = h*(pd_t0005*0.024840279750548405 + (pd_t0013*0.0005344000104406429 + pd_t0008*0.0038708789505961438) - pd_t0016*0.052578892044918522 - pd_t0039);
-  const double pd_t0041 = pd_t0037*1.0666666666666667;
-  const double pd_t0042 = -(h*(pd_t0013*0.0010750422554968589 + pd_t0008*0.012942269750409557 - pd_t0016*0.014408375588830192 - pd_t0005*0.026275603083742889 - pd_t0041));
-  const double pd_t0043 = pd_t0037*0.340896515786064;
-  const double pd_t0044 = -(h*(pd_t0043 + (pd_t0008*0.012235289145699726 + (pd_t0016*0.0071623566661990221 + pd_t0005*0.0078587203676434639)) - pd_t0013*0.0039230328462088807));
-  const double pd_t0045 = h*((pd_t0017 + pd_t0009)*0.0025000000000000001 + pd_t0037*0.10000000000000001);
-  const double pd_t0046 = pd_t0037*12.703703703703704;
-  const double pd_t0047 = pd_t0037*5.8074074074074078;
-  const double pd_t0048 = h*(pd_t0008*0.040683871556431793 + (pd_t0013*0.0030799344260414238 + pd_t0016*0.022609812278198024) - pd_t0005*0.12859584048289346 - pd_t0047);
-  const double pd_t0049 = h*(pd_t0009*0.038461486405326983 + pd_t0037*1.2703703703703704 - pd_t0017*0.011239264183104759);
-  const double pd_t0050 = -(h*(pd_t0005*0.012235289145699726 + (pd_t0008*0.0078587203676434639 + (pd_t0043 + pd_t0013*0.0071623566661990221)) - pd_t0016*0.0039230328462088807));
-  const double pd_t0051 = -(h*(pd_t0047 + pd_t0008*0.12859584048289346 - pd_t0016*0.0030799344260414238 - pd_t0013*0.022609812278198024 - pd_t0005*0.040683871556431793));
-  const double pd_t0052 = h*(pd_t0008*0.026275603083742889 + (pd_t0041 + pd_t0013*0.014408375588830192) - pd_t0016*0.0010750422554968589 - pd_t0005*0.012942269750409557);
-  const double pd_t0053 = h*(pd_t0008*0.024840279750548405 + (pd_t0016*0.0005344000104406429 + pd_t0005*0.0038708789505961438) - pd_t0039 - pd_t0013*0.052578892044918522);
-  S[0] = h*(pd_t0009*0.32607257743127305 + (pd_t0017*0.17392742256872692 + ((pd_t0020*pd_t0020 + pd_t0021*pd_t0021)*0.086963711284363462 + (pd_t0023*pd_t0023 + pd_t0024*pd_t0024)*0.16303628871563652)));
-  g[0] = -(h*(pd_t0025*1.0994869450636569 + (pd_t0026*0.1232741032024484 + (pd_t0027*0.029907999238518453 + (pd_t0029*0.02003807601558252 + (pd_t0031*0.0056958598140994963 + pd_t0032*0.0061208410997268927)))) - pd_t0034*0.040681622474346361 - pd_t0036*0.076339406272863342));
-  g[1] = h*(pd_t0026*1.2654457260944294 + (pd_t0025*1.1603183569654674 + (pd_t0027*0.12665846775638201 + (pd_t0036*0.11979279930741085 + (pd_t0029*0.062989454444818543 + (pd_t0031*0.016318311803700261 + pd_t0032*0.021531098627420201))))) - pd_t0034*0.19910056555592964);
-  g[2] = -(h*((pd_t0026 + pd_t0027)*1.2389220914098444 + ((pd_t0034 + pd_t0029)*0.21060501277892579 + ((pd_t0036 + pd_t0031)*0.032827235001148022 + (pd_t0032 + pd_t0025)*0.07624166942950393))));
-  g[3] = h*(pd_t0027*1.2654457260944294 + (pd_t0032*1.1603183569654674 + (pd_t0026*0.12665846775638201 + (pd_t0031*0.11979279930741085 + (pd_t0034*0.062989454444818543 + (pd_t0036*0.016318311803700261 + pd_t0025*0.021531098627420201))))) - pd_t0029*0.19910056555592964);
-  g[4] = -(h*(pd_t0032*1.0994869450636569 + (pd_t0027*0.1232741032024484 + (pd_t0026*0.029907999238518453 + (pd_t0034*0.02003807601558252 + (pd_t0036*0.0056958598140994963 + pd_t0025*0.0061208410997268927)))) - pd_t0029*0.040681622474346361 - pd_t0031*0.076339406272863342));
-  H[0] = -(h*(pd_t0016*0.033506533150575987 + (pd_t0005*0.0050755399923014663 + (pd_t0013*0.00018653078705316791 + pd_t0008*0.0012313960700693805)) - pd_t0038));
-  H[1] = pd_t0040;
-  H[2] = pd_t0042;
-  H[3] = pd_t0044;
-  H[4] = pd_t0045;
-  H[5] = pd_t0040;
-  H[6] = -(h*(pd_t0005*0.12157120208321184 + (pd_t0016*0.082507488203794471 + (pd_t0013*0.0015310253908785464 + pd_t0008*0.01216806209989291)) - pd_t0046));
-  H[7] = pd_t0048;
-  H[8] = pd_t0049;
-  H[9] = pd_t0050;
-  H[10] = pd_t0042;
-  H[11] = pd_t0048;
-  H[12] = -(h*(pd_t0017*0.0061958450364247566 + pd_t0009*0.13602637718579746 - pd_t0037*9.481481481481481));
-  H[13] = pd_t0051;
-  H[14] = pd_t0052;
-  H[15] = pd_t0044;
-  H[16] = pd_t0049;
-  H[17] = pd_t0051;
-  H[18] = -(h*(pd_t0008*0.12157120208321184 + (pd_t0013*0.082507488203794471 + (pd_t0016*0.0015310253908785464 + pd_t0005*0.01216806209989291)) - pd_t0046));
-  H[19] = pd_t0053;
-  H[20] = pd_t0045;
-  H[21] = pd_t0050;
-  H[22] = pd_t0052;
-  H[23] = pd_t0053;
-  H[24] = -(h*(pd_t0013*0.033506533150575987 + (pd_t0008*0.0050755399923014663 + (pd_t0016*0.00018653078705316791 + pd_t0005*0.0012313960700693805)) - pd_t0038));
+  const double pd_t0005 = p[0]/p[1];
+  const double pd_t0006 = pd_t0004*pd_t0005;
+  const double pd_t0007 = q1[0]*0.66999052179242813 + (q0[0]*0.33000947820757187 + (pd_t0001 + pd_t0002));
+  const double pd_t0008 = std::cos(pd_t0007);
+  const double pd_t0009 = pd_t0005*pd_t0008;
+  const double pd_t0010 = pd_t0006 + pd_t0009;
+  const double pd_t0011 = (z[0] + z[2]*0.67694468393226148)*0.25844425285419081;
+  const double pd_t0012 = z[1]*0.22255573065553855;
+  const double pd_t0013 = q1[0]*0.93056815579702634 + (pd_t0011 + (q0[0]*0.069431844202973714 + pd_t0012));
+  const double pd_t0014 = std::cos(pd_t0013);
+  const double pd_t0015 = pd_t0005*pd_t0014;
+  const double pd_t0016 = pd_t0012 - pd_t0011 - q1[0]*0.069431844202973714 - q0[0]*0.93056815579702634;
+  const double pd_t0017 = std::cos(pd_t0016);
+  const double pd_t0018 = pd_t0005*pd_t0017;
+  const double pd_t0019 = pd_t0015 + pd_t0018;
+  const double pd_t0020 = 1.0/h;
+  const double pd_t0021 = z[2]*pd_t0020;
+  const double pd_t0022 = (pd_t0021 + z[0]*2.8257418583505536*pd_t0020)*1.2189879398208248;
+  const double pd_t0023 = (q0[0] - q1[0])*pd_t0020;
+  const double pd_t0024 = pd_t0023 + z[1]*2.4493344828748551*pd_t0020;
+  const double pd_t0025 = pd_t0022 - pd_t0024;
+  const double pd_t0026 = pd_t0024 + pd_t0022;
+  const double pd_t0027 = pd_t0023 - z[1]*1.3064773400177123*pd_t0020;
+  const double pd_t0028 = (pd_t0021 - z[0]*0.82574185835055369*pd_t0020)*1.6469119986915983;
+  const double pd_t0029 = pd_t0027 + pd_t0028;
+  const double pd_t0030 = pd_t0028 - pd_t0027;
+  const double pd_t0031 = std::sin(pd_t0013);
+  const double pd_t0032 = pd_t0005*pd_t0031;
+  const double pd_t0033 = std::sin(pd_t0007);
+  const double pd_t0034 = pd_t0005*pd_t0033;
+  const double pd_t0035 = std::sin(pd_t0016);
+  const double pd_t0036 = pd_t0005*pd_t0035;
+  const double pd_t0037 = pd_t0026*pd_t0020;
+  const double pd_t0038 = pd_t0025*pd_t0020;
+  const double pd_t0039 = pd_t0037 - pd_t0038;
+  const double pd_t0040 = pd_t0030*pd_t0020;
+  const double pd_t0041 = pd_t0029*pd_t0020;
+  const double pd_t0042 = pd_t0040 - pd_t0041;
+  const double pd_t0043 = 0.17392742256872692*(pd_t0039 - pd_t0042*1.8747623153124482);
+  const double pd_t0044 = std::sin(pd_t0003);
+  const double pd_t0045 = pd_t0005*pd_t0044;
+  const double pd_t0046 = pd_t0040 + pd_t0041;
+  const double pd_t0047 = pd_t0032 - pd_t0036;
+  const double pd_t0048 = pd_t0034 - pd_t0045;
+  const double pd_t0049 = pd_t0038 + pd_t0037;
+  const double pd_t0050 = 1.0/(h*h);
+  const double pd_t0051 = pd_t0015 + pd_t0018*13.402613260230394;
+  const double pd_t0052 = pd_t0009 + pd_t0006*2.0302159969205866;
+  const double pd_t0053 = -(h*(pd_t0051*0.0031209990829060624 + pd_t0052*0.09516905423566123));
+  const double pd_t0054 = pd_t0050*3.0226589942830556e-77;
+  const double pd_t0055 = h*(pd_t0006*0.065689007709357219 + (pd_t0054 + pd_t0018*0.036020938972075478) - pd_t0015*0.0026876056387421473 - pd_t0009*0.032355674376023894);
+  const double pd_t0056 = pd_t0050*3.4544674220377779e-77;
+  const double pd_t0057 = -(h*(pd_t0056 + pd_t0051*0.0021127437377307223 - pd_t0052*0.010041868633599814));
+  const double pd_t0058 = -(h*(pd_t0010*0.072095697639175893 + (pd_t0050 + pd_t0019*0.011237635694157437)));
+  const double pd_t0059 = pd_t0018 - pd_t0015;
+  const double pd_t0060 = pd_t0009 - pd_t0006;
+  const double pd_t0061 = h*(pd_t0050*1.6408720254679445e-76 + pd_t0059*0.010004000891015875 - pd_t0060*0.086711980632552574);
+  const double pd_t0062 = -(h*(pd_t0019*0.0078642081747671774 - pd_t0050*1.2090635977132222e-76 - pd_t0010*0.026911827222386227));
+  const double pd_t0063 = pd_t0018 + pd_t0015*13.402613260230394;
+  const double pd_t0064 = pd_t0006 + pd_t0009*2.0302159969205866;
+  const double pd_t0065 = -(h*(0.0031209990829060624*pd_t0063 + 0.09516905423566123*pd_t0064 - pd_t0050*8.6361685550944446e-78));
+  const double pd_t0066 = h*(pd_t0060*0.0091495111038422134 + (pd_t0050*2.6772122520792778e-76 + pd_t0059*0.0067721552212268044));
+  const double pd_t0067 = h*(pd_t0018*0.0026876056387421473 + pd_t0006*0.032355674376023894 - pd_t0054 - pd_t0015*0.036020938972075478 - pd_t0009*0.065689007709357219);
+  const double pd_t0068 = -(h*(0.0021127437377307223*pd_t0063 - pd_t0056 - 0.010041868633599814*pd_t0064));
+  S[0] = h*(pd_t0010*0.32607257743127305 + (pd_t0019*0.17392742256872692 + ((pd_t0025*pd_t0025 + pd_t0026*pd_t0026)*0.086963711284363462 + (pd_t0029*pd_t0029 + pd_t0030*pd_t0030)*0.16303628871563652)));
+  g[0] = -(h*(pd_t0032*0.012076101706416622 + pd_t0034*0.10760704113589251 - pd_t0036*0.1618513208623103 - pd_t0043 - pd_t0045*0.21846553629538057));
+  g[1] = -(h*(pd_t0046*0.44343398063795225 + (pd_t0047*0.04495054277662975 + pd_t0048*0.28838279055670357) - pd_t0049*0.5991008766235747));
+  g[2] = h*((pd_t0039 + pd_t0042)*0.42600643361512919 - (pd_t0036 + pd_t0032)*0.03870854461081763 - (pd_t0045 + pd_t0034)*0.098044682085381113);
+  g[3] = -(h*((pd_t0047 - pd_t0048)*0.030429030972509229 - pd_t0049*0.21201543051539845 - pd_t0046*0.53701284021585893));
+  g[4] = -(h*(pd_t0034*0.21846553629538057 + (pd_t0043 + pd_t0032*0.1618513208623103) - pd_t0036*0.012076101706416622 - pd_t0045*0.10760704113589251));
+  H[0] = -(h*(pd_t0018*0.15061368516815288 + (pd_t0006*0.14636983865620468 + (pd_t0015*0.00083846601225918385 + pd_t0009*0.035511343496716606)) - pd_t0050));
+  H[1] = pd_t0053;
+  H[2] = pd_t0055;
+  H[3] = pd_t0057;
+  H[4] = pd_t0058;
+  H[5] = pd_t0053;
+  H[6] = -(h*(pd_t0019*0.011617209443296419 + pd_t0010*0.25504945722337025 - pd_t0050*5.333333333333333));
+  H[7] = pd_t0061;
+  H[8] = pd_t0062;
+  H[9] = pd_t0065;
+  H[10] = pd_t0055;
+  H[11] = pd_t0061;
+  H[12] = -(h*(pd_t0019*0.008614808428473026 + pd_t0010*0.029480429666765069 - pd_t0050*3.2000000000000002));
+  H[13] = pd_t0066;
+  H[14] = pd_t0067;
+  H[15] = pd_t0057;
+  H[16] = pd_t0062;
+  H[17] = pd_t0066;
+  H[18] = -(h*(pd_t0010*0.0028396313888771744 + pd_t0019*0.0053236339172452749 - pd_t0050*2.2857142857142856));
+  H[19] = pd_t0068;
+  H[20] = pd_t0058;
+  H[21] = pd_t0065;
+  H[22] = pd_t0067;
+  H[23] = pd_t0068;
+  H[24] = -(h*(pd_t0015*0.15061368516815288 + (pd_t0009*0.14636983865620468 + (pd_t0018*0.00083846601225918385 + pd_t0006*0.035511343496716606)) - pd_t0050));
 }
 
 static const pardel_condensation::Interval pendulum_galerkin_gauss_s_4_interval = {
@@ -635,104 +692,127 @@ static const pardel_condensation::Interval pendulum_galerkin_gauss_s_4_interval 
 
 #if !defined(__CUDACC__)
 
-// interior_extended: in pd_quad, 207 operations
+// interior_extended: in pd_quad, 149 operations
 static void pendulum_galerkin_gauss_s_4_interior_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
     const pd_quad* z, pd_quad* g, pd_quad* H) {
   (void)t0;
   (void)t1;
   const pd_quad pd_t0001 = 1.0/h;
-  const pd_quad pd_t0002 = z[1]*((pd_quad(3.7995286238720101) + 1.1407526488132259e-16 + 8.0889057664263906e-33))*pd_t0001;
-  const pd_quad pd_t0003 = (z[2]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0001 + z[0]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0001 - (q1[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q0[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0001 - pd_t0002)*pd_t0001;
-  const pd_quad pd_t0004 = z[1]*((pd_quad(0.43835335626489408) - 1.3741310711245168e-17 + 6.7407548053553255e-34))*pd_t0001;
-  const pd_quad pd_t0005 = (z[2]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0001 + z[0]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0001 - pd_t0004 - (q1[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q0[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0001)*pd_t0001;
-  const pd_quad pd_t0006 = (z[0]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0001 + z[2]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0001 - pd_t0002 - (q0[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q1[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0001)*pd_t0001;
-  const pd_quad pd_t0007 = p[0]/p[1];
-  const pd_quad pd_t0008 = z[1]*((pd_quad(0.18874099619441229) - 9.1159616881575048e-18 + 5.2963073470648986e-34));
-  const pd_quad pd_t0009 = q1[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) + pd_t0008 - z[2]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q0[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[0]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
-  const pd_quad pd_t0010 = sinq(pd_t0009);
-  const pd_quad pd_t0011 = pd_t0007*pd_t0010;
-  const pd_quad pd_t0012 = z[1]*((pd_quad(0.64588385333726939) + 3.2913909958366282e-17 - 2.6963019221421302e-33));
-  const pd_quad pd_t0013 = z[2]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34)) + (pd_t0012 + q0[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34))) - q1[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[0]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
-  const pd_quad pd_t0014 = sinq(pd_t0013);
-  const pd_quad pd_t0015 = pd_t0007*pd_t0014;
-  const pd_quad pd_t0016 = pd_t0008 + q0[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) - z[0]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q1[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[2]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
-  const pd_quad pd_t0017 = sinq(pd_t0016);
-  const pd_quad pd_t0018 = pd_t0007*pd_t0017;
-  const pd_quad pd_t0019 = (z[0]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0001 + z[2]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0001 - (q0[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q1[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0001 - pd_t0004)*pd_t0001;
-  const pd_quad pd_t0020 = pd_t0012 + (q1[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34)) + z[0]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34))) - q0[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[2]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
-  const pd_quad pd_t0021 = sinq(pd_t0020);
-  const pd_quad pd_t0022 = pd_t0007*pd_t0021;
-  const pd_quad pd_t0023 = cosq(pd_t0020);
-  const pd_quad pd_t0024 = pd_t0007*pd_t0023;
-  const pd_quad pd_t0025 = cosq(pd_t0009);
-  const pd_quad pd_t0026 = pd_t0007*pd_t0025;
-  const pd_quad pd_t0027 = cosq(pd_t0016);
-  const pd_quad pd_t0028 = pd_t0007*pd_t0027;
-  const pd_quad pd_t0029 = cosq(pd_t0013);
-  const pd_quad pd_t0030 = pd_t0007*pd_t0029;
-  const pd_quad pd_t0031 = 1.0/(h*h);
-  const pd_quad pd_t0032 = pd_t0031*((pd_quad(12.703703703703704) - 4.6053695836302787e-16 - 2.6192647243666408e-32));
-  const pd_quad pd_t0033 = pd_t0031*((pd_quad(5.8074074074074078) - 3.8816686490598067e-16 + 1.771855548836257e-32));
-  const pd_quad pd_t0034 = h*(pd_t0030*((pd_quad(0.040683871556431793) - 3.2728035469436033e-19)) + (pd_t0028*((pd_quad(0.0030799344260414238) - 2.801391479903996e-20 - 1.504632769052528e-36)) + pd_t0026*((pd_quad(0.022609812278198024) + 1.4085901598314437e-18 - 9.0277966143151681e-36))) - pd_t0024*((pd_quad(0.12859584048289346) - 6.2745841083059631e-19 - 2.4074124304840448e-35)) - pd_t0033);
-  const pd_quad pd_t0035 = pd_t0024 + pd_t0030;
-  const pd_quad pd_t0036 = pd_t0028 + pd_t0026;
-  const pd_quad pd_t0037 = h*(pd_t0035*((pd_quad(0.038461486405326983) - 2.2997322445306122e-18 + 1.2638915260041235e-34)) + pd_t0031*((pd_quad(1.2703703703703704) - 1.6447748512965283e-18)) - pd_t0036*((pd_quad(0.011239264183104759) - 4.8020006528382776e-19 - 3.4606553688208144e-35)));
-  const pd_quad pd_t0038 = -(h*(pd_t0033 + pd_t0030*((pd_quad(0.12859584048289346) - 6.2745841083059631e-19 - 2.4074124304840448e-35)) - pd_t0026*((pd_quad(0.0030799344260414238) - 2.801391479903996e-20 - 1.504632769052528e-36)) - pd_t0028*((pd_quad(0.022609812278198024) + 1.4085901598314437e-18 - 9.0277966143151681e-36)) - pd_t0024*((pd_quad(0.040683871556431793) - 3.2728035469436033e-19))));
-  g[0] = h*(pd_t0003*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0005*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0006*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0011*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0015*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0018*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0019*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0022*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
-  g[1] = -(h*((pd_t0003 + pd_t0006)*((pd_quad(1.2389220914098444) + 1.8491905256815235e-17 + 5.7777898331617076e-34)) + ((pd_t0022 + pd_t0015)*((pd_quad(0.21060501277892579) + 9.908285689141597e-18 + 4.8148248609680896e-35)) + ((pd_t0011 + pd_t0018)*((pd_quad(0.032827235001148022) + 2.8151941429253193e-18 - 1.023150282955719e-34)) + (pd_t0019 + pd_t0005)*((pd_quad(0.07624166942950393) + 1.3223508262235632e-18 - 1.2037062152420224e-35))))));
-  g[2] = h*(pd_t0006*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0019*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0003*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0018*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0022*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0011*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0005*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0015*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
-  H[0] = -(h*(pd_t0024*((pd_quad(0.12157120208321184) + 4.5704781772984664e-18 - 2.8888949165808538e-34)) + (pd_t0026*((pd_quad(0.082507488203794471) + 1.3656102038054429e-18 + 3.6111186457260672e-35)) + (pd_t0028*((pd_quad(0.0015310253908785464) - 9.8038427481031055e-20 + 1.88079096131566e-36)) + pd_t0030*((pd_quad(0.01216806209989291) + 6.3921475862163336e-19 + 1.0532429383367696e-35)))) - pd_t0032));
-  H[1] = pd_t0034;
-  H[2] = pd_t0037;
-  H[3] = pd_t0034;
-  H[4] = -(h*(pd_t0036*((pd_quad(0.0061958450364247566) + 3.1167040125707034e-19 + 1.9560225997682864e-35)) + pd_t0035*((pd_quad(0.13602637718579746) + 6.7904945057857275e-19 + 4.8148248609680896e-35)) - pd_t0031*((pd_quad(9.481481481481481) + 5.26327952414889e-16 + 2.9274135154685985e-32))));
-  H[5] = pd_t0038;
-  H[6] = pd_t0037;
-  H[7] = pd_t0038;
-  H[8] = -(h*(pd_t0030*((pd_quad(0.12157120208321184) + 4.5704781772984664e-18 - 2.8888949165808538e-34)) + (pd_t0028*((pd_quad(0.082507488203794471) + 1.3656102038054429e-18 + 3.6111186457260672e-35)) + (pd_t0026*((pd_quad(0.0015310253908785464) - 9.8038427481031055e-20 + 1.88079096131566e-36)) + pd_t0024*((pd_quad(0.01216806209989291) + 6.3921475862163336e-19 + 1.0532429383367696e-35)))) - pd_t0032));
+  const pd_quad pd_t0002 = z[2]*pd_t0001;
+  const pd_quad pd_t0003 = (pd_t0002 - z[0]*((pd_quad(0.82574185835055369) + 1.909826579752236e-17 - 1.9259299443872359e-34))*pd_t0001)*((pd_quad(1.6469119986915983) - 2.6751406094759421e-17 + 1.3481509610710651e-33));
+  const pd_quad pd_t0004 = (q0[0] - q1[0])*pd_t0001;
+  const pd_quad pd_t0005 = pd_t0004 - z[1]*((pd_quad(1.3064773400177123) + 7.03969830888873e-17 - 1.5407439555097887e-33))*pd_t0001;
+  const pd_quad pd_t0006 = (pd_t0003 - pd_t0005)*pd_t0001;
+  const pd_quad pd_t0007 = (pd_t0005 + pd_t0003)*pd_t0001;
+  const pd_quad pd_t0008 = pd_t0006 + pd_t0007;
+  const pd_quad pd_t0009 = p[0]/p[1];
+  const pd_quad pd_t0010 = z[1]*((pd_quad(0.22255573065553855) + 6.4599633762276512e-18 - 1.4444474582904269e-34));
+  const pd_quad pd_t0011 = (z[0] + z[2]*((pd_quad(0.67694468393226148) + 2.7882978912865291e-17 - 2.6000054249227684e-33)))*((pd_quad(0.25844425285419081) - 2.2306383130292231e-17 - 3.3703774026776627e-34));
+  const pd_quad pd_t0012 = q1[0]*((pd_quad(0.93056815579702634) - 5.4168080581922711e-17 + 2.9851914138002156e-33)) + (q0[0]*((pd_quad(0.069431844202973714) - 1.3430706493351195e-18 + 7.2222372914521344e-35)) + (pd_t0010 + pd_t0011));
+  const pd_quad pd_t0013 = sinq(pd_t0012);
+  const pd_quad pd_t0014 = pd_t0009*pd_t0013;
+  const pd_quad pd_t0015 = pd_t0010 - q1[0]*((pd_quad(0.069431844202973714) - 1.3430706493351195e-18 + 7.2222372914521344e-35)) - pd_t0011 - q0[0]*((pd_quad(0.93056815579702634) - 5.4168080581922711e-17 + 2.9851914138002156e-33));
+  const pd_quad pd_t0016 = sinq(pd_t0015);
+  const pd_quad pd_t0017 = pd_t0009*pd_t0016;
+  const pd_quad pd_t0018 = pd_t0014 - pd_t0017;
+  const pd_quad pd_t0019 = z[1]*((pd_quad(0.30068361730310234) + 3.2138807330892925e-19));
+  const pd_quad pd_t0020 = (z[0] - z[2]*((pd_quad(0.10551611250369008) - 3.8376789335677554e-18 + 1.8055593228630336e-34)))*((pd_quad(0.88441289000295209) - 2.5274603639357336e-17 + 7.7037197775489434e-34));
+  const pd_quad pd_t0021 = q1[0]*((pd_quad(0.66999052179242813) + 3.7456608534810891e-18)) + (q0[0]*((pd_quad(0.33000947820757187) - 3.7456608534810891e-18 + 4.8148248609680896e-35)) + (pd_t0019 + pd_t0020));
+  const pd_quad pd_t0022 = sinq(pd_t0021);
+  const pd_quad pd_t0023 = pd_t0009*pd_t0022;
+  const pd_quad pd_t0024 = pd_t0019 - q1[0]*((pd_quad(0.33000947820757187) - 3.7456608534810891e-18 + 4.8148248609680896e-35)) - q0[0]*((pd_quad(0.66999052179242813) + 3.7456608534810891e-18)) - pd_t0020;
+  const pd_quad pd_t0025 = sinq(pd_t0024);
+  const pd_quad pd_t0026 = pd_t0025*pd_t0009;
+  const pd_quad pd_t0027 = pd_t0023 - pd_t0026;
+  const pd_quad pd_t0028 = (pd_t0002 + z[0]*((pd_quad(2.8257418583505536) + 1.30120568260038e-16 + 1.1940765655200862e-32))*pd_t0001)*((pd_quad(1.2189879398208248) + 1.6560826636622719e-18));
+  const pd_quad pd_t0029 = pd_t0004 + z[1]*((pd_quad(2.4493344828748551) + 1.3383829878175338e-16 + 1.9259299443872359e-33))*pd_t0001;
+  const pd_quad pd_t0030 = (pd_t0028 - pd_t0029)*pd_t0001;
+  const pd_quad pd_t0031 = (pd_t0029 + pd_t0028)*pd_t0001;
+  const pd_quad pd_t0032 = pd_t0030 + pd_t0031;
+  const pd_quad pd_t0033 = cosq(pd_t0012);
+  const pd_quad pd_t0034 = pd_t0009*pd_t0033;
+  const pd_quad pd_t0035 = cosq(pd_t0015);
+  const pd_quad pd_t0036 = pd_t0009*pd_t0035;
+  const pd_quad pd_t0037 = pd_t0034 + pd_t0036;
+  const pd_quad pd_t0038 = cosq(pd_t0024);
+  const pd_quad pd_t0039 = pd_t0009*pd_t0038;
+  const pd_quad pd_t0040 = cosq(pd_t0021);
+  const pd_quad pd_t0041 = pd_t0009*pd_t0040;
+  const pd_quad pd_t0042 = pd_t0039 + pd_t0041;
+  const pd_quad pd_t0043 = 1.0/(h*h);
+  const pd_quad pd_t0044 = pd_t0036 - pd_t0034;
+  const pd_quad pd_t0045 = pd_t0041 - pd_t0039;
+  const pd_quad pd_t0046 = h*(pd_t0043*1.6408720254679445e-76 + pd_t0044*((pd_quad(0.010004000891015875) + 6.5436461996171199e-19 + 1.504632769052528e-35)) - pd_t0045*((pd_quad(0.086711980632552574) - 2.3251572749173318e-19 - 1.2037062152420224e-35)));
+  const pd_quad pd_t0047 = -(h*(pd_t0037*((pd_quad(0.0078642081747671774) + 7.766505803113087e-19 + 2.256949153578792e-35)) - pd_t0043*1.2090635977132222e-76 - pd_t0042*((pd_quad(0.026911827222386227) - 9.4155171970381458e-19 + 8.1250169528836513e-35))));
+  const pd_quad pd_t0048 = h*(pd_t0045*((pd_quad(0.0091495111038422134) - 6.4976126025307435e-19 - 3.3101920919155616e-35)) + (pd_t0043*2.6772122520792778e-76 + pd_t0044*((pd_quad(0.0067721552212268044) - 1.8354659364374373e-19 + 6.770847460736376e-36))));
+  g[0] = -(h*(pd_t0008*((pd_quad(0.44343398063795225) + 2.5229606864300472e-17 - 1.1555579666323415e-33)) + (pd_t0018*((pd_quad(0.04495054277662975) + 2.8901186225095131e-18 - 4.2129717533470784e-35)) + pd_t0027*((pd_quad(0.28838279055670357) + 8.6747045506692007e-18 + 2.8888949165808538e-34))) - pd_t0032*((pd_quad(0.5991008766235747) + 4.2168830045833131e-17 + 2.8888949165808538e-34))));
+  g[1] = h*((pd_t0006 + pd_t0031 - pd_t0007 - pd_t0030)*((pd_quad(0.42600643361512919) + 1.185774885025626e-17 + 7.7037197775489434e-34)) - (pd_t0017 + pd_t0014)*((pd_quad(0.03870854461081763) - 2.2629513617757456e-18 - 8.4259435066941569e-35)) - (pd_t0026 + pd_t0023)*((pd_quad(0.098044682085381113) + 2.7927525576365639e-18 + 1.6851887013388314e-34)));
+  g[2] = -(h*((pd_t0018 - pd_t0027)*((pd_quad(0.030429030972509229) - 1.4428849696844255e-19 - 6.018531076210112e-36)) - pd_t0032*((pd_quad(0.21201543051539845) + 9.2871924323327603e-18 + 3.6111186457260672e-34)) - pd_t0008*((pd_quad(0.53701284021585893) - 5.2813232519192658e-17 + 1.2518544638517033e-33))));
+  H[0] = -(h*(pd_t0037*((pd_quad(0.011617209443296419) + 6.9280221960555741e-19 - 4.6643615840628368e-35)) + pd_t0042*((pd_quad(0.25504945722337025) + 1.273217719834824e-18)) - pd_t0043*((pd_quad(5.333333333333333) + 2.9605947323337506e-16 + 1.6177811532852781e-32))));
+  H[1] = pd_t0046;
+  H[2] = pd_t0047;
+  H[3] = pd_t0046;
+  H[4] = -(h*(pd_t0037*((pd_quad(0.008614808428473026) + 4.1293621297479705e-19 - 2.1064858766735392e-35)) + pd_t0042*((pd_quad(0.029480429666765069) - 3.7989386105142927e-19 - 6.018531076210112e-36)) - pd_t0043*((pd_quad(3.2000000000000002) - 1.7763568394002506e-16 + 1.0014835710813626e-32))));
+  H[5] = pd_t0048;
+  H[6] = pd_t0047;
+  H[7] = pd_t0048;
+  H[8] = -(h*(pd_t0042*((pd_quad(0.0028396313888771744) - 5.2524831457649932e-20 + 1.128474576789396e-36)) + pd_t0037*((pd_quad(0.0053236339172452749) - 2.5016671384034398e-19 + 2.3321807920314184e-35)) - pd_t0043*((pd_quad(2.2857142857142856) + 1.2688263138573217e-16 + 6.9333477997940491e-33))));
 }
 
-// ext_grad_extended: in pd_quad, 199 operations
+// ext_grad_extended: in pd_quad, 142 operations
 static void pendulum_galerkin_gauss_s_4_ext_grad_extended(pd_quad h, pd_quad t0, pd_quad t1, const pd_quad* q0, const pd_quad* q1, const pd_quad* p,
     const pd_quad* z, pd_quad* S, pd_quad* g) {
   (void)t0;
   (void)t1;
-  const pd_quad pd_t0001 = p[0]/p[1];
-  const pd_quad pd_t0002 = z[1]*((pd_quad(0.64588385333726939) + 3.2913909958366282e-17 - 2.6963019221421302e-33));
-  const pd_quad pd_t0003 = pd_t0002 + (q1[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34)) + z[0]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34))) - q0[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[2]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
+  const pd_quad pd_t0001 = z[1]*((pd_quad(0.30068361730310234) + 3.2138807330892925e-19));
+  const pd_quad pd_t0002 = (z[0] - z[2]*((pd_quad(0.10551611250369008) - 3.8376789335677554e-18 + 1.8055593228630336e-34)))*((pd_quad(0.88441289000295209) - 2.5274603639357336e-17 + 7.7037197775489434e-34));
+  const pd_quad pd_t0003 = pd_t0001 - q1[0]*((pd_quad(0.33000947820757187) - 3.7456608534810891e-18 + 4.8148248609680896e-35)) - q0[0]*((pd_quad(0.66999052179242813) + 3.7456608534810891e-18)) - pd_t0002;
   const pd_quad pd_t0004 = cosq(pd_t0003);
-  const pd_quad pd_t0005 = z[2]*((pd_quad(0.61060199273548066) - 3.9032552498348474e-18 - 1.9259299443872359e-34)) + (pd_t0002 + q0[0]*((pd_quad(0.061452809596679384) + 3.2379725138603335e-18 - 1.2037062152420224e-34))) - q1[0]*((pd_quad(0.12476247709889343) + 3.7109227152825714e-18 + 1.4444474582904269e-34)) - z[0]*((pd_quad(0.19317617857053604) - 1.3095658916334177e-17 - 7.2222372914521344e-35));
-  const pd_quad pd_t0006 = cosq(pd_t0005);
-  const pd_quad pd_t0007 = z[1]*((pd_quad(0.18874099619441229) - 9.1159616881575048e-18 + 5.2963073470648986e-34));
-  const pd_quad pd_t0008 = q0[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) + pd_t0007 - z[0]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q1[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[2]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
-  const pd_quad pd_t0009 = cosq(pd_t0008);
-  const pd_quad pd_t0010 = pd_t0007 + q1[0]*((pd_quad(0.0327484862937516) + 5.0960743870007208e-19 - 4.2129717533470784e-35)) - z[2]*((pd_quad(0.093822535645591634) - 4.4252954035761878e-18 - 3.7314892672502695e-34)) - q0[0]*((pd_quad(0.43891529665310852) - 1.6067295952335452e-17 + 1.3000027124613842e-33)) - z[0]*((pd_quad(0.68875165018946372) + 2.5764024914268662e-17 + 1.1555579666323415e-33));
+  const pd_quad pd_t0005 = p[0]/p[1];
+  const pd_quad pd_t0006 = q1[0]*((pd_quad(0.66999052179242813) + 3.7456608534810891e-18)) + (q0[0]*((pd_quad(0.33000947820757187) - 3.7456608534810891e-18 + 4.8148248609680896e-35)) + (pd_t0001 + pd_t0002));
+  const pd_quad pd_t0007 = cosq(pd_t0006);
+  const pd_quad pd_t0008 = (z[0] + z[2]*((pd_quad(0.67694468393226148) + 2.7882978912865291e-17 - 2.6000054249227684e-33)))*((pd_quad(0.25844425285419081) - 2.2306383130292231e-17 - 3.3703774026776627e-34));
+  const pd_quad pd_t0009 = z[1]*((pd_quad(0.22255573065553855) + 6.4599633762276512e-18 - 1.4444474582904269e-34));
+  const pd_quad pd_t0010 = q1[0]*((pd_quad(0.93056815579702634) - 5.4168080581922711e-17 + 2.9851914138002156e-33)) + (pd_t0008 + (q0[0]*((pd_quad(0.069431844202973714) - 1.3430706493351195e-18 + 7.2222372914521344e-35)) + pd_t0009));
   const pd_quad pd_t0011 = cosq(pd_t0010);
-  const pd_quad pd_t0012 = 1.0/h;
-  const pd_quad pd_t0013 = z[1]*((pd_quad(0.43835335626489408) - 1.3741310711245168e-17 + 6.7407548053553255e-34))*pd_t0012;
-  const pd_quad pd_t0014 = z[0]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0012 + z[2]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0012 - (q0[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q1[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0012 - pd_t0013;
-  const pd_quad pd_t0015 = z[2]*((pd_quad(0.12379358188276635) - 4.350824927239054e-18 + 1.8055593228630336e-34))*pd_t0012 + z[0]*((pd_quad(6.6712789727391666) - 2.923270236908519e-16 - 6.9333477997940491e-33))*pd_t0012 - pd_t0013 - (q1[0]*((pd_quad(0.035191926663020949) - 1.8377059428896606e-18 - 3.6111186457260672e-35)) + q0[0]*((pd_quad(6.3215272716940181) - 4.4069339175382238e-16 - 3.0814879110195774e-33)))*pd_t0012;
-  const pd_quad pd_t0016 = z[1]*((pd_quad(3.7995286238720101) + 1.1407526488132259e-16 + 8.0889057664263906e-33))*pd_t0012;
-  const pd_quad pd_t0017 = z[0]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0012 + z[2]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0012 - (q0[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q1[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0012 - pd_t0016;
-  const pd_quad pd_t0018 = z[2]*((pd_quad(0.38843642956475866) + 1.7730860537236198e-17 + 9.1481672358393703e-34))*pd_t0012 + z[0]*((pd_quad(3.8808713571172655) - 2.0360530633120386e-16 + 9.2444637330587321e-33))*pd_t0012 - pd_t0016 - (q1[0]*((pd_quad(0.091721908889508555) - 3.4053984232046632e-18 + 2.4074124304840448e-35)) + q0[0]*((pd_quad(0.37805725392050521) + 2.2644807327646912e-17 - 4.3333423748712807e-34)))*pd_t0012;
-  const pd_quad pd_t0019 = pd_t0015*pd_t0012;
-  const pd_quad pd_t0020 = pd_t0018*pd_t0012;
-  const pd_quad pd_t0021 = pd_t0017*pd_t0012;
-  const pd_quad pd_t0022 = sinq(pd_t0005);
-  const pd_quad pd_t0023 = pd_t0001*pd_t0022;
-  const pd_quad pd_t0024 = sinq(pd_t0008);
-  const pd_quad pd_t0025 = pd_t0001*pd_t0024;
-  const pd_quad pd_t0026 = pd_t0014*pd_t0012;
-  const pd_quad pd_t0027 = sinq(pd_t0003);
-  const pd_quad pd_t0028 = pd_t0001*pd_t0027;
-  const pd_quad pd_t0029 = sinq(pd_t0010);
-  const pd_quad pd_t0030 = pd_t0001*pd_t0029;
-  S[0] = h*((pd_t0001*pd_t0004 + pd_t0001*pd_t0006)*((pd_quad(0.32607257743127305) + 2.3925407421254193e-17 - 5.2963073470648986e-34)) + ((pd_t0009*pd_t0001 + pd_t0001*pd_t0011)*((pd_quad(0.17392742256872692) + 3.8301681943747208e-18 - 2.4074124304840448e-34)) + ((pd_t0014*pd_t0014 + pd_t0015*pd_t0015)*((pd_quad(0.086963711284363462) + 1.9150840971873604e-18 - 1.2037062152420224e-34)) + (pd_t0017*pd_t0017 + pd_t0018*pd_t0018)*((pd_quad(0.16303628871563652) + 1.1962703710627097e-17 - 2.6481536735324493e-34)))));
-  g[0] = -(h*(pd_t0019*((pd_quad(1.0994869450636569) - 2.1771214669942454e-18 + 1.9259299443872359e-34)) + (pd_t0020*((pd_quad(0.1232741032024484) + 6.0031508072989784e-18 + 1.2037062152420224e-34)) + (pd_t0021*((pd_quad(0.029907999238518453) - 1.5915643576772342e-18 + 1.2037062152420224e-35)) + (pd_t0023*((pd_quad(0.02003807601558252) + 4.3900808820685091e-19 - 1.504632769052528e-35)) + (pd_t0025*((pd_quad(0.0056958598140994963) + 2.4703631850434165e-19 + 1.5798644075051544e-35)) + pd_t0026*((pd_quad(0.0061208410997268927) - 2.3085751409801891e-19 + 1.9560225997682864e-35)))))) - pd_t0028*((pd_quad(0.040681622474346361) + 1.6103541235356328e-18 - 7.8240903990731457e-35)) - pd_t0030*((pd_quad(0.076339406272863342) - 2.2245369457181715e-18 + 6.018531076210112e-35))));
-  g[1] = h*(pd_t0020*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0019*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0021*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0030*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0023*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0025*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0026*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0028*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
-  g[2] = -(h*((pd_t0020 + pd_t0021)*((pd_quad(1.2389220914098444) + 1.8491905256815235e-17 + 5.7777898331617076e-34)) + ((pd_t0028 + pd_t0023)*((pd_quad(0.21060501277892579) + 9.908285689141597e-18 + 4.8148248609680896e-35)) + ((pd_t0030 + pd_t0025)*((pd_quad(0.032827235001148022) + 2.8151941429253193e-18 - 1.023150282955719e-34)) + (pd_t0026 + pd_t0019)*((pd_quad(0.07624166942950393) + 1.3223508262235632e-18 - 1.2037062152420224e-35))))));
-  g[3] = h*(pd_t0021*((pd_quad(1.2654457260944294) - 1.068675000146999e-16 - 3.8518598887744717e-34)) + (pd_t0026*((pd_quad(1.1603183569654674) + 1.0535094932464957e-16 + 3.0814879110195774e-33)) + (pd_t0020*((pd_quad(0.12665846775638201) + 1.1809795354713996e-17 + 2.6481536735324493e-34)) + (pd_t0025*((pd_quad(0.11979279930741085) - 1.4121751092683237e-18 - 3.6111186457260672e-35)) + (pd_t0028*((pd_quad(0.062989454444818543) - 1.3053254476571703e-18 - 6.018531076210112e-35)) + (pd_t0030*((pd_quad(0.016318311803700261) - 7.4659188305836953e-19 - 2.1064858766735392e-35)) + pd_t0019*((pd_quad(0.021531098627420201) - 1.4858071829214496e-18 + 6.3194576300206176e-35))))))) - pd_t0023*((pd_quad(0.19910056555592964) + 1.0413695367830593e-17 + 5.5370485901133031e-34)));
-  g[4] = -(h*(pd_t0026*((pd_quad(1.0994869450636569) - 2.1771214669942454e-18 + 1.9259299443872359e-34)) + (pd_t0021*((pd_quad(0.1232741032024484) + 6.0031508072989784e-18 + 1.2037062152420224e-34)) + (pd_t0020*((pd_quad(0.029907999238518453) - 1.5915643576772342e-18 + 1.2037062152420224e-35)) + (pd_t0028*((pd_quad(0.02003807601558252) + 4.3900808820685091e-19 - 1.504632769052528e-35)) + (pd_t0030*((pd_quad(0.0056958598140994963) + 2.4703631850434165e-19 + 1.5798644075051544e-35)) + pd_t0019*((pd_quad(0.0061208410997268927) - 2.3085751409801891e-19 + 1.9560225997682864e-35)))))) - pd_t0023*((pd_quad(0.040681622474346361) + 1.6103541235356328e-18 - 7.8240903990731457e-35)) - pd_t0025*((pd_quad(0.076339406272863342) - 2.2245369457181715e-18 + 6.018531076210112e-35))));
+  const pd_quad pd_t0012 = pd_t0009 - pd_t0008 - q1[0]*((pd_quad(0.069431844202973714) - 1.3430706493351195e-18 + 7.2222372914521344e-35)) - q0[0]*((pd_quad(0.93056815579702634) - 5.4168080581922711e-17 + 2.9851914138002156e-33));
+  const pd_quad pd_t0013 = cosq(pd_t0012);
+  const pd_quad pd_t0014 = 1.0/h;
+  const pd_quad pd_t0015 = z[2]*pd_t0014;
+  const pd_quad pd_t0016 = (pd_t0015 + z[0]*((pd_quad(2.8257418583505536) + 1.30120568260038e-16 + 1.1940765655200862e-32))*pd_t0014)*((pd_quad(1.2189879398208248) + 1.6560826636622719e-18));
+  const pd_quad pd_t0017 = (q0[0] - q1[0])*pd_t0014;
+  const pd_quad pd_t0018 = pd_t0017 + z[1]*((pd_quad(2.4493344828748551) + 1.3383829878175338e-16 + 1.9259299443872359e-33))*pd_t0014;
+  const pd_quad pd_t0019 = pd_t0016 - pd_t0018;
+  const pd_quad pd_t0020 = pd_t0018 + pd_t0016;
+  const pd_quad pd_t0021 = pd_t0017 - z[1]*((pd_quad(1.3064773400177123) + 7.03969830888873e-17 - 1.5407439555097887e-33))*pd_t0014;
+  const pd_quad pd_t0022 = (pd_t0015 - z[0]*((pd_quad(0.82574185835055369) + 1.909826579752236e-17 - 1.9259299443872359e-34))*pd_t0014)*((pd_quad(1.6469119986915983) - 2.6751406094759421e-17 + 1.3481509610710651e-33));
+  const pd_quad pd_t0023 = pd_t0021 + pd_t0022;
+  const pd_quad pd_t0024 = pd_t0022 - pd_t0021;
+  const pd_quad pd_t0025 = sinq(pd_t0010);
+  const pd_quad pd_t0026 = pd_t0005*pd_t0025;
+  const pd_quad pd_t0027 = sinq(pd_t0006);
+  const pd_quad pd_t0028 = pd_t0005*pd_t0027;
+  const pd_quad pd_t0029 = sinq(pd_t0012);
+  const pd_quad pd_t0030 = pd_t0005*pd_t0029;
+  const pd_quad pd_t0031 = pd_t0020*pd_t0014;
+  const pd_quad pd_t0032 = pd_t0019*pd_t0014;
+  const pd_quad pd_t0033 = pd_t0031 - pd_t0032;
+  const pd_quad pd_t0034 = pd_t0024*pd_t0014;
+  const pd_quad pd_t0035 = pd_t0023*pd_t0014;
+  const pd_quad pd_t0036 = pd_t0034 - pd_t0035;
+  const pd_quad pd_t0037 = ((pd_quad(0.17392742256872692) + 3.8301681943747208e-18 - 2.4074124304840448e-34))*(pd_t0033 - pd_t0036*((pd_quad(1.8747623153124484) - 1.1080389681011044e-16 + 4.0444528832131953e-33)));
+  const pd_quad pd_t0038 = sinq(pd_t0003);
+  const pd_quad pd_t0039 = pd_t0005*pd_t0038;
+  const pd_quad pd_t0040 = pd_t0034 + pd_t0035;
+  const pd_quad pd_t0041 = pd_t0026 - pd_t0030;
+  const pd_quad pd_t0042 = pd_t0028 - pd_t0039;
+  const pd_quad pd_t0043 = pd_t0032 + pd_t0031;
+  S[0] = h*((pd_t0004*pd_t0005 + pd_t0005*pd_t0007)*((pd_quad(0.32607257743127305) + 2.3925407421254193e-17 - 5.2963073470648986e-34)) + ((pd_t0005*pd_t0011 + pd_t0005*pd_t0013)*((pd_quad(0.17392742256872692) + 3.8301681943747208e-18 - 2.4074124304840448e-34)) + ((pd_t0019*pd_t0019 + pd_t0020*pd_t0020)*((pd_quad(0.086963711284363462) + 1.9150840971873604e-18 - 1.2037062152420224e-34)) + (pd_t0023*pd_t0023 + pd_t0024*pd_t0024)*((pd_quad(0.16303628871563652) + 1.1962703710627097e-17 - 2.6481536735324493e-34)))));
+  g[0] = -(h*(pd_t0026*((pd_quad(0.012076101706416622) + 1.1342729341183309e-19 + 9.0277966143151681e-36)) + pd_t0028*((pd_quad(0.10760704113589251) - 5.068784955224919e-18 - 1.0833355937178202e-34)) - pd_t0030*((pd_quad(0.1618513208623103) + 7.1861878529165014e-18 + 2.8888949165808538e-34)) - pd_t0037 - pd_t0039*((pd_quad(0.21846553629538057) + 1.2386167608501986e-18 - 2.4074124304840448e-35))));
+  g[1] = -(h*(pd_t0040*((pd_quad(0.44343398063795225) + 2.5229606864300472e-17 - 1.1555579666323415e-33)) + (pd_t0041*((pd_quad(0.04495054277662975) + 2.8901186225095131e-18 - 4.2129717533470784e-35)) + pd_t0042*((pd_quad(0.28838279055670357) + 8.6747045506692007e-18 + 2.8888949165808538e-34))) - pd_t0043*((pd_quad(0.5991008766235747) + 4.2168830045833131e-17 + 2.8888949165808538e-34))));
+  g[2] = h*((pd_t0033 + pd_t0036)*((pd_quad(0.42600643361512919) + 1.185774885025626e-17 + 7.7037197775489434e-34)) - (pd_t0030 + pd_t0026)*((pd_quad(0.03870854461081763) - 2.2629513617757456e-18 - 8.4259435066941569e-35)) - (pd_t0039 + pd_t0028)*((pd_quad(0.098044682085381113) + 2.7927525576365639e-18 + 1.6851887013388314e-34)));
+  g[3] = -(h*((pd_t0041 - pd_t0042)*((pd_quad(0.030429030972509229) - 1.4428849696844255e-19 - 6.018531076210112e-36)) - pd_t0043*((pd_quad(0.21201543051539845) + 9.2871924323327603e-18 + 3.6111186457260672e-34)) - pd_t0040*((pd_quad(0.53701284021585893) - 5.2813232519192658e-17 + 1.2518544638517033e-33))));
+  g[4] = -(h*(pd_t0028*((pd_quad(0.21846553629538057) + 1.2386167608501986e-18 - 2.4074124304840448e-35)) + (pd_t0037 + pd_t0026*((pd_quad(0.1618513208623103) + 7.1861878529165014e-18 + 2.8888949165808538e-34))) - pd_t0030*((pd_quad(0.012076101706416622) + 1.1342729341183309e-19 + 9.0277966143151681e-36)) - pd_t0039*((pd_quad(0.10760704113589251) - 5.068784955224919e-18 - 1.0833355937178202e-34))));
 }
 
 static const pardel_condensation::ExtendedInterval<pd_quad> pendulum_galerkin_gauss_s_4_interval_extended = {

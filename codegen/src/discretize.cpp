@@ -164,22 +164,36 @@ HermiteBasis hermite_basis(int order, const GiNaC::symbol& u) {
 
 namespace {
 
-/** The value at `u` of the j-th u-derivative of the polynomial with monomial coefficients `a`. */
-GiNaC::numeric polynomial_derivative(const std::vector<GiNaC::numeric>& a, int j, const GiNaC::numeric& u) {
-  GiNaC::numeric sum = 0, power = 1;
-  for (std::size_t e = static_cast<std::size_t>(j); e < a.size(); ++e) {
-    GiNaC::numeric falling = 1;
-    for (int r = 0; r < j; ++r) falling *= GiNaC::numeric(static_cast<long>(e) - r);
-    sum += a[e] * falling * power;
-    power *= u;
-  }
-  return sum;
-}
-
 /** A 60-digit number, with values below 1e-45 (round-off of exact zeros) set to 0. */
 GiNaC::numeric cleaned(const GiNaC::numeric& v) {
   const GiNaC::numeric tiny = GiNaC::ex_to<GiNaC::numeric>(GiNaC::pow(GiNaC::numeric(10), -45).evalf());
   return GiNaC::abs(v) < tiny ? GiNaC::numeric(0) : v;
+}
+
+/** The value at u = c of the j-th u-derivative of the polynomial p(u). */
+GiNaC::numeric derivative_at(const ex& p, const GiNaC::symbol& u, int j, const GiNaC::numeric& c) {
+  return cleaned(GiNaC::ex_to<GiNaC::numeric>(p.diff(u, static_cast<unsigned>(j)).subs(u == c).evalf()));
+}
+
+/** The interior basis of a Galerkin interval of a model of order g: bubble j is
+ *  u^g (1 - u)^g P_j^(g,g)(2u - 1) (Jacobi), scaled to at most 1 on [0, 1]. Each vanishes with its
+ *  first g - 1 derivatives at both ends, and their g-th derivatives are Legendre polynomials
+ *  (Rodrigues' formula), orthogonal on [0, 1]: the part of d2S/dz2 that x^(g)^2 gives is
+ *  diagonal, and the Hermite interpolant, orthogonal to every bubble in that part, is the
+ *  polynomial at z = 0. */
+std::vector<ex> bubbles(int g, int m, const GiNaC::symbol& u) {
+  std::vector<ex> out;
+  for (int j = 0; j < m; ++j) {
+    // P_j^(g,g)(2u - 1) = sum_s binom(j + g, j - s) binom(j + g, s) (u - 1)^s u^(j - s); its
+    // largest magnitude on [0, 1] is binom(j + g, j), that of u^g (1 - u)^g is 4^-g.
+    ex jacobi = 0;
+    for (int k = 0; k <= j; ++k)
+      jacobi += GiNaC::binomial(GiNaC::numeric(j + g), GiNaC::numeric(j - k)) *
+                GiNaC::binomial(GiNaC::numeric(j + g), GiNaC::numeric(k)) * GiNaC::pow(u - 1, k) * GiNaC::pow(u, j - k);
+    const ex scale = GiNaC::pow(GiNaC::numeric(4), g) / GiNaC::binomial(GiNaC::numeric(j + g), GiNaC::numeric(j));
+    out.push_back((scale * GiNaC::pow(u, g) * GiNaC::pow(1 - u, g) * jacobi).expand());
+  }
+  return out;
 }
 
 }  // namespace
@@ -189,43 +203,17 @@ GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSp
   const long saved = GiNaC::Digits;
   GiNaC::Digits = std::max<long>(saved, 60);
   const std::size_t n = model.coords.size();
-  const int g = model.order, m = spec.interior_points, degree = spec.stages + g - 1;
+  const int g = model.order, m = spec.interior_points;
   GalerkinInterval out;
-  // Interior fractions: the inner nodes of the (m + 2)-point Gauss-Lobatto rule.
-  std::vector<numeric> fractions;
-  if (m > 0) {
-    const Quadrature lob = gauss_lobatto(m + 2);
-    for (int j = 1; j <= m; ++j) fractions.push_back(GiNaC::ex_to<numeric>(lob.nodes[static_cast<std::size_t>(j)].evalf()));
-  }
-  for (const numeric& c : fractions) out.fractions.push_back(c);
-  // The basis: rows are the conditions (k-th derivative at 0, then at 1, for k < order; value at
-  // each fraction), columns the monomials u^e; the basis functions are the columns of V^-1.
-  const int size = degree + 1;
-  GiNaC::matrix V(static_cast<unsigned>(size), static_cast<unsigned>(size));
-  auto row = [&](int r, int k, const numeric& at) {
-    for (int e = 0; e < size; ++e) {
-      std::vector<numeric> mono(static_cast<std::size_t>(size), 0);
-      mono[static_cast<std::size_t>(e)] = 1;
-      V(static_cast<unsigned>(r), static_cast<unsigned>(e)) = polynomial_derivative(mono, k, at);
-    }
-  };
-  for (int k = 0; k < g; ++k) {
-    row(k, k, 0);
-    row(g + k, k, 1);
-  }
-  for (int j = 0; j < m; ++j) row(2 * g + j, 0, fractions[static_cast<std::size_t>(j)]);
-  const GiNaC::matrix inv = V.inverse();
-  auto basis = [&](int column) {
-    std::vector<numeric> a(static_cast<std::size_t>(size));
-    for (int e = 0; e < size; ++e)
-      a[static_cast<std::size_t>(e)] = GiNaC::ex_to<numeric>(inv(static_cast<unsigned>(e), static_cast<unsigned>(column)).evalf());
-    return a;
-  };
+  // The polynomial of degree s + g - 1 on the interval: the Hermite interpolant of the nodes' jets
+  // (degree 2g - 1) plus the interior coefficients z times the bubbles (degree 2g + m - 1).
+  const GiNaC::symbol u("u");
+  const HermiteBasis hb = hermite_basis(g, u);
+  const std::vector<ex> bubble = bubbles(g, m, u);
   for (int j = 0; j < m; ++j) {
     for (std::size_t i = 0; i < n; ++i) out.z.emplace_back("z_" + std::to_string(j) + "_" + std::to_string(i));
   }
   const ex h = s.h;
-  // The quadrature.
   Quadrature quad = spec.family->quadrature(spec.stages);
   ex total = 0;
   for (std::size_t stage = 0; stage < quad.nodes.size(); ++stage) {
@@ -233,8 +221,8 @@ GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSp
     std::vector<std::vector<ex>> values(static_cast<std::size_t>(g) + 1, std::vector<ex>(n, 0));
     for (int j = 0; j <= g; ++j) {
       for (int k = 0; k < g; ++k) {
-        const numeric ca = cleaned(polynomial_derivative(basis(k), j, c));
-        const numeric cb = cleaned(polynomial_derivative(basis(g + k), j, c));
+        const numeric ca = derivative_at(hb.at[static_cast<std::size_t>(k)], u, j, c);
+        const numeric cb = derivative_at(hb.bt[static_cast<std::size_t>(k)], u, j, c);
         const ex scale = GiNaC::pow(h, k - j);
         for (std::size_t i = 0; i < n; ++i) {
           values[static_cast<std::size_t>(j)][i] +=
@@ -242,7 +230,7 @@ GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSp
         }
       }
       for (int jj = 0; jj < m; ++jj) {
-        const numeric cz = cleaned(polynomial_derivative(basis(2 * g + jj), j, c));
+        const numeric cz = derivative_at(bubble[static_cast<std::size_t>(jj)], u, j, c);
         for (std::size_t i = 0; i < n; ++i)
           values[static_cast<std::size_t>(j)][i] += GiNaC::pow(h, -j) * cz * out.z[static_cast<std::size_t>(jj) * n + i];
       }
@@ -251,21 +239,8 @@ GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSp
     total += weight * evaluate_at(model, model.lagrangian, s.t0 + c * (s.t1 - s.t0), values);
   }
   out.action = h * total;
-  // Starting values: the Hermite interpolant of degree 2 order - 1 of the nodes' jets.
-  const GiNaC::symbol u("u");
-  const HermiteBasis hb = hermite_basis(g, u);
-  for (int j = 0; j < m; ++j) {
-    const numeric c = fractions[static_cast<std::size_t>(j)];
-    for (std::size_t i = 0; i < n; ++i) {
-      ex v = 0;
-      for (int k = 0; k < g; ++k) {
-        const numeric ca = cleaned(GiNaC::ex_to<numeric>(hb.at[static_cast<std::size_t>(k)].subs(u == c).evalf()));
-        const numeric cb = cleaned(GiNaC::ex_to<numeric>(hb.bt[static_cast<std::size_t>(k)].subs(u == c).evalf()));
-        v += GiNaC::pow(h, k) * (ca * s.q0[static_cast<std::size_t>(k) * n + i] + cb * s.q1[static_cast<std::size_t>(k) * n + i]);
-      }
-      out.start.push_back(v);
-    }
-  }
+  // Starting values: z = 0, the Hermite interpolant of the nodes' jets.
+  out.start.assign(out.z.size(), ex(0));
   GiNaC::Digits = saved;
   return out;
 }

@@ -52,16 +52,16 @@ HermiteBasis hermite_basis(int order, const GiNaC::symbol& u);
 
 /**
  * One interval of a Galerkin discretization (galerkin_gauss, galerkin_lobatto): the polynomial
- * of degree s + order - 1 through both nodes' jets and spec.interior_points values per
- * coordinate at the interior fractions (the inner nodes of the Gauss-Lobatto rule with
- * interior_points + 2 points), its action under the quadrature, and where the interior values
- * start (the Hermite interpolant of the nodes' jets). The discrete Lagrangian is the action
- * made stationary in the interior values; the generated kernels find them by Newton's method
- * and condense them out (pardel/condensation.hpp).
+ * of degree s + order - 1 that takes both nodes' jets, written as their Hermite interpolant plus
+ * spec.interior_points interior coefficients per coordinate times bubbles (polynomials that
+ * vanish with their first order - 1 derivatives at both ends, with orthogonal order-th
+ * derivatives), its action under the quadrature, and where the interior values start (zero: the
+ * Hermite interpolant). The discrete Lagrangian is the action made stationary in the interior
+ * values; the generated kernels find them by Newton's method and condense them out
+ * (pardel/condensation.hpp).
  */
 struct GalerkinInterval {
-  std::vector<GiNaC::symbol> z;     ///< interior values, z[j * ncoords + i]: coordinate i at fraction j
-  std::vector<GiNaC::ex> fractions; ///< the interior fractions of [0, 1], ascending
+  std::vector<GiNaC::symbol> z;     ///< interior values, z[j * ncoords + i]: coordinate i, bubble j
   GiNaC::ex action;                 ///< h sum_i w_i L(t_i, x(c_i), ..., x^(order)(c_i)) in h, t0, t1, q0, q1, z, p
   std::vector<GiNaC::ex> start;     ///< z's starting values in h, q0, q1 (z's layout)
 };

@@ -135,8 +135,9 @@ void lu_solve(int n, const S* A, const int* piv, S* b, int stride = 1) {
 /**
  * Newton's method on dS/dz = 0 from the values in z, with interior(z, g, H) giving dS/dz and
  * d2S/dz2. Converged when a step changes every entry of z by at most 8 eps times the size of its
- * coordinate (|z_i| and the node values of the same coordinate), or when the steps stop
- * decreasing below 1e-8 of that size (round-off). eps is T's. No stop on the step that quadratic
+ * coordinate (its node values and the magnitudes of all its interior coefficients: a coefficient
+ * may be zero by symmetry, where its own size would leave only round-off to compare the step
+ * with), or when the steps stop decreasing below 1e-8 of that size (round-off). eps is T's. No stop on the step that quadratic
  * convergence predicts next: D1 and D2 are first order in the error of z, and a prediction made
  * from a step before the quadratic regime left them 2.5e-11 off (relative) on an interval of a
  * torus geodesic (tests/python/test_condensation_accuracy.py).
@@ -154,16 +155,19 @@ bool newton_interior(Interior&& interior, const T* q0, const T* q1, T* z) {
     interior(z, g, H);
     if (!lu_factor(M, H, piv)) return false;
     lu_solve(M, H, piv, g);
+    T size[N];  // each coordinate's size: its node values and all its interior coefficients
+    for (int c = 0; c < N; ++c) size[c] = magnitude(q0[c]) + magnitude(q1[c]);
+    for (int i = 0; i < M; ++i) {
+      z[i] -= g[i];
+      if (!finite(z[i])) return false;
+      size[i % N] += magnitude(z[i]);
+    }
     T ratio = 0;  // the largest step relative to its coordinate's size
     bool small = true;
     for (int i = 0; i < M; ++i) {
-      const int c = i % N;
-      z[i] -= g[i];
-      const T size = magnitude(z[i]) + magnitude(q0[c]) + magnitude(q1[c]);
-      const T step = magnitude(g[i]);
-      if (!finite(z[i])) return false;
-      if (step > 8 * eps * size) small = false;
-      ratio = size > 0 ? larger(ratio, step / size) : (step > 0 ? infinity : ratio);
+      const T step = magnitude(g[i]), scale = size[i % N];
+      if (step > 8 * eps * scale) small = false;
+      ratio = scale > 0 ? larger(ratio, step / scale) : (step > 0 ? infinity : ratio);
     }
     if (small) return true;
     if (ratio >= previous && ratio <= T(1e-8)) return true;
