@@ -122,3 +122,17 @@ def test_a_linear_order_three_saddle_converges_in_one_newton_iteration(discretiz
         assert r.iterations == 1, r.iterations
         exact = saddle_motion(c, T, qa, qb)(r.t)
         assert np.abs(r.q[:, 0] - exact).max() < 1e-13 * np.abs(exact).max()
+
+
+def test_the_smallest_eigenvalue_of_a_convex_order_two_action_is_resolved_on_a_fine_grid():
+    # L = x''^2/2 + 3 x'^2/2 - x on [0, 1.3]: the Hessian's smallest eigenvalue is (T/N) mu_1 with
+    # mu_1 that of the continuous second variation, so N lambda_min is the same on every grid. The
+    # condensed blocks' rounding put it 6e-4 low at N = 1000 (0.030329 against 0.030348).
+    lag = ("model condensed_convex_beam\norder 2\ncoords x\nparam k = 3\nL = x''^2/2 + k*x'^2/2 - x\n"
+           "discretizations galerkin_gauss(s=4)\n")
+    scaled = []
+    for N in (300, 1000):
+        r = pardel.solve(lag, q0=[0, 0], qN=[0.5, 0], T=1.3, N=N, discretization="galerkin_gauss(s=4)")
+        assert r.status == "converged" and r.point["kind"] == "minimum", r.message
+        scaled.append(N * r.point["lambda_min"])
+    assert abs(scaled[1] / scaled[0] - 1) < 5e-5, scaled
