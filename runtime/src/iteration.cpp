@@ -165,8 +165,8 @@ bool Iteration::times_stop_increasing() {
   if (start) {
     finish(Termination::invalid_input,
            "the node times do not increase " + where +
-               " at the start: the model's clock (dt/ds) must be positive and finite along the path; a guess on "
-               "which it is <= 0 gives no trajectory in time");
+               " at the start: the model's clock (dt/ds) must be positive and finite along the path, at every point "
+               "where the discretization reads it; a guess on which it is < 0 gives no trajectory in time");
   } else {
     finish(Termination::diverged,
            "the node times stopped increasing " + where + format(" at iteration %.0f", static_cast<double>(iteration_)) +

@@ -195,3 +195,40 @@ def test_a_clock_undefined_on_the_path_names_its_interval():
     assert r.status == "converged", r.message
     assert r.cost is None
     assert "not finite: the clock's share of interval 0 (t = 0 to 0.1) is not a number" in r.cost_definition
+
+
+DIP_CLOCK_LAG = """\
+model dip_clock
+coords x
+L = x'^2/2
+clock = (x - 1/2)^2 - 1/2500
+cost travel_time = clock
+discretizations trapezoid galerkin_gauss(s=3)
+"""
+
+
+@pytest.mark.parametrize("discretization,N,interval", [("trapezoid", 10, 4), ("galerkin_gauss(s=3)", 11, 5)])
+def test_a_clock_negative_where_the_discretization_reads_it_is_refused(discretization, N, interval):
+    # The clock is negative for |x - 1/2| < 1/50 and the path is x = s: under trapezoid at N = 10 a
+    # node sits at x = 1/2, under galerkin_gauss(s=3) at N = 11 the middle Gauss point of interval 5
+    # does; each interval's integral stays positive there (the times increased, and both were
+    # accepted with time running backwards inside an interval).
+    with pytest.raises(pardel.PardelError, match="the node times do not increase on interval %d .* at the start: the "
+                       "model's clock .* every point where the discretization reads it" % interval):
+        pardel.solve(DIP_CLOCK_LAG, q0=[0.0], qN=[1.0], T=1.0, N=N, discretization=discretization,
+                     clock="free_final_time")
+    # Without a clock mode the clock is only the cost, which is not a number there either.
+    plain = pardel.solve(DIP_CLOCK_LAG, q0=[0.0], qN=[1.0], T=1.0, N=N, discretization=discretization)
+    assert plain.status == "converged" and plain.cost is None, plain.message
+    assert "the clock's share of interval %d" % interval in plain.cost_definition, plain.cost_definition
+
+
+def test_a_clock_positive_at_every_point_the_discretization_reads_is_accepted():
+    # The same clock, with no node or quadrature point in the dip: accepted, and the travel time is
+    # the discretization's integral of the clock along x = s.
+    r = pardel.solve(DIP_CLOCK_LAG, q0=[0.0], qN=[1.0], T=1.0, N=13, discretization="trapezoid",
+                     clock="free_final_time")
+    assert r.status == "converged", r.message
+    x = np.linspace(0, 1, 14)
+    F = (x - 0.5) ** 2 - 0.0004
+    assert abs(r.final_time - np.sum((F[:-1] + F[1:]) / 2) / 13) < 1e-14
