@@ -137,10 +137,10 @@ void lu_solve(int n, const S* A, const int* piv, S* b, int stride = 1) {
  * d2S/dz2. Converged when a step changes every entry of z by at most 8 eps times the size of its
  * coordinate (its node values and the magnitudes of all its interior coefficients: a coefficient
  * may be zero by symmetry, where its own size would leave only round-off to compare the step
- * with), or when the steps stop decreasing below 1e-8 of that size (round-off). eps is T's. No stop on the step that quadratic
- * convergence predicts next: D1 and D2 are first order in the error of z, and a prediction made
- * from a step before the quadratic regime left them 2.5e-11 off (relative) on an interval of a
- * torus geodesic (tests/python/test_condensation_accuracy.py).
+ * with), or when the steps stop decreasing below 1e-8 of that size (round-off). eps is T's. No
+ * stop on the step that quadratic convergence predicts next: D1 and D2 are first order in the
+ * error of z, and a prediction made from a step before the quadratic regime left them 2.5e-11 off
+ * (relative) on an interval of a torus geodesic (tests/python/test_condensation_accuracy.py).
  * @tparam D the dimension of a node point, N the number of coordinates, M = interior values
  */
 template <class T, int D, int N, int M, class Interior>
