@@ -385,12 +385,20 @@ double free_time_step(const Grid& ctx, double t0, const double* q0, const double
   // duration where there is one (one or two steps near a solution), else the left rule's.
   constexpr int kTravelIterations = 50;
   double dt = guess > 0 && std::isfinite(guess) ? guess : ctx.model->clock(hs, t0, q0, q1, ctx.p());
+  // Fixed-point steps, each after the first taken by the secant through the last two (the map's
+  // slope estimated from them) while that slope is a contraction's.
+  double before = std::numeric_limits<double>::quiet_NaN(), image_before = before;
   for (int it = 0; it < kTravelIterations && std::isfinite(dt); ++it) {
-    const double next = travel(hs, t0, t0 + dt, q0, q1, ctx.p());
-    const bool settled = std::fabs(next - dt) <= 4 * std::numeric_limits<double>::epsilon() *
-                                                     std::max(std::fabs(t0), std::fabs(next));
+    const double image = travel(hs, t0, t0 + dt, q0, q1, ctx.p());
+    const bool settled = std::fabs(image - dt) <= 4 * std::numeric_limits<double>::epsilon() *
+                                                      std::max(std::fabs(t0), std::fabs(image));
+    if (settled) return image;
+    double next = image;
+    const double slope = (image - image_before) / (dt - before);
+    if (std::isfinite(slope) && std::fabs(slope) < 0.5) next = dt + (image - dt) / (1 - slope);
+    before = dt;
+    image_before = image;
     dt = next;
-    if (settled) return dt;
   }
   return std::numeric_limits<double>::quiet_NaN();
 }

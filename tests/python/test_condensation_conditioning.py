@@ -6,6 +6,8 @@ galerkin_gauss(s=5) was 87 times the condensed one (740 times at s=6), and D11 c
 Truth: the same condensation in 40-digit arithmetic (mpmath) over another basis of the same
 polynomial space (monomials, interior values at equally spaced points): the discrete Lagrangian
 does not depend on the basis."""
+import math
+
 import mpmath as mp
 import numpy as np
 import pytest
@@ -136,3 +138,28 @@ def test_the_smallest_eigenvalue_of_a_convex_order_two_action_is_resolved_on_a_f
         assert r.status == "converged" and r.point["kind"] == "minimum", r.message
         scaled.append(N * r.point["lambda_min"])
     assert abs(scaled[1] / scaled[0] - 1) < 5e-5, scaled
+
+
+@pytest.mark.parametrize("order,s", [(2, 3), (2, 4), (2, 8), (2, 16), (3, 5), (3, 8)])
+def test_nodes_at_zero_with_moving_jets_condense(order, s):
+    # Both nodes at x = 0 with x' = 1: the interior coefficients are zero or nearly (the Hermite
+    # interpolant is the minimiser of x^(order)^2), and a coordinate's size taken from its node
+    # values and coefficients alone was round-off: the interior Newton never stopped, the kernels
+    # were NaN and the solve ended non_finite. Exact: the polynomial of degree 2 order - 1 through
+    # the jets.
+    lag = ("model condensed_hop_%d\norder %d\ncoords x\nL = x%s^2/2\ndiscretizations galerkin_gauss(s=%d)\n"
+           % (order, order, "'" * order, s))
+    jet = [0.0, 1.0] + [0.0] * (order - 2)
+    T, N = 2.0, 10
+    degree = 2 * order - 1
+
+    def rows(t):
+        return [[math.factorial(k) / math.factorial(k - d) * t ** (k - d) if k >= d else 0.0 for k in range(degree + 1)]
+                for d in range(order)]
+
+    coef = np.linalg.solve(np.array(rows(0.0) + rows(T)), jet + jet)
+    k = pardel.kernels(pardel.model(lag), "galerkin_gauss(s=%d)" % s, 0.2, 0.0, 0.2, jet, jet)
+    assert np.isfinite(k["Ld"]) and np.all(np.isfinite(k["D11"])), k
+    r = pardel.solve(lag, q0=jet, qN=jet, T=T, N=N, discretization="galerkin_gauss(s=%d)" % s)
+    assert r.status == "converged", r.message
+    assert np.abs(r.q[:, 0] - np.polynomial.polynomial.polyval(r.t, coef)).max() < 1e-12

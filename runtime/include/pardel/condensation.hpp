@@ -135,16 +135,17 @@ void lu_solve(int n, const S* A, const int* piv, S* b, int stride = 1) {
 /**
  * Newton's method on dS/dz = 0 from the values in z, with interior(z, g, H) giving dS/dz and
  * d2S/dz2. Converged when a step changes every entry of z by at most 8 eps times the size of its
- * coordinate (its node values and the magnitudes of all its interior coefficients: a coefficient
- * may be zero by symmetry, where its own size would leave only round-off to compare the step
- * with), or when the steps stop decreasing below 1e-8 of that size (round-off). eps is T's. No
+ * coordinate on the interval (its nodes' jets scaled to the interval, sum_k h^k (|x0^(k)| +
+ * |x1^(k)|), and the magnitudes of all its interior coefficients: a coefficient, or a node's
+ * value, may be zero, where its own size would leave only round-off to compare the step with), or
+ * when the steps stop decreasing below 1e-8 of that size (round-off). eps is T's. No
  * stop on the step that quadratic convergence predicts next: D1 and D2 are first order in the
  * error of z, and a prediction made from a step before the quadratic regime left them 2.5e-11 off
  * (relative) on an interval of a torus geodesic (tests/python/test_condensation_accuracy.py).
  * @tparam D the dimension of a node point, N the number of coordinates, M = interior values
  */
 template <class T, int D, int N, int M, class Interior>
-bool newton_interior(Interior&& interior, const T* q0, const T* q1, T* z) {
+bool newton_interior(Interior&& interior, T h, const T* q0, const T* q1, T* z) {
   const T eps = epsilon_of<T>();
   constexpr int kMaxIterations = 40;
   T g[M], H[M * M];
@@ -155,8 +156,12 @@ bool newton_interior(Interior&& interior, const T* q0, const T* q1, T* z) {
     interior(z, g, H);
     if (!lu_factor(M, H, piv)) return false;
     lu_solve(M, H, piv, g);
-    T size[N];  // each coordinate's size: its node values and all its interior coefficients
-    for (int c = 0; c < N; ++c) size[c] = magnitude(q0[c]) + magnitude(q1[c]);
+    T size[N];  // each coordinate's size: its nodes' jets on the interval and its interior coefficients
+    for (int c = 0; c < N; ++c) {
+      T scale = 1;  // h^k
+      size[c] = 0;
+      for (int k = c; k < D; k += N, scale *= magnitude(h)) size[c] += scale * (magnitude(q0[k]) + magnitude(q1[k]));
+    }
     for (int i = 0; i < M; ++i) {
       z[i] -= g[i];
       if (!finite(z[i])) return false;
@@ -182,7 +187,7 @@ bool solve_interior(const Interval& f, double h, double t0, double t1, const dou
                     const double* p, double* z) {
   f.start(h, t0, t1, q0, q1, p, z);
   return newton_interior<double, D, N, M>(
-      [&](const double* x, double* g, double* H) { f.interior(h, t0, t1, q0, q1, p, x, g, H); }, q0, q1, z);
+      [&](const double* x, double* g, double* H) { f.interior(h, t0, t1, q0, q1, p, x, g, H); }, h, q0, q1, z);
 }
 
 /** d2S/dz2 (M x M, row-major) at the interior values z* that the condensed kernels find
@@ -312,7 +317,7 @@ void condensed_extended(const Interval& f, const ExtendedInterval<T>& x, double 
   if (done) {
     for (int i = 0; i < M; ++i) zq[i] = z[i];
     done = newton_interior<T, D, N, M>(
-        [&](const T* w, T* g, T* H) { x.interior(hq, t0q, t1q, a, b, pq, w, g, H); }, a, b, zq);
+        [&](const T* w, T* g, T* H) { x.interior(hq, t0q, t1q, a, b, pq, w, g, H); }, hq, a, b, zq);
   }
   const bool full = D11 != nullptr;
   done = done && condense_at<T, D, N, M>(
