@@ -382,7 +382,7 @@ double free_time_step(const Grid& ctx, double t0, const double* q0, const double
   if (!travel) return ctx.model->clock(hs, t0, q0, q1, ctx.p());
   if (!ctx.model->time_dependent) return travel(hs, t0, t0, q0, q1, ctx.p());
   // dt = travel(t0, t0 + dt): a contraction by about hs |dF/dt|, from the interval's previous
-  // duration where there is one (one or two steps near a solution), else the left rule's.
+  // duration where there is one (a few steps near a solution), else the left rule's.
   constexpr int kTravelIterations = 50;
   double dt = guess > 0 && std::isfinite(guess) ? guess : ctx.model->clock(hs, t0, q0, q1, ctx.p());
   // Fixed-point steps, each after the first taken by the secant through the last two (the map's
