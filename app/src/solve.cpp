@@ -47,7 +47,7 @@ SolveRun run_solve(const Scene& scene, Trajectory& trajectory, const SolveReques
   SolveRun run;
   run.memory = estimate_solve_memory(scene.problem, scene.options, request.full_certificate);
   if (request.check_memory) {
-    const std::string refusal = memory_refusal(scene.problem, scene.options, run.memory, machine_memory());
+    const std::string refusal = memory_refusal(scene.problem, scene.options, run.memory, machine_memory(run.memory.peak));
     if (!refusal.empty()) throw MemoryRefused(scene.path, refusal);
   }
   // Taken before the solve: what a checkpoint of this solve records of its model.

@@ -40,7 +40,7 @@ std::string batch_refusal(const Problem& base, const Options& options, const Opt
                 " solves at once and " + std::to_string(count) + " results";
   Options at_once = inner;  // the address space each of the batch's threads reserves
   at_once.threads = threads;
-  const std::string refusal = memory_refusal(base, at_once, all, machine_memory());
+  const std::string refusal = memory_refusal(base, at_once, all, machine_memory(all.peak));
   if (refusal.empty()) return "";
   return "a batch of " + std::to_string(count) + " problems: " + refusal +
          " (for a batch: or fewer problems per call, or fewer threads)";

@@ -149,9 +149,10 @@ MemoryEstimate estimate_solve_memory(const Problem& problem, const Options& opti
   return e;
 }
 
-MachineMemory machine_memory() {
+MachineMemory machine_memory(double needed) {
+  constexpr double kReadAvailableFrom = 16e6;  // bytes
   MachineMemory m;
-  m.available = proc_kb(read_file("/proc/meminfo"), "MemAvailable");
+  if (needed >= kReadAvailableFrom) m.available = proc_kb(read_file("/proc/meminfo"), "MemAvailable");
   rlimit limit{};
   if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
     m.address_limit = static_cast<double>(limit.rlim_cur);
