@@ -541,8 +541,9 @@ extern "C" PARDEL_HD double spacecraft_trapezoid_alpha_1_travel(double h, double
   stage[0] = pd_t0008;
   stage[1] = pd_t0016;
   travel_total = h*0.5*(pd_t0008 + pd_t0016);
-for (int i = 0; i < 2; ++i)
-    if (stage[i] < 0) return NAN;
+  const double below = -1e-12 * std::fabs(travel_total / h);
+  for (int i = 0; i < 2; ++i)
+    if (!(stage[i] >= below)) return NAN;
   return travel_total;
 }
 
@@ -1937,8 +1938,9 @@ extern "C" PARDEL_HD double spacecraft_gauss2_travel(double h, double t0, double
   stage[0] = pd_t0017;
   stage[1] = pd_t0027;
   travel_total = h*0.5*(pd_t0017 + pd_t0027);
-for (int i = 0; i < 2; ++i)
-    if (stage[i] < 0) return NAN;
+  const double below = -1e-12 * std::fabs(travel_total / h);
+  for (int i = 0; i < 2; ++i)
+    if (!(stage[i] >= below)) return NAN;
   return travel_total;
 }
 

@@ -870,8 +870,9 @@ extern "C" PARDEL_HD double zermelo_trapezoid_travel(double h, double t0, double
   stage[0] = pd_t0026;
   stage[1] = pd_t0044;
   travel_total = h*0.5*(pd_t0026 + pd_t0044);
-for (int i = 0; i < 2; ++i)
-    if (stage[i] < 0) return NAN;
+  const double below = -1e-12 * std::fabs(travel_total / h);
+  for (int i = 0; i < 2; ++i)
+    if (!(stage[i] >= below)) return NAN;
   return travel_total;
 }
 
@@ -1569,8 +1570,9 @@ extern "C" PARDEL_HD double zermelo_midpoint_travel(double h, double t0, double 
   const double pd_t0022 = 2.0*(1.0/pd_t0020) - pd_t0021;
   stage[0] = -pd_t0022;
   travel_total = -(h*pd_t0022);
-for (int i = 0; i < 1; ++i)
-    if (stage[i] < 0) return NAN;
+  const double below = -1e-12 * std::fabs(travel_total / h);
+  for (int i = 0; i < 1; ++i)
+    if (!(stage[i] >= below)) return NAN;
   return travel_total;
 }
 

@@ -537,8 +537,9 @@ extern "C" PARDEL_HD double zermelo_tv_trapezoid_travel(double h, double t0, dou
   stage[0] = -pd_t0017;
   stage[1] = -pd_t0028;
   travel_total = -(h*0.5*(pd_t0017 + pd_t0028));
-for (int i = 0; i < 2; ++i)
-    if (stage[i] < 0) return NAN;
+  const double below = -1e-12 * std::fabs(travel_total / h);
+  for (int i = 0; i < 2; ++i)
+    if (!(stage[i] >= below)) return NAN;
   return travel_total;
 }
 
@@ -999,8 +1000,9 @@ extern "C" PARDEL_HD double zermelo_tv_midpoint_travel(double h, double t0, doub
   const double pd_t0013 = pd_t0011 - pd_t0012;
   stage[0] = -pd_t0013;
   travel_total = -(h*pd_t0013);
-for (int i = 0; i < 1; ++i)
-    if (stage[i] < 0) return NAN;
+  const double below = -1e-12 * std::fabs(travel_total / h);
+  for (int i = 0; i < 1; ++i)
+    if (!(stage[i] >= below)) return NAN;
   return travel_total;
 }
 

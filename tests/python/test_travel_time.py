@@ -232,3 +232,17 @@ def test_a_clock_positive_at_every_point_the_discretization_reads_is_accepted():
     x = np.linspace(0, 1, 14)
     F = (x - 0.5) ** 2 - 0.0004
     assert abs(r.final_time - np.sum((F[:-1] + F[1:]) / 2) / 13) < 1e-14
+
+
+def test_a_clock_that_vanishes_at_a_node_is_accepted_within_its_rounding():
+    # dt/ds = 0 at a point is a clock (the times still increase); computed, such a zero is rounded
+    # either way. A value below zero by at most 1e-12 of the interval's mean clock counts as that
+    # zero, one beyond it as time running backwards. Trapezoid at N = 10 has a node at x = 1/2.
+    lag = "model touching_clock\ncoords x\nparam c = 0\nL = x'^2/2\nclock = (x - 1/2)^2 - c\n" \
+          "discretizations trapezoid\n"
+    common = dict(q0=[0.0], qN=[1.0], T=1.0, N=10, discretization="trapezoid", clock="free_final_time")
+    for c in (0.0, 1e-17):
+        r = pardel.solve(lag, params={"c": c}, **common)
+        assert r.status == "converged", (c, r.message)
+    with pytest.raises(pardel.PardelError, match="the node times do not increase on interval 4"):
+        pardel.solve(lag, params={"c": 1e-13}, **common)
