@@ -518,10 +518,9 @@ extern "C" PARDEL_HD double spacecraft_trapezoid_alpha_1_action(double h, double
   return h*0.5*(pd_t0017*pd_t0017 + (pd_t0031*pd_t0031 + (pd_t0033*pd_t0033 + pd_t0034*pd_t0034)));
 }
 
-// travel: the clock integrated over the interval, 43 operations (243 before CSE)
+// travel: the clock integrated over the interval, 43 operations (123 before CSE)
 extern "C" PARDEL_HD double spacecraft_trapezoid_alpha_1_travel(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
-  double stage[2], travel_total;
   const double pd_t0001 = std::sqrt(q1[0]*q1[0] + q1[1]*q1[1]);
   const double pd_t0002 = p[5] + t1*p[4];
   const double pd_t0003 = std::cos(pd_t0002);
@@ -529,22 +528,14 @@ extern "C" PARDEL_HD double spacecraft_trapezoid_alpha_1_travel(double h, double
   const double pd_t0005 = std::sin(pd_t0002);
   const double pd_t0006 = p[3]*pd_t0005 - q1[1];
   const double pd_t0007 = std::sqrt(pd_t0004*pd_t0004 + pd_t0006*pd_t0006);
-  const double pd_t0008 = pd_t0001*pd_t0007/(p[3]*(pd_t0001 + pd_t0007));
-  const double pd_t0009 = std::sqrt(q0[1]*q0[1] + q0[0]*q0[0]);
-  const double pd_t0010 = p[5] + p[4]*t0;
-  const double pd_t0011 = std::cos(pd_t0010);
-  const double pd_t0012 = q0[0] - p[3]*pd_t0011;
-  const double pd_t0013 = std::sin(pd_t0010);
-  const double pd_t0014 = p[3]*pd_t0013 - q0[1];
-  const double pd_t0015 = std::sqrt(pd_t0012*pd_t0012 + pd_t0014*pd_t0014);
-  const double pd_t0016 = pd_t0009*pd_t0015/(p[3]*(pd_t0009 + pd_t0015));
-  stage[0] = pd_t0008;
-  stage[1] = pd_t0016;
-  travel_total = h*0.5*(pd_t0008 + pd_t0016);
-  const double below = -1e-12 * std::fabs(travel_total / h);
-  for (int i = 0; i < 2; ++i)
-    if (!(stage[i] >= below)) return NAN;
-  return travel_total;
+  const double pd_t0008 = std::sqrt(q0[1]*q0[1] + q0[0]*q0[0]);
+  const double pd_t0009 = p[5] + p[4]*t0;
+  const double pd_t0010 = std::cos(pd_t0009);
+  const double pd_t0011 = q0[0] - p[3]*pd_t0010;
+  const double pd_t0012 = std::sin(pd_t0009);
+  const double pd_t0013 = p[3]*pd_t0012 - q0[1];
+  const double pd_t0014 = std::sqrt(pd_t0011*pd_t0011 + pd_t0013*pd_t0013);
+  return h*0.5*(pd_t0001*pd_t0007/(p[3]*(pd_t0001 + pd_t0007)) + pd_t0008*pd_t0014/(p[3]*(pd_t0008 + pd_t0014)));
 }
 
 // grad_extended: the grad kernel in pd_quad, 282 operations; outputs as double-double pairs
@@ -1904,10 +1895,9 @@ extern "C" PARDEL_HD double spacecraft_gauss2_action(double h, double t0, double
   return h*0.00038580246913580245*(pd_t0029*pd_t0029 + (pd_t0045*pd_t0045 + (pd_t0048*pd_t0048 + pd_t0049*pd_t0049)));
 }
 
-// travel: the clock integrated over the interval, 88 operations (1027 before CSE)
+// travel: the clock integrated over the interval, 88 operations (515 before CSE)
 extern "C" PARDEL_HD double spacecraft_gauss2_travel(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
-  double stage[2], travel_total;
   const double pd_t0001 = h*q1[2];
   const double pd_t0002 = h*q0[2];
   const double pd_t0003 = (pd_t0001 - q1[0]*3.2679491924311224 - (pd_t0002 + q0[0]*6.7320508075688767)*3.7320508075688772)*1.2679491924311228;
@@ -1924,24 +1914,16 @@ extern "C" PARDEL_HD double spacecraft_gauss2_travel(double h, double t0, double
   const double pd_t0014 = std::sin(pd_t0010);
   const double pd_t0015 = pd_t0005 - pd_t0012*pd_t0014;
   const double pd_t0016 = std::sqrt(0.0007716049382716049*(pd_t0013*pd_t0013 + pd_t0015*pd_t0015));
-  const double pd_t0017 = pd_t0006*pd_t0016/(p[3]*(pd_t0006 + pd_t0016));
-  const double pd_t0018 = (pd_t0001 - q1[0]*6.7320508075688767 - 0.2679491924311227*(pd_t0002 + 3.2679491924311224*q0[0]))*4.7320508075688776;
-  const double pd_t0019 = p[5] + pd_t0009*(pd_t0008 + pd_t0007*4.7320508075688776);
-  const double pd_t0020 = std::cos(pd_t0019);
-  const double pd_t0021 = pd_t0018 + pd_t0012*pd_t0020;
-  const double pd_t0022 = std::sin(pd_t0019);
-  const double pd_t0023 = (q0[1] + q1[1]*7.6881108528775508 + (pd_t0004 - q1[3]*(h*3.7320508075688772))*0.30600230943494899)*4.1435935394489816;
-  const double pd_t0024 = pd_t0012*pd_t0022 - pd_t0023;
-  const double pd_t0025 = std::sqrt(0.0007716049382716049*(pd_t0021*pd_t0021 + pd_t0024*pd_t0024));
-  const double pd_t0026 = std::sqrt(0.0007716049382716049*(pd_t0018*pd_t0018 + pd_t0023*pd_t0023));
-  const double pd_t0027 = pd_t0025*pd_t0026/(p[3]*(pd_t0025 + pd_t0026));
-  stage[0] = pd_t0017;
-  stage[1] = pd_t0027;
-  travel_total = h*0.5*(pd_t0017 + pd_t0027);
-  const double below = -1e-12 * std::fabs(travel_total / h);
-  for (int i = 0; i < 2; ++i)
-    if (!(stage[i] >= below)) return NAN;
-  return travel_total;
+  const double pd_t0017 = (pd_t0001 - q1[0]*6.7320508075688767 - 0.2679491924311227*(pd_t0002 + 3.2679491924311224*q0[0]))*4.7320508075688776;
+  const double pd_t0018 = p[5] + pd_t0009*(pd_t0008 + pd_t0007*4.7320508075688776);
+  const double pd_t0019 = std::cos(pd_t0018);
+  const double pd_t0020 = pd_t0017 + pd_t0012*pd_t0019;
+  const double pd_t0021 = std::sin(pd_t0018);
+  const double pd_t0022 = (q0[1] + q1[1]*7.6881108528775508 + (pd_t0004 - q1[3]*(h*3.7320508075688772))*0.30600230943494899)*4.1435935394489816;
+  const double pd_t0023 = pd_t0012*pd_t0021 - pd_t0022;
+  const double pd_t0024 = std::sqrt(0.0007716049382716049*(pd_t0020*pd_t0020 + pd_t0023*pd_t0023));
+  const double pd_t0025 = std::sqrt(0.0007716049382716049*(pd_t0017*pd_t0017 + pd_t0022*pd_t0022));
+  return h*0.5*(pd_t0006*pd_t0016/(p[3]*(pd_t0006 + pd_t0016)) + pd_t0024*pd_t0025/(p[3]*(pd_t0024 + pd_t0025)));
 }
 
 // grad_extended: the grad kernel in pd_quad, 479 operations; outputs as double-double pairs

@@ -817,63 +817,54 @@ extern "C" PARDEL_HD double zermelo_trapezoid_action(double h, double t0, double
   return h*0.5*(pd_t0026*pd_t0026 + pd_t0044*pd_t0044);
 }
 
-// travel: the clock integrated over the interval, 140 operations (4455 before CSE)
+// travel: the clock integrated over the interval, 140 operations (2229 before CSE)
 extern "C" PARDEL_HD double zermelo_trapezoid_travel(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
-  double stage[2], travel_total;
   (void)t0;
   (void)t1;
-  const double pd_t0001 = q0[1] - q1[1];
-  const double pd_t0002 = 1.0/(h*h);
-  const double pd_t0003 = q0[0] - q1[0];
-  const double pd_t0004 = pd_t0001*pd_t0001*pd_t0002 + pd_t0003*pd_t0003*pd_t0002;
-  const double pd_t0005 = p[0]*p[0];
-  const double pd_t0006 = q1[1] - 5.0;
-  const double pd_t0007 = q1[0] - 2.0;
-  const double pd_t0008 = pd_t0007*pd_t0007;
-  const double pd_t0009 = 1.0/(1.0 + 3.0*(pd_t0008 + pd_t0006*pd_t0006));
-  const double pd_t0010 = q1[1] - 4.0;
-  const double pd_t0011 = q1[0] - 4.0;
-  const double pd_t0012 = 1.0/(1.0 + (pd_t0010*pd_t0010 + pd_t0011*pd_t0011)*3.0);
-  const double pd_t0013 = q1[1] - 2.0;
-  const double pd_t0014 = 1.0/(1.0 + 3.0*(pd_t0008 + pd_t0013*pd_t0013));
-  const double pd_t0015 = q1[1] - 1.0;
-  const double pd_t0016 = q1[0] - 5.0;
-  const double pd_t0017 = 1.0/(1.0 + 3.0*(pd_t0016*pd_t0016 + pd_t0015*pd_t0015));
-  const double pd_t0018 = pd_t0006*pd_t0009 + (pd_t0010*pd_t0012 + pd_t0013*pd_t0014) - pd_t0015*pd_t0017;
-  const double pd_t0019 = pd_t0016*pd_t0017 - pd_t0007*pd_t0014 - pd_t0007*pd_t0009 - pd_t0011*pd_t0012;
-  const double pd_t0020 = pd_t0005*(pd_t0018*pd_t0018) + pd_t0005*(pd_t0019*pd_t0019) - 1.0;
-  const double pd_t0021 = p[0]/h;
-  const double pd_t0022 = pd_t0003*pd_t0021;
-  const double pd_t0023 = pd_t0021*pd_t0001;
-  const double pd_t0024 = pd_t0020/(pd_t0018*pd_t0022 + pd_t0019*pd_t0023);
-  const double pd_t0025 = std::sqrt(-(pd_t0004/pd_t0020 - 1.0/(pd_t0024*pd_t0024)));
-  const double pd_t0026 = pd_t0025 - 1.0/pd_t0024;
-  const double pd_t0027 = q0[1] - 4.0;
-  const double pd_t0028 = q0[0] - 4.0;
-  const double pd_t0029 = 1.0/(1.0 + 3.0*(pd_t0028*pd_t0028 + pd_t0027*pd_t0027));
-  const double pd_t0030 = q0[1] - 2.0;
-  const double pd_t0031 = q0[0] - 2.0;
-  const double pd_t0032 = pd_t0031*pd_t0031;
-  const double pd_t0033 = 1.0/(1.0 + 3.0*(pd_t0030*pd_t0030 + pd_t0032));
-  const double pd_t0034 = q0[1] - 5.0;
-  const double pd_t0035 = 1.0/(1.0 + 3.0*(pd_t0032 + pd_t0034*pd_t0034));
-  const double pd_t0036 = q0[1] - 1.0;
-  const double pd_t0037 = q0[0] - 5.0;
-  const double pd_t0038 = 1.0/(1.0 + 3.0*(pd_t0037*pd_t0037 + pd_t0036*pd_t0036));
-  const double pd_t0039 = pd_t0027*pd_t0029 + (pd_t0030*pd_t0033 + pd_t0034*pd_t0035) - pd_t0036*pd_t0038;
-  const double pd_t0040 = pd_t0028*pd_t0029 + (pd_t0031*pd_t0035 + pd_t0031*pd_t0033) - pd_t0037*pd_t0038;
-  const double pd_t0041 = pd_t0005*(pd_t0039*pd_t0039) + pd_t0005*(pd_t0040*pd_t0040) - 1.0;
-  const double pd_t0042 = pd_t0041/(pd_t0023*pd_t0040 - pd_t0022*pd_t0039);
-  const double pd_t0043 = std::sqrt(-(pd_t0004/pd_t0041 - 1.0/(pd_t0042*pd_t0042)));
-  const double pd_t0044 = pd_t0043 + 1.0/pd_t0042;
-  stage[0] = pd_t0026;
-  stage[1] = pd_t0044;
-  travel_total = h*0.5*(pd_t0026 + pd_t0044);
-  const double below = -1e-12 * std::fabs(travel_total / h);
-  for (int i = 0; i < 2; ++i)
-    if (!(stage[i] >= below)) return NAN;
-  return travel_total;
+  const double pd_t0001 = p[0]*p[0];
+  const double pd_t0002 = q0[1] - 4.0;
+  const double pd_t0003 = q0[0] - 4.0;
+  const double pd_t0004 = 1.0/(1.0 + 3.0*(pd_t0003*pd_t0003 + pd_t0002*pd_t0002));
+  const double pd_t0005 = q0[1] - 2.0;
+  const double pd_t0006 = q0[0] - 2.0;
+  const double pd_t0007 = pd_t0006*pd_t0006;
+  const double pd_t0008 = 1.0/(1.0 + (pd_t0005*pd_t0005 + pd_t0007)*3.0);
+  const double pd_t0009 = q0[1] - 5.0;
+  const double pd_t0010 = 1.0/(1.0 + 3.0*(pd_t0007 + pd_t0009*pd_t0009));
+  const double pd_t0011 = q0[1] - 1.0;
+  const double pd_t0012 = q0[0] - 5.0;
+  const double pd_t0013 = 1.0/(1.0 + 3.0*(pd_t0012*pd_t0012 + pd_t0011*pd_t0011));
+  const double pd_t0014 = pd_t0002*pd_t0004 + (pd_t0005*pd_t0008 + pd_t0009*pd_t0010) - pd_t0011*pd_t0013;
+  const double pd_t0015 = pd_t0003*pd_t0004 + (pd_t0006*pd_t0010 + pd_t0006*pd_t0008) - pd_t0012*pd_t0013;
+  const double pd_t0016 = pd_t0001*(pd_t0014*pd_t0014) + pd_t0001*(pd_t0015*pd_t0015) - 1.0;
+  const double pd_t0017 = q0[1] - q1[1];
+  const double pd_t0018 = p[0]/h;
+  const double pd_t0019 = pd_t0017*pd_t0018;
+  const double pd_t0020 = q0[0] - q1[0];
+  const double pd_t0021 = pd_t0020*pd_t0018;
+  const double pd_t0022 = pd_t0016/(pd_t0015*pd_t0019 - pd_t0014*pd_t0021);
+  const double pd_t0023 = 1.0/(h*h);
+  const double pd_t0024 = pd_t0017*pd_t0017*pd_t0023 + pd_t0020*pd_t0020*pd_t0023;
+  const double pd_t0025 = std::sqrt(-(pd_t0024/pd_t0016 - 1.0/(pd_t0022*pd_t0022)));
+  const double pd_t0026 = q1[1] - 5.0;
+  const double pd_t0027 = q1[0] - 2.0;
+  const double pd_t0028 = pd_t0027*pd_t0027;
+  const double pd_t0029 = 1.0/(1.0 + 3.0*(pd_t0028 + pd_t0026*pd_t0026));
+  const double pd_t0030 = q1[1] - 4.0;
+  const double pd_t0031 = q1[0] - 4.0;
+  const double pd_t0032 = 1.0/(1.0 + 3.0*(pd_t0030*pd_t0030 + pd_t0031*pd_t0031));
+  const double pd_t0033 = q1[1] - 2.0;
+  const double pd_t0034 = 1.0/(1.0 + 3.0*(pd_t0028 + pd_t0033*pd_t0033));
+  const double pd_t0035 = q1[1] - 1.0;
+  const double pd_t0036 = q1[0] - 5.0;
+  const double pd_t0037 = 1.0/(1.0 + 3.0*(pd_t0036*pd_t0036 + pd_t0035*pd_t0035));
+  const double pd_t0038 = pd_t0026*pd_t0029 + (pd_t0030*pd_t0032 + pd_t0033*pd_t0034) - pd_t0035*pd_t0037;
+  const double pd_t0039 = pd_t0036*pd_t0037 - pd_t0027*pd_t0034 - pd_t0027*pd_t0029 - pd_t0031*pd_t0032;
+  const double pd_t0040 = pd_t0001*(pd_t0038*pd_t0038) + pd_t0001*(pd_t0039*pd_t0039) - 1.0;
+  const double pd_t0041 = pd_t0040/(pd_t0021*pd_t0038 + pd_t0019*pd_t0039);
+  const double pd_t0042 = std::sqrt(-(pd_t0024/pd_t0040 - 1.0/(pd_t0041*pd_t0041)));
+  return h*0.5*(1.0/pd_t0022 + (pd_t0025 + pd_t0042) - 1.0/pd_t0041);
 }
 
 // grad_extended: the grad kernel in pd_quad, 391 operations; outputs as double-double pairs
@@ -1540,10 +1531,9 @@ extern "C" PARDEL_HD double zermelo_midpoint_action(double h, double t0, double 
   return h*(pd_t0022*pd_t0022);
 }
 
-// travel: the clock integrated over the interval, 77 operations (3119 before CSE)
+// travel: the clock integrated over the interval, 76 operations (1560 before CSE)
 extern "C" PARDEL_HD double zermelo_midpoint_travel(double h, double t0, double t1, const double* q0, const double* q1,
     const double* p) {
-  double stage[1], travel_total;
   (void)t0;
   (void)t1;
   const double pd_t0001 = q0[0] + q1[0];
@@ -1567,13 +1557,7 @@ extern "C" PARDEL_HD double zermelo_midpoint_travel(double h, double t0, double 
   const double pd_t0019 = h/(q0[1] - q1[1]);
   const double pd_t0020 = pd_t0017/(pd_t0016*pd_t0018 + pd_t0015/pd_t0019);
   const double pd_t0021 = std::sqrt(4.0*(1.0/(pd_t0020*pd_t0020)) - (pd_t0018*pd_t0018 + 1.0/(pd_t0019*pd_t0019))/pd_t0017);
-  const double pd_t0022 = 2.0*(1.0/pd_t0020) - pd_t0021;
-  stage[0] = -pd_t0022;
-  travel_total = -(h*pd_t0022);
-  const double below = -1e-12 * std::fabs(travel_total / h);
-  for (int i = 0; i < 1; ++i)
-    if (!(stage[i] >= below)) return NAN;
-  return travel_total;
+  return -(h*(2.0*(1.0/pd_t0020) - pd_t0021));
 }
 
 // grad_extended: the grad kernel in pd_quad, 224 operations; outputs as double-double pairs

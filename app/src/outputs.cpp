@@ -96,8 +96,7 @@ PhysicalCost physical_cost(const Scene& scene, const Summary& summary, const Tra
     for (int k = 0; k < trajectory.N && !std::isfinite(value); ++k)  // name the first interval at fault
       if (!std::isfinite(clock_share(problem, trajectory, k))) {
         definition += fmt::format("; not finite: the clock's share of interval {} (t = {:.6g} to {:.6g}) is not a "
-                                  "number, the model's clock being undefined, infinite, or negative at a point where the "
-                                  "discretization reads it, on the path there",
+                                  "number, the model's clock being undefined or infinite on the path there",
                                   k, trajectory.t[k], trajectory.t[k + 1]);
         break;
       }

@@ -21,9 +21,6 @@ namespace {
 using GiNaC::ex;
 using GiNaC::exmap;
 
-/** Where evaluate_at records what it returns (StageRecorder), or nullptr. */
-thread_local std::vector<ex>* stage_record = nullptr;
-
 /** L evaluated at time `time` with values[k][i] substituted for the k-th derivative of coord i. */
 ex evaluate_at(const LagModel& model, const ex& expr, const ex& time, const std::vector<std::vector<ex>>& values) {
   exmap m;
@@ -31,9 +28,7 @@ ex evaluate_at(const LagModel& model, const ex& expr, const ex& time, const std:
   for (std::size_t k = 0; k < values.size(); ++k) {
     for (std::size_t i = 0; i < values[k].size(); ++i) m[model.coord_symbols[k][i]] = values[k][i];
   }
-  ex value = expr.subs(m, GiNaC::subs_options::no_pattern);
-  if (stage_record) stage_record->push_back(value);
-  return value;
+  return expr.subs(m, GiNaC::subs_options::no_pattern);
 }
 
 std::vector<ex> block(const std::vector<GiNaC::symbol>& q, std::size_t k, std::size_t n) {
@@ -249,9 +244,6 @@ GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSp
   GiNaC::Digits = saved;
   return out;
 }
-
-StageRecorder::StageRecorder(std::vector<GiNaC::ex>* into) : previous_(stage_record) { stage_record = into; }
-StageRecorder::~StageRecorder() { stage_record = previous_; }
 
 KernelSymbols::KernelSymbols(const LagModel& model) {
   for (int i = 0; i < model.dim(); ++i) {

@@ -166,7 +166,6 @@ Json kernel_json(const KernelIR& k) {
   for (const auto& t : k.code.temporaries) j["temporaries"].push_back(Json{{"name", text(t.name)}, {"expr", text(t.expr)}});
   j["outputs"] = Json::array();
   for (const auto& o : k.code.outputs) j["outputs"].push_back(Json{{"target", text(o.name)}, {"expr", text(o.expr)}});
-  j["stages"] = k.stages;
   return j;
 }
 
@@ -240,50 +239,27 @@ LagModel clock_as_lagrangian(const LagModel& model) {
   return out;
 }
 
-/** The outputs of a travel kernel: the clock at each of the discretization's points
- *  (stage[i]) and its integral over the interval (travel_total). */
-std::vector<KernelOutput> travel_outputs(const std::vector<GiNaC::ex>& stages, const GiNaC::ex& total) {
-  std::vector<KernelOutput> outs;
-  for (std::size_t i = 0; i < stages.size(); ++i) outs.push_back({"stage[" + std::to_string(i) + "]", stages[i]});
-  outs.push_back({"travel_total", total});
-  return outs;
-}
-
 /** The travel kernels of `dir` (DiscretizationIR::travel, travel_interval) of a model with a
  *  clock; where L or the clock depends on t, the time at a quadrature point is linear between the
- *  interval's t0 and t1, as in the discrete Lagrangian. The rendered kernel returns NaN where the
- *  clock is negative at one of the points the discretization reads it at (time running backwards
- *  there, whatever the integral). */
+ *  interval's t0 and t1, as in the discrete Lagrangian. */
 void add_travel(const LagModel& model, const KernelSymbols& s, const CseOptions& options, DiscretizationIR& dir) {
   if (!model.has_clock) return;
   const LagModel clock_model = clock_as_lagrangian(model);
   KernelIR k;
   k.variant = "travel";
   k.function = model.name + "_" + dir.spec.ident + "_travel";
-  std::vector<GiNaC::ex> stages;
   if (dir.spec.interior_points > 0) {
-    GalerkinInterval gi;
-    {
-      StageRecorder record(&stages);
-      gi = galerkin_interval(clock_model, dir.spec, s);
-    }
+    const GalerkinInterval gi = galerkin_interval(clock_model, dir.spec, s);
     std::vector<KernelInput> inputs = kernel_inputs(s);
     for (std::size_t i = 0; i < gi.z.size(); ++i) inputs.push_back({gi.z[i], "z[" + std::to_string(i) + "]", "z"});
     KernelIR z;
     z.variant = "travel_z";
     z.function = k.function + "_z";
-    z.stages = static_cast<int>(stages.size());
-    z.code = generate_kernel_code(travel_outputs(stages, gi.action), inputs, options);
+    z.code = generate_kernel_code({{"return", gi.action}}, inputs, options);
     z.unused_inputs = unused(z.code, {"h", "t0", "t1", "q0", "q1", "p", "z"});
     dir.travel_interval = std::move(z);
   } else {
-    GiNaC::ex total;
-    {
-      StageRecorder record(&stages);
-      total = discrete_lagrangian(clock_model, dir.spec, s);
-    }
-    k.stages = static_cast<int>(stages.size());
-    k.code = generate_kernel_code(travel_outputs(stages, total), kernel_inputs(s), options);
+    k.code = generate_kernel_code({{"return", discrete_lagrangian(clock_model, dir.spec, s)}}, kernel_inputs(s), options);
     k.unused_inputs = unused(k.code, {"h", "t0", "t1", "q0", "q1", "p"});
   }
   dir.travel = std::move(k);

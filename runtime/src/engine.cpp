@@ -383,19 +383,33 @@ double free_time_step(const Grid& ctx, double t0, const double* q0, const double
   if (!ctx.model->time_dependent) return travel(hs, t0, t0, q0, q1, ctx.p());
   // dt = travel(t0, t0 + dt): a contraction by about hs |dF/dt|, from the interval's previous
   // duration where there is one (a few steps near a solution), else the left rule's.
-  constexpr int kTravelIterations = 50;
+  constexpr int kTravelIterations = 100;
   double dt = guess > 0 && std::isfinite(guess) ? guess : ctx.model->clock(hs, t0, q0, q1, ctx.p());
   // Fixed-point steps, each after the first taken by the secant through the last two (the map's
-  // slope estimated from them) while that slope is a contraction's.
-  double before = std::numeric_limits<double>::quiet_NaN(), image_before = before;
+  // slope estimated from them) while that slope is a contraction's; where the secant's point does
+  // not lower the fixed-point residual |travel - dt| (or has no travel time), the plain step it
+  // replaced is taken instead.
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  double before = nan, image_before = nan, plain = nan, residual_before = std::numeric_limits<double>::infinity();
   for (int it = 0; it < kTravelIterations && std::isfinite(dt); ++it) {
     const double image = travel(hs, t0, t0 + dt, q0, q1, ctx.p());
-    const bool settled = std::fabs(image - dt) <= 4 * std::numeric_limits<double>::epsilon() *
-                                                      std::max(std::fabs(t0), std::fabs(image));
-    if (settled) return image;
+    const double residual = std::fabs(image - dt);
+    if (!(residual < residual_before) && std::isfinite(plain)) {
+      dt = plain;
+      plain = nan;
+      continue;
+    }
+    if (std::isfinite(image) &&
+        residual <= 4 * std::numeric_limits<double>::epsilon() * std::max(std::fabs(t0), std::fabs(image)))
+      return image;
+    residual_before = residual;
     double next = image;
+    plain = nan;
     const double slope = (image - image_before) / (dt - before);
-    if (std::isfinite(slope) && std::fabs(slope) < 0.5) next = dt + (image - dt) / (1 - slope);
+    if (std::isfinite(slope) && std::fabs(slope) < 0.9) {
+      next = dt + (image - dt) / (1 - slope);
+      plain = image;
+    }
     before = dt;
     image_before = image;
     dt = next;

@@ -162,16 +162,23 @@ bool Iteration::times_stop_increasing() {
             time(ctx_.t[static_cast<std::size_t>(bad) + 1]) + ")";
   }
   const bool start = iteration_ == 0 && level_.level_it == 0 && !resumed_level_;
+  // Where L or the clock depends on t, an interval's end time is a fixed point that may not exist
+  // (or not be reached) on this grid although the clock is positive.
+  const std::string fixed_point =
+      ctx_.clock == ClockMode::free_final_time && ctx_.model->time_dependent && ctx_.disc && ctx_.disc->travel
+          ? " (L or the clock depends on t: or no end time t1 = t0 + the clock integrated up to t1 was found on "
+            "that interval, which a finer grid can change)"
+          : "";
   if (start) {
     finish(Termination::invalid_input,
            "the node times do not increase " + where +
-               " at the start: the model's clock (dt/ds) must be positive and finite along the path, at every point "
-               "where the discretization reads it; a guess on which it is < 0 gives no trajectory in time");
+               " at the start: the model's clock (dt/ds) must be positive and finite along the path; a guess on "
+               "which it is <= 0 gives no trajectory in time" + fixed_point);
   } else {
     finish(Termination::diverged,
            "the node times stopped increasing " + where + format(" at iteration %.0f", static_cast<double>(iteration_)) +
-               ": the iterate left the region where the model's clock (dt/ds) is positive; the iterate is returned "
-               "but is no trajectory in time");
+               ": the iterate left the region where the model's clock (dt/ds) is positive" + fixed_point +
+               "; the iterate is returned but is no trajectory in time");
   }
   return true;
 }

@@ -67,20 +67,6 @@ struct GalerkinInterval {
 };
 GalerkinInterval galerkin_interval(const LagModel& model, const DiscretizationSpec& spec, const KernelSymbols& s);
 
-/** While alive, collects (into `into`) the integrand at each point where a discretization's
- *  builder evaluates it, in the order evaluated: built with the clock in L's place, the clock's
- *  values where the discretization reads it (the travel kernels' stages). One per thread. */
-class StageRecorder {
- public:
-  explicit StageRecorder(std::vector<GiNaC::ex>* into);
-  ~StageRecorder();
-  StageRecorder(const StageRecorder&) = delete;
-  StageRecorder& operator=(const StageRecorder&) = delete;
-
- private:
-  std::vector<GiNaC::ex>* previous_;
-};
-
 /** The discrete Lagrangian L_d(h, t0, t1, q0, q1, p) of `spec` for `model`: the builder of its
  *  row of the catalogue (discretizations.hpp). A Galerkin discretization with interior values has
  *  no closed form: use galerkin_interval. @throws std::logic_error for one. */

@@ -28,9 +28,6 @@ struct KernelIR {
   std::string function;  ///< the C symbol: `<model>_<disc-ident>_<variant>`, or `<model>_clock`
   std::vector<std::string> unused_inputs;  ///< kernel arguments the code never reads
   KernelCode code;
-  /** Travel kernels: the clock's values at the discretization's points, outputs stage[0 .. stages)
-   *  beside the integral (travel_total); 0 for every other kernel. */
-  int stages = 0;
 };
 
 struct DiscretizationIR {
