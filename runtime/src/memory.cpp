@@ -189,7 +189,7 @@ std::string memory_refusal(const Problem& problem, const Options& options, const
       return need + "; the address space of this process is limited to " + format_bytes(machine.address_limit) +
              " (RLIMIT_AS, `ulimit -v`), of which " + format_bytes(used) + " are in use and about " +
              format_bytes(reserved) + " are reserved by " + std::to_string(threads) +
-             " thread(s); lower grid.N or raise the limit";
+             " thread(s); lower grid.N, run fewer threads (solver.threads) or raise the limit";
     }
   }
   return "";
