@@ -203,10 +203,10 @@ void update_times(Context& ctx, Positions positions);
 /** The time that an interval from node values q0 to q1 takes under the free_final_time clock, with
  *  the parameter step hs, starting at time t0: the discretization's travel kernel
  *  (the clock integrated with its own interpolant and quadrature) where it has one, solved for the
- *  interval's end time by fixed-point iteration where L or the clock depends on t, started from
- *  `guess` (the interval's previous duration) where that is positive, else from the left rule (NaN
- *  where it does not settle in kTravelIterations); else the model's clock by the seed's left rule
- *  (first order). */
+ *  interval's end time by fixed-point iteration where L or the clock depends on t (with secant
+ *  steps), started from `guess` (the interval's previous duration) where that is positive, else
+ *  from the left rule (NaN where it does not settle in kTravelIterations); else the model's clock
+ *  by the seed's left rule (first order). */
 double free_time_step(const Grid& ctx, double t0, const double* q0, const double* q1, double hs, double guess);
 
 /** Under the free_final_time clock: the largest change of a node time when the interior nodes move

@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <string>
 
 #include <vector>
@@ -263,3 +265,80 @@ TEST(Clock, ZermeloWithTimeVaryingWind) {
 #endif
 
 }  // namespace
+
+namespace {
+
+// Travel kernels of one coordinate moving at unit speed, with a clock that depends on t; h is the
+// parameter step. exp_travel: F = e^t by the trapezoid rule; root_travel: F = sqrt(1 - t), no
+// travel time past t = 1.
+double exp_travel(double h, double t0, double t1, const double*, const double*, const double*) {
+  return h / 2 * (std::exp(t0) + std::exp(t1));
+}
+double root_travel(double h, double t0, double t1, const double*, const double*, const double*) {
+  return t1 <= 1 ? h / 2 * (std::sqrt(1 - t0) + std::sqrt(1 - t1)) : std::nan("");
+}
+
+/** dt = travel(t0, t0 + dt) by plain fixed-point steps, the rule before the secant steps: NaN
+ *  where 50 do not settle it to 4 ulps. */
+double plain_fixed_point(pardel_action_kernel travel, double h, double t0, double dt) {
+  for (int it = 0; it < 50 && std::isfinite(dt); ++it) {
+    const double image = travel(h, t0, t0 + dt, nullptr, nullptr, nullptr);
+    if (std::fabs(image - dt) <= 4 * std::numeric_limits<double>::epsilon() * std::max(std::fabs(t0), std::fabs(image)))
+      return image;
+    dt = image;
+  }
+  return std::nan("");
+}
+
+struct TravelGrid {
+  pardel_model model = hand::forced;
+  pardel_discretization disc = hand::forced.discretizations[0];
+  pardel::detail::Grid grid;
+  explicit TravelGrid(pardel_action_kernel travel) {
+    model.time_dependent = 1;
+    disc.travel = travel;
+    grid.model = &model;
+    grid.disc = &disc;
+  }
+};
+
+}  // namespace
+
+TEST(Clock, TheTravelTimesFixedPointSettlesWhereItsContractionIsSlow) {
+  // F = e^t from t0 = 0 with h = 0.552: the fixed point dt = 1.125 has slope h e^dt / 2 = 0.85,
+  // so plain steps need about 220 to settle from the left rule's h (more than they were allowed);
+  // the secant steps settle it.
+  TravelGrid g(exp_travel);
+  const double q = 0, h = 0.552;
+  EXPECT_TRUE(std::isnan(plain_fixed_point(exp_travel, h, 0.0, h)));
+  const double dt = pardel::detail::free_time_step(g.grid, 0.0, &q, &q, h, h);
+  ASSERT_TRUE(std::isfinite(dt));
+  EXPECT_NEAR(dt, exp_travel(h, 0.0, dt, nullptr, nullptr, nullptr), 4e-16 * dt);
+  EXPECT_NEAR(h * std::exp(dt) / 2, 0.85, 0.01);
+}
+
+TEST(Clock, TheTravelTimesFixedPointSettlesWherePlainStepsDo) {
+  // Random intervals of two clocks (a fixed seed): wherever plain fixed-point steps settle, the
+  // secant steps settle to the same time; where a secant step leaves the clock's domain (sqrt(1 - t)
+  // past t = 1) or does not lower the residual, the plain step is taken instead.
+  std::mt19937_64 random(20261129);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (pardel_action_kernel travel : {exp_travel, root_travel}) {
+    TravelGrid g(travel);
+    const double q = 0;
+    int settled = 0;
+    for (int i = 0; i < 2000; ++i) {
+      const double t0 = unit(random), h = std::pow(10.0, -3 + 3.3 * unit(random));
+      double guess = travel(h, t0, t0, nullptr, nullptr, nullptr);
+      if (!(guess > 0)) guess = h;
+      if (unit(random) < 0.5) guess *= 0.5 + 1.5 * unit(random);
+      const double plain = plain_fixed_point(travel, h, t0, guess);
+      if (!std::isfinite(plain)) continue;
+      ++settled;
+      const double dt = pardel::detail::free_time_step(g.grid, t0, &q, &q, h, guess);
+      ASSERT_TRUE(std::isfinite(dt)) << "t0 = " << t0 << ", h = " << h << ", guess = " << guess;
+      EXPECT_NEAR(dt, plain, 1e-12 * plain + 8 * std::numeric_limits<double>::epsilon() * t0);
+    }
+    EXPECT_GT(settled, 500);
+  }
+}
