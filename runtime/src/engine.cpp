@@ -380,7 +380,7 @@ void retime_nodes(const RetimeGrid& old, const double* t_new, int k_first, int k
 double free_time_step(const Grid& ctx, double t0, const double* q0, const double* q1, double hs, double guess) {
   const pardel_action_kernel travel = ctx.disc ? ctx.disc->travel : nullptr;
   if (!travel) return ctx.model->clock(hs, t0, q0, q1, ctx.p());
-  if (!ctx.model->time_dependent) return travel(hs, t0, t0, q0, q1, ctx.p());
+  if (!end_times_are_fixed_points(ctx)) return travel(hs, t0, t0, q0, q1, ctx.p());
   // dt = travel(t0, t0 + dt): a contraction by about hs |dF/dt|, from the interval's previous
   // duration where there is one (a few steps near a solution), else the left rule's.
   constexpr int kTravelIterations = 100;

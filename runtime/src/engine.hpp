@@ -200,6 +200,13 @@ enum class Positions {
  *  parameter and keeps its values. */
 void update_times(Context& ctx, Positions positions);
 
+/** Whether free_time_step finds each interval's end time as a fixed point t1 = t0 + travel(t0, t1)
+ *  (the discretization has a travel kernel and L or the clock depends on t), which may not exist
+ *  or not be reached on a grid where the clock is positive. */
+inline bool end_times_are_fixed_points(const Grid& ctx) {
+  return ctx.disc && ctx.disc->travel && ctx.model->time_dependent;
+}
+
 /** The time that an interval from node values q0 to q1 takes under the free_final_time clock, with
  *  the parameter step hs, starting at time t0: the discretization's travel kernel
  *  (the clock integrated with its own interpolant and quadrature) where it has one, solved for the

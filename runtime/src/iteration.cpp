@@ -162,10 +162,8 @@ bool Iteration::times_stop_increasing() {
             time(ctx_.t[static_cast<std::size_t>(bad) + 1]) + ")";
   }
   const bool start = iteration_ == 0 && level_.level_it == 0 && !resumed_level_;
-  // Where L or the clock depends on t, an interval's end time is a fixed point that may not exist
-  // (or not be reached) on this grid although the clock is positive.
   const std::string fixed_point =
-      ctx_.clock == ClockMode::free_final_time && ctx_.model->time_dependent && ctx_.disc && ctx_.disc->travel
+      ctx_.clock == ClockMode::free_final_time && end_times_are_fixed_points(ctx_)
           ? " (L or the clock depends on t: or no end time t1 = t0 + the clock integrated up to t1 was found on "
             "that interval, which a finer grid can change)"
           : "";
